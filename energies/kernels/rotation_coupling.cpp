@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: MIT
+#include "energies/kernels/rotation_coupling.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "energies/kernels/mesh_adjacency.h"
+#include "energies/kernels/polar_decomposition.h"
+#include "framework/error.h"
+
+namespace harap {
+
+namespace {
+
+constexpr Index kGrain = 2048;
+
+// M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest).
+inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positions& u, Index s) {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  for (Index p = coupling.site_offsets[s]; p < coupling.site_offsets[s + 1]; ++p) {
+    const Index j = coupling.site_vertices[p];
+    const Eigen::Vector3d uj(u(j, 0), u(j, 1), u(j, 2));
+    m.noalias() += uj * coupling.site_coefficients[p].transpose();
+  }
+  return m;
+}
+
+// tr(uᵀ A u), A symmetric in full storage.
+double QuadraticTerm(const SparseMatrix& a, const Positions& u) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<Index>(0, static_cast<Index>(a.outerSize()), kGrain), 0.0,
+      [&](const tbb::blocked_range<Index>& range, double sum) {
+        const Index* outer = a.outerIndexPtr();
+        const Index* inner = a.innerIndexPtr();
+        const double* value = a.valuePtr();
+        for (Index col = range.begin(); col != range.end(); ++col) {
+          Eigen::RowVector3d au = Eigen::RowVector3d::Zero();
+          for (Index p = outer[col]; p < outer[col + 1]; ++p) au += value[p] * u.row(inner[p]);
+          sum += au.dot(u.row(col));
+        }
+        return sum;
+      },
+      std::plus<double>());
+}
+
+}  // namespace
+
+RotationCoupling MakeVertexSiteCoupling(const SparseMatrix& pattern,
+                                        std::vector<Eigen::Vector3d> coefficient_by_entry,
+                                        double constant) {
+  HARAP_CHECK(static_cast<Index>(coefficient_by_entry.size()) == pattern.nonZeros(),
+              "{} coefficients for {} pattern entries", coefficient_by_entry.size(),
+              pattern.nonZeros());
+  RotationCoupling coupling;
+  const Index n = static_cast<Index>(pattern.outerSize());
+  coupling.num_sites = n;
+  coupling.num_vertices = n;
+  coupling.constant = constant;
+  coupling.site_offsets.assign(pattern.outerIndexPtr(), pattern.outerIndexPtr() + n + 1);
+  coupling.site_vertices.assign(pattern.innerIndexPtr(),
+                                pattern.innerIndexPtr() + pattern.nonZeros());
+  // The pattern is symmetric: column j also lists the sites s coupled to vertex j, and the
+  // coefficient c_sj sits at the mirror entry (row j, column s).
+  coupling.vertex_offsets = coupling.site_offsets;
+  coupling.vertex_sites = coupling.site_vertices;
+  const std::vector<Index> mirror = TransposePositions(pattern);
+  coupling.vertex_coefficients.resize(coefficient_by_entry.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, mirror.size(), 16 * kGrain),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t p = range.begin(); p != range.end(); ++p) {
+                        coupling.vertex_coefficients[p] = coefficient_by_entry[mirror[p]];
+                      }
+                    });
+  coupling.site_coefficients = std::move(coefficient_by_entry);
+  return coupling;
+}
+
+double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,
+                           const Positions& u, Rotations& rotations, const Context& context) {
+  HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
+              "{} rotations for {} sites", rotations.size(), coupling.num_sites);
+  HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
+              coupling.num_vertices);
+  return context.Run([&] {
+    const double alignment = tbb::parallel_reduce(
+        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
+        [&](const tbb::blocked_range<Index>& range, double sum) {
+          for (Index s = range.begin(); s != range.end(); ++s) {
+            const Eigen::Matrix3d m = Covariance(coupling, u, s);
+            rotations[s] = coupling.planar ? ClosestPlanarRotation(m)
+                                           : ClosestRotation(m, rotations[s]);
+            sum += rotations[s].cwiseProduct(m).sum();
+          }
+          return sum;
+        },
+        std::plus<double>());
+    return QuadraticTerm(a, u) - 2.0 * alignment + coupling.constant;
+  });
+}
+
+void AssembleCoupledRhs(const RotationCoupling& coupling, const Rotations& rotations,
+                        Positions& rhs, const Context& context) {
+  HARAP_CHECK(rhs.rows() == coupling.num_vertices, "rhs has {} rows for {} vertices", rhs.rows(),
+              coupling.num_vertices);
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, coupling.num_vertices, kGrain),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index j = range.begin(); j != range.end(); ++j) {
+                          Eigen::Vector3d b = Eigen::Vector3d::Zero();
+                          for (Index p = coupling.vertex_offsets[j];
+                               p < coupling.vertex_offsets[j + 1]; ++p) {
+                            b.noalias() += rotations[coupling.vertex_sites[p]] *
+                                           coupling.vertex_coefficients[p];
+                          }
+                          rhs.row(j) = b.transpose();
+                        }
+                      });
+  });
+}
+
+double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatrix& a,
+                             const Positions& u, const Rotations& rotations,
+                             const Context& context) {
+  HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
+              "{} rotations for {} sites", rotations.size(), coupling.num_sites);
+  return context.Run([&] {
+    const double alignment = tbb::parallel_reduce(
+        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
+        [&](const tbb::blocked_range<Index>& range, double sum) {
+          for (Index s = range.begin(); s != range.end(); ++s) {
+            sum += rotations[s].cwiseProduct(Covariance(coupling, u, s)).sum();
+          }
+          return sum;
+        },
+        std::plus<double>());
+    return QuadraticTerm(a, u) - 2.0 * alignment + coupling.constant;
+  });
+}
+
+double CoupledQuadraticEnergy::FitRotations(const Positions& u, Rotations& rotations,
+                                            const Context& context) const {
+  return FitCoupledRotations(coupling_, a_, u, rotations, context);
+}
+
+void CoupledQuadraticEnergy::AssembleRhs(const Rotations& rotations, Positions& rhs,
+                                         const Context& context) const {
+  AssembleCoupledRhs(coupling_, rotations, rhs, context);
+}
+
+double CoupledQuadraticEnergy::Evaluate(const Positions& u, const Rotations& rotations,
+                                        const Context& context) const {
+  return EvaluateCoupledEnergy(coupling_, a_, u, rotations, context);
+}
+
+}  // namespace harap

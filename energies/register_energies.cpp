@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: MIT
+#include "energies/register_energies.h"
+
+#include "energies/spokes_and_rims_energy.h"
+#include "energies/spokes_energy.h"
+
+namespace harap {
+
+void RegisterEnergies(Registry<Energy>& registry) {
+  registry.Add(std::string(SpokesAndRimsEnergy::kName),
+               "spokes-and-rims ARAP, one rotation per vertex over all edges of its incident "
+               "faces [Chao et al. 2010] (the paper's Eq. 1)",
+               &SpokesAndRimsEnergy::Create);
+  registry.Add(std::string(SpokesEnergy::kName),
+               "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
+               "½(cot α + cot β) [Sorkine & Alexa 2007]",
+               &SpokesEnergy::Create);
+}
+
+}  // namespace harap

@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <memory>
+#include <string_view>
+
+#include "energies/kernels/rotation_coupling.h"
+#include "framework/config.h"
+
+namespace harap {
+
+/// Spokes-and-rims ARAP [Chao et al. 2010], the paper's Eq. (1):
+///
+///     E(U, R) = Σ_i Σ_{f ∋ i} Σ_{(j,k) ∈ f} w_fjk ‖(u_j − u_k) − R_i (v̄_j − v̄_k)‖²,
+///     w_fjk = ½ cot(angle of f opposite edge jk).
+///
+/// One rotation per vertex; every edge of every incident face (spokes and rims) enters the
+/// vertex's cell. A = 3·L with L the cotangent Laplacian (each face edge is seen by the three
+/// rotations of its face). Triangle meshes only. Degenerate triangles get zero weight.
+class SpokesAndRimsEnergy final : public CoupledQuadraticEnergy {
+ public:
+  static constexpr std::string_view kName = "spokes_and_rims";
+
+  struct Options {
+    // No options yet: the weights are fixed by the definition. The struct keeps the shape every
+    // implementation shares (FromConfig rejects unknown keys).
+    static Options FromConfig(const ConfigNode& node);
+  };
+
+  explicit SpokesAndRimsEnergy(const Options& options);
+  static std::unique_ptr<Energy> Create(const ConfigNode& node);
+
+  void Precompute(const Mesh& rest, const Context& context) override;
+
+  /// Triangles whose weights were zeroed as degenerate in the last Precompute().
+  Index num_degenerate_triangles() const { return num_degenerate_; }
+
+ private:
+  Options options_;
+  Index num_degenerate_ = 0;
+};
+
+}  // namespace harap

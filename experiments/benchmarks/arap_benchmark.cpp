@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: MIT
+// Micro-benchmarks of the classic ARAP kernels: local step, right-hand side, factorization,
+// one solve, one full iteration — on a generated cylinder and, when ../shared is present, on the
+// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices).
+//
+//   ./build/harap_benchmarks --benchmark_filter=armadillo
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "experiments/builtins.h"
+#include "framework/constrained_system.h"
+#include "framework/io/builtin_meshes.h"
+#include "framework/io/scenario.h"
+
+namespace {
+
+using namespace harap;
+
+/// One loaded problem with its energy precomputed and its reduced system factored.
+struct Fixture {
+  Scenario scenario;
+  Registries registries = MakeBuiltinRegistries();
+  Context context;
+  std::unique_ptr<Energy> energy;
+  std::unique_ptr<ConstrainedSystem> system;
+  std::unique_ptr<LinearSolver> solver;
+  Positions u, rhs;
+  Rotations rotations;
+  Eigen::MatrixXd reduced_rhs, reduced_x;
+
+  Fixture(Scenario loaded, const std::string& energy_name)
+      : scenario(std::move(loaded)) {
+    energy = registries.energies.Create(energy_name, ConfigNode());
+    energy->Precompute(scenario.mesh, context);
+    const Constraints constraints = scenario.MergedConstraints();
+    system = std::make_unique<ConstrainedSystem>(energy->system_matrix(), constraints.indices);
+    solver = registries.linear_solvers.Create("cholmod", ConfigNode());
+    solver->Factorize(system->reduced_matrix(), context);
+    u = scenario.mesh.vertices;
+    for (size_t k = 0; k < constraints.indices.size(); ++k) {
+      u.row(constraints.indices[k]) = constraints.targets.row(k);
+    }
+    system->SetFixedPositions(u);
+    rotations.assign(energy->num_rotations(), Rotation::Identity());
+    rhs.resize(u.rows(), 3);
+    // A few iterations so the state (and the rotation warm starts) look like mid-solve.
+    for (int i = 0; i < 3; ++i) Iterate();
+  }
+
+  void Iterate() {
+    energy->FitRotations(u, rotations, context);
+    energy->AssembleRhs(rotations, rhs, context);
+    system->ReducedRhs(rhs, reduced_rhs);
+    system->GatherFree(u, reduced_x);
+    solver->Solve(reduced_rhs, reduced_x, context);
+    system->ScatterFree(reduced_x, u);
+  }
+};
+
+std::map<std::string, std::unique_ptr<Fixture>>& Fixtures() {
+  static std::map<std::string, std::unique_ptr<Fixture>> fixtures;
+  return fixtures;
+}
+
+Fixture& Get(const std::string& key) { return *Fixtures().at(key); }
+
+void SetCounters(benchmark::State& state, const Fixture& fixture) {
+  state.counters["vertices"] = fixture.scenario.mesh.num_vertices();
+  state.SetComplexityN(fixture.scenario.mesh.num_vertices());
+}
+
+void LocalStep(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  for (auto _ : state) benchmark::DoNotOptimize(f.energy->FitRotations(f.u, f.rotations, f.context));
+  SetCounters(state, f);
+}
+
+void RightHandSide(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  for (auto _ : state) {
+    f.energy->AssembleRhs(f.rotations, f.rhs, f.context);
+    f.system->ReducedRhs(f.rhs, f.reduced_rhs);
+    benchmark::ClobberMemory();
+  }
+  SetCounters(state, f);
+}
+
+void Factorization(benchmark::State& state, std::string key, std::string mode) {
+  Fixture& f = Get(key);
+  ConfigNode options;
+  options.Set("mode", fmt::format("\"{}\"", mode));
+  for (auto _ : state) {
+    auto solver = f.registries.linear_solvers.Create("cholmod", options);
+    solver->Factorize(f.system->reduced_matrix(), f.context);
+    benchmark::DoNotOptimize(solver.get());
+  }
+  SetCounters(state, f);
+}
+
+void Solve(benchmark::State& state, std::string key, std::string mode) {
+  Fixture& f = Get(key);
+  ConfigNode options;
+  options.Set("mode", fmt::format("\"{}\"", mode));
+  auto solver = f.registries.linear_solvers.Create("cholmod", options);
+  solver->Factorize(f.system->reduced_matrix(), f.context);
+  Eigen::MatrixXd x = f.reduced_x;
+  for (auto _ : state) {
+    solver->Solve(f.reduced_rhs, x, f.context);
+    benchmark::ClobberMemory();
+  }
+  SetCounters(state, f);
+}
+
+void FullIteration(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  for (auto _ : state) {
+    f.Iterate();
+    benchmark::ClobberMemory();
+  }
+  SetCounters(state, f);
+}
+
+void RegisterAll(const std::string& key) {
+  auto add = [&](const std::string& name, auto&&... args) {
+    benchmark::RegisterBenchmark((name + "/" + key).c_str(), args...)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+  };
+  add("LocalStep", LocalStep, key);
+  add("RightHandSide", RightHandSide, key);
+  for (const char* mode : {"simplicial", "supernodal"}) {
+    add(std::string("Factorization_") + mode, Factorization, key, std::string(mode));
+    add(std::string("Solve3_") + mode, Solve, key, std::string(mode));
+  }
+  add("FullIteration", FullIteration, key);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  // Generated: no data needed.
+  {
+    Scenario cylinder = ParseScenario(R"(
+mesh = { builtin = "cylinder", vertices = 170000 }
+[[handle]]
+select.slab = { axis = "z", from = 0.0, to = 0.02 }
+[[handle]]
+select.slab = { axis = "z", from = 0.98, to = 1.0 }
+rotate = { axis = [1.0, 0.0, 0.0], degrees = 90.0 }
+translate = [0.0, 0.35, -0.3]
+)",
+                                      "cylinder-170k", ".");
+    Fixtures()["cylinder-170k"] = std::make_unique<Fixture>(std::move(cylinder), "spokes_and_rims");
+    RegisterAll("cylinder-170k");
+  }
+  const std::filesystem::path armadillo =
+      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/armadillo-bend.toml";
+  if (std::filesystem::exists(armadillo)) {
+    Fixtures()["armadillo-bend"] =
+        std::make_unique<Fixture>(LoadScenario(armadillo), "spokes_and_rims");
+    RegisterAll("armadillo-bend");
+  } else {
+    fmt::print(stderr, "note: {} not found; armadillo benchmarks skipped\n", armadillo.string());
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,22 @@
+// SPDX-License-Identifier: MIT
+#include "experiments/builtins.h"
+
+#include "energies/register_energies.h"
+#include "hierarchies/register_hierarchies.h"
+#include "hierarchies/upsamplers/register_upsamplers.h"
+#include "solvers/optimizers/register_optimizers.h"
+#include "solvers/register_solvers.h"
+
+namespace harap {
+
+Registries MakeBuiltinRegistries() {
+  Registries registries;
+  RegisterOptimizers(registries.optimizers);
+  RegisterEnergies(registries.energies);
+  RegisterLinearSolvers(registries.linear_solvers);
+  RegisterHierarchies(registries.hierarchies);
+  RegisterUpsamplers(registries.upsamplers);
+  return registries;
+}
+
+}  // namespace harap

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: MIT
+#include "experiments/deform.h"
+
+#include <sys/resource.h>
+
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "experiments/component_factory.h"
+
+namespace harap {
+
+long long PeakMemoryBytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<long long>(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
+}
+
+DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
+                        const ConfigNode& config, const DeformOptions& options) {
+  ValidateRunConfig(config);
+  DefaultComponents defaults;
+  if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
+  auto optimizer = MakeOptimizer(registries, config, defaults);
+  RegistryComponentFactory factory(registries, config, defaults);
+
+  DeformOutcome outcome;
+  outcome.optimizer = config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
+  outcome.energy_type = factory.energy_name();
+  outcome.solver = factory.solver_name();
+  if (config.Has("hierarchy")) outcome.hierarchy = factory.hierarchy_name();
+  if (config.Has("upsampler")) outcome.upsampler = factory.upsampler_name();
+  outcome.threads = options.threads > 0 ? options.threads
+                                        : static_cast<int>(std::thread::hardware_concurrency());
+  outcome.resolved_config = config.ToToml();
+
+  Context context = Context::WithThreads(options.threads);
+  context.iteration_callback = [&](const IterationSummary& summary) {
+    outcome.trace.push_back({summary.seconds, summary.energy, summary.level});
+    return options.progress ? options.progress(summary) : CallbackAction::kContinue;
+  };
+  DeformationProblem problem;
+  problem.mesh = &scenario.mesh;
+  problem.constraints = scenario.MergedConstraints();
+  problem.initial = scenario.initial;
+  context.run_clock.Restart();
+  outcome.result = context.Run([&] { return optimizer->Optimize(problem, factory, context); });
+  return outcome;
+}
+
+std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outcome,
+                             bool include_trace) {
+  using nlohmann::json;
+  const OptimizeResult& r = outcome.result;
+  json report;
+  report["scenario"] = scenario.file.string();
+  report["mesh"] = {{"source", scenario.mesh_source},
+                    {"vertices", scenario.mesh.num_vertices()},
+                    {"faces", scenario.mesh.num_elements()},
+                    {"element_kind", scenario.mesh.kind() == ElementKind::kTetrahedron
+                                         ? "tetrahedron"
+                                         : "triangle"}};
+  report["optimizer"] = outcome.optimizer;
+  report["energy_type"] = outcome.energy_type;
+  report["solver"] = outcome.solver;
+  if (!outcome.hierarchy.empty()) report["hierarchy"] = outcome.hierarchy;
+  if (!outcome.upsampler.empty()) report["upsampler"] = outcome.upsampler;
+  report["energy"] = r.energy;
+  report["iterations"] = r.iterations;
+  report["total_iterations"] = r.total_iterations;
+  report["converged"] = r.converged;
+  report["timings"] = {{"hierarchy", r.timings.hierarchy},   {"precompute", r.timings.precompute},
+                       {"constrain", r.timings.constrain},   {"solve", r.timings.solve},
+                       {"total", r.timings.total}};
+  report["peak_memory_bytes"] = PeakMemoryBytes();
+  report["threads"] = outcome.threads;
+  report["constraints"] = {{"constrained_vertices", r.constraints.constrained_vertices},
+                           {"isolated_vertices", r.constraints.isolated_vertices},
+                           {"free_components", r.constraints.free_components},
+                           {"vertices_in_free_components",
+                            r.constraints.vertices_in_free_components}};
+  json handles = json::array();
+  for (const auto& handle : scenario.handles) {
+    handles.push_back({{"name", handle.name}, {"vertices", handle.vertices.size()}});
+  }
+  report["handles"] = handles;
+  json levels = json::array();
+  for (const auto& level : r.levels) {
+    levels.push_back({{"level", level.level},
+                      {"vertices", level.vertices},
+                      {"faces", level.elements},
+                      {"iterations", level.iterations},
+                      {"energy", level.energy},
+                      {"seconds", level.seconds},
+                      {"converged", level.converged}});
+  }
+  report["levels"] = levels;
+  report["notes"] = r.notes;
+  report["config"] = outcome.resolved_config;
+  if (include_trace) {
+    json trace = json::array();
+    for (const auto& entry : outcome.trace) {
+      trace.push_back({{"t", entry.t}, {"energy", entry.energy}, {"level", entry.level}});
+    }
+    report["trace"] = trace;
+  }
+  return report.dump(2);
+}
+
+}  // namespace harap

@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "framework/config.h"
+#include "framework/io/scenario.h"
+#include "framework/optimizer.h"
+#include "framework/registries.h"
+
+namespace harap {
+
+/// One entry of the energy trace (the report's `trace` array).
+struct TraceEntry {
+  double t = 0.0;  ///< Seconds since the start of the run (precomputation included).
+  double energy = 0.0;
+  int level = 0;
+};
+
+struct DeformOptions {
+  int threads = 0;  ///< 0: all hardware threads.
+  /// Called for every iteration (after the trace is recorded), e.g. for a progress display.
+  IterationCallback progress;
+};
+
+/// Everything a `harap deform` run produced.
+struct DeformOutcome {
+  std::string optimizer;
+  std::string energy_type;
+  std::string solver;
+  std::string hierarchy;  ///< Empty for single-level optimizers.
+  std::string upsampler;
+  int threads = 0;
+  OptimizeResult result;
+  std::vector<TraceEntry> trace;
+  std::string resolved_config;  ///< The run's config as TOML.
+};
+
+/// Solves the scenario's deformation with the pieces named in `config` (tables `optimizer`,
+/// `energy`, `solver`, `hierarchy`, `upsampler`; each with `type` and options).
+DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
+                        const ConfigNode& config, const DeformOptions& options);
+
+/// The JSON report (see docs/report.md for the keys); `include_trace` adds the `trace` array.
+std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outcome,
+                             bool include_trace);
+
+/// Peak resident memory of this process so far, in bytes.
+long long PeakMemoryBytes();
+
+}  // namespace harap

@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: MIT
+// The `harap` command line: `harap deform SCENARIO.toml ...` and `harap list`.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <iostream>
+#include <new>
+
+#include "experiments/builtins.h"
+#include "experiments/deform.h"
+#include "framework/error.h"
+#include "framework/io/builtin_meshes.h"
+#include "framework/io/mesh_io.h"
+#include "framework/io/scenario.h"
+
+namespace {
+
+using namespace harap;
+
+template <class Interface>
+void ListRegistry(const Registry<Interface>& registry) {
+  fmt::print("{}:\n", registry.kind());
+  for (const auto& name : registry.Names()) {
+    fmt::print("  {:<20} {}\n", name, registry.Description(name));
+    for (const auto& option : registry.DescribeOptions(name)) {
+      if (option.key == "type") continue;
+      fmt::print("      {}.{} = {}\n          {}\n", registry.kind(), option.key,
+                 option.default_value, option.help);
+    }
+  }
+  fmt::print("\n");
+}
+
+int List() {
+  const Registries registries = MakeBuiltinRegistries();
+  ListRegistry(registries.optimizers);
+  ListRegistry(registries.energies);
+  ListRegistry(registries.linear_solvers);
+  ListRegistry(registries.hierarchies);
+  ListRegistry(registries.upsamplers);
+  fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
+  for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
+  return 0;
+}
+
+struct DeformArguments {
+  std::string scenario;
+  std::string config_file;
+  std::string optimizer, energy, solver, hierarchy, upsampler;
+  std::optional<double> tolerance;
+  std::optional<int> max_iterations;
+  std::vector<std::string> settings;
+  std::string out, report;
+  bool trace = false;
+  bool quiet = false;
+  int threads = 0;
+};
+
+// Progress on a terminal for runs that take longer than a second: one overwritten line.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool enabled) : enabled_(enabled && isatty(fileno(stderr))) {}
+  ~ProgressLine() { Finish(); }
+  CallbackAction operator()(const IterationSummary& s) {
+    if (!enabled_ || s.seconds < 1.0 || s.seconds - last_ < 0.2) return CallbackAction::kContinue;
+    last_ = s.seconds;
+    shown_ = true;
+    fmt::print(stderr, "\r  {:6.1f} s  level {}  iteration {:5}  energy {:.6e}  step {:.2e}   ",
+               s.seconds, s.level, s.iteration, s.energy, s.displacement);
+    std::fflush(stderr);
+    return CallbackAction::kContinue;
+  }
+  void Finish() {
+    if (shown_) fmt::print(stderr, "\r{:80}\r", "");
+    shown_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool shown_ = false;
+  double last_ = 0.0;
+};
+
+void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
+  const OptimizeResult& r = outcome.result;
+  fmt::print("scenario    {}\n", scenario.file.string());
+  fmt::print("mesh        {} ({} vertices, {} {})\n", scenario.mesh_source,
+             scenario.mesh.num_vertices(), scenario.mesh.num_elements(),
+             scenario.mesh.kind() == ElementKind::kTetrahedron ? "tetrahedra" : "faces");
+  fmt::print("pieces      optimizer {} | energy {} | solver {}{}\n", outcome.optimizer,
+             outcome.energy_type, outcome.solver,
+             outcome.hierarchy.empty() ? "" : fmt::format(" | hierarchy {} | upsampler {}",
+                                                          outcome.hierarchy, outcome.upsampler));
+  fmt::print("iterations  {} ({})\n", r.iterations,
+             r.converged ? "converged" : (r.stopped_by_callback ? "stopped" : "not converged"));
+  fmt::print("energy      {:.9e}\n", r.energy);
+  fmt::print("time [s]    hierarchy {:.3f} | precompute {:.3f} | constrain {:.3f} | solve {:.3f} "
+             "| total {:.3f}\n",
+             r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
+             r.timings.total);
+  fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
+  for (const auto& note : r.notes) fmt::print("note        {}\n", note);
+}
+
+// The run config: --config file, then the shortcut flags, then --set KEY=VALUE.
+ConfigNode BuildRunConfig(const DeformArguments& args) {
+  ConfigNode config =
+      args.config_file.empty() ? ConfigNode() : ConfigNode::ParseFile(args.config_file);
+  auto set_type = [&](const char* table, const std::string& name) {
+    if (!name.empty()) config.Set(fmt::format("{}.type", table), fmt::format("\"{}\"", name));
+  };
+  set_type("optimizer", args.optimizer);
+  set_type("energy", args.energy);
+  set_type("solver", args.solver);
+  set_type("hierarchy", args.hierarchy);
+  set_type("upsampler", args.upsampler);
+  if (args.tolerance) config.Set("optimizer.tolerance", fmt::format("{}", *args.tolerance));
+  if (args.max_iterations) {
+    config.Set("optimizer.max_iterations", fmt::format("{}", *args.max_iterations));
+  }
+  for (const auto& setting : args.settings) {
+    const auto eq = setting.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw ConfigError(fmt::format("--set '{}': expected KEY=VALUE, e.g. energy.lambda=0.5",
+                                    setting));
+    }
+    config.Set(setting.substr(0, eq), setting.substr(eq + 1));
+  }
+  return config;
+}
+
+int Deform(const DeformArguments& args) {
+  const Registries registries = MakeBuiltinRegistries();
+  const ConfigNode config = BuildRunConfig(args);
+  const Scenario scenario = LoadScenario(args.scenario);
+  ProgressLine progress(!args.quiet);
+  DeformOptions options;
+  options.threads = args.threads;
+  options.progress = [&](const IterationSummary& s) { return progress(s); };
+  const DeformOutcome outcome = RunDeform(registries, scenario, config, options);
+  progress.Finish();
+
+  if (!args.out.empty()) WritePly(args.out, outcome.result.positions, scenario.mesh.elements);
+  if (!args.report.empty()) {
+    std::ofstream file(args.report);
+    file << DeformReportJson(scenario, outcome, args.trace) << "\n";
+    if (!file) throw InputError(fmt::format("{}: cannot write the report", args.report));
+  }
+  if (!args.quiet) PrintSummary(scenario, outcome);
+  return 0;
+}
+
+// `harap hierarchy`: builds the hierarchy of a scenario's mesh, writes each level as PLY and
+// prints a per-level table.
+int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
+  const Registries registries = MakeBuiltinRegistries();
+  const ConfigNode config = BuildRunConfig(args);
+  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
+    config.Child(table);
+  }
+  config.RejectUnknownKeys();
+  const Scenario scenario = LoadScenario(args.scenario);
+  auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
+  Context context = Context::WithThreads(args.threads);
+  Stopwatch clock;
+  const MeshHierarchy levels = hierarchy->Build(scenario.mesh, context);
+  const double seconds = clock.Seconds();
+  if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
+  fmt::print("{:>5} {:>10} {:>10} {:>10}  {}\n", "level", "vertices", "faces", "reduction", "file");
+  for (int l = 0; l < levels.num_levels(); ++l) {
+    const HierarchyLevel& level = levels.levels[l];
+    std::string file;
+    if (!out_dir.empty()) {
+      file = (std::filesystem::path(out_dir) / fmt::format("level_{}.ply", l)).string();
+      WritePly(file, level.mesh.vertices, level.mesh.elements);
+    }
+    const std::string reduction =
+        l == 0 ? std::string("-")
+               : fmt::format("{:.2f}x", double(levels.levels[l - 1].mesh.num_vertices()) /
+                                            level.mesh.num_vertices());
+    fmt::print("{:>5} {:>10} {:>10} {:>10}  {}\n", l, level.mesh.num_vertices(),
+               level.mesh.num_elements(), reduction, file);
+  }
+  fmt::print("hierarchy built in {:.3f} s\n", seconds);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
+  app.require_subcommand(1);
+
+  auto* list = app.add_subcommand("list", "list every registered piece with its options");
+
+  DeformArguments args;
+  auto* deform = app.add_subcommand("deform", "deform a mesh as a scenario file describes");
+  deform->add_option("scenario", args.scenario, "scenario TOML file")->required();
+  deform->add_option("--config", args.config_file,
+                     "TOML file with [optimizer] [energy] [solver] [hierarchy] [upsampler] tables");
+  deform->add_option("--optimizer", args.optimizer, "optimizer name (default classic)");
+  deform->add_option("--energy", args.energy, "energy name (default spokes_and_rims)");
+  deform->add_option("--solver", args.solver, "linear solver name (default cholmod)");
+  deform->add_option("--hierarchy", args.hierarchy, "hierarchy name (hierarchical optimizers)");
+  deform->add_option("--upsampler", args.upsampler, "upsampler name (hierarchical optimizers)");
+  deform->add_option("--tolerance", args.tolerance,
+                     "convergence tolerance: squared max displacement / squared diagonal");
+  deform->add_option("--max-iterations", args.max_iterations, "iteration cap (per level)");
+  deform->add_option("--set", args.settings,
+                     "set any option by its config key, e.g. --set energy.lambda=0.5");
+  deform->add_option("--out", args.out, "write the deformed mesh (binary PLY, double precision)");
+  deform->add_option("--report", args.report, "write a JSON report");
+  deform->add_flag("--trace", args.trace, "include the per-iteration energy trace in the report");
+  deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
+  deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
+
+  std::string hierarchy_out;
+  auto* hierarchy = app.add_subcommand("hierarchy", "build a scenario's mesh hierarchy, write each "
+                                                    "level as PLY, print a per-level table");
+  hierarchy->add_option("scenario", args.scenario, "scenario TOML file")->required();
+  hierarchy->add_option("--out", hierarchy_out, "folder for level_<l>.ply files");
+  hierarchy->add_option("--hierarchy", args.hierarchy, "hierarchy name (default octree)");
+  hierarchy->add_option("--config", args.config_file, "TOML file with a [hierarchy] table");
+  hierarchy->add_option("--set", args.settings, "set an option, e.g. hierarchy.min_vertices=500");
+  hierarchy->add_option("--threads", args.threads, "worker threads (default: all cores)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error);
+  }
+  try {
+    if (*list) return List();
+    if (*hierarchy) return WriteHierarchy(args, hierarchy_out);
+    return Deform(args);
+  } catch (const harap::Error& error) {
+    fmt::print(stderr, "harap: error: {}\n", error.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "harap: error: out of memory (try a smaller mesh or an iterative solver)\n");
+    return 1;
+  } catch (const std::exception& error) {
+    fmt::print(stderr, "harap: internal error: {}\n", error.what());
+    return 2;
+  }
+}

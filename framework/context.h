@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+
+namespace harap {
+
+/// Wall-clock stopwatch (steady clock), in seconds.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(Clock::now()) {}
+  void Restart() { start_ = Clock::now(); }
+  double Seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point start_;
+};
+
+/// What one local/global iteration reports to the callback (Ceres' IterationSummary idea).
+struct IterationSummary {
+  int level = 0;              ///< Hierarchy level (0 = input mesh; classic ARAP is always 0).
+  int iteration = 0;          ///< 1-based iteration count on this level.
+  double energy = 0.0;        ///< E(U, R) after the iteration's global step, R fitted to U.
+  double displacement = 0.0;  ///< Squared max-norm of the global step's displacement / diag².
+  double seconds = 0.0;       ///< Wall time since the start of the run (precomputation included).
+};
+
+/// Return kStop to end the optimization after this iteration (the result reports it).
+enum class CallbackAction { kContinue, kStop };
+using IterationCallback = std::function<CallbackAction(const IterationSummary&)>;
+
+/// Everything an algorithm needs from its caller besides its inputs: threads, the run clock and
+/// the callback. Passed by reference; algorithms never create global thread pools or print.
+struct Context {
+  /// Runs `f` inside the run's task arena (so the thread count holds for TBB algorithms).
+  template <class F>
+  decltype(auto) Run(F&& f) const {
+    return arena->execute(std::forward<F>(f));
+  }
+
+  std::shared_ptr<tbb::task_arena> arena = std::make_shared<tbb::task_arena>();
+  Stopwatch run_clock;                 ///< Started when the run starts; trace times count from it.
+  IterationCallback iteration_callback;  ///< May be empty.
+
+  /// A context with `threads` worker threads (0 = all hardware threads).
+  static Context WithThreads(int threads) {
+    Context context;
+    if (threads > 0) context.arena = std::make_shared<tbb::task_arena>(threads);
+    return context;
+  }
+};
+
+}  // namespace harap

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <string_view>
+
+#include "framework/context.h"
+#include "framework/mesh.h"
+#include "framework/types.h"
+
+namespace harap {
+
+/// Where an energy's rotations live: one per vertex (spokes, spokes-and-rims, smooth ARAP) or
+/// one per element (per-triangle / per-tetrahedron ARAP, Section 6 of the paper).
+enum class RotationSite { kVertex, kElement };
+
+/// An ARAP-type energy E(U, R) on one mesh level, minimized by local/global iterations.
+///
+/// Contract (every implementation): for fixed rotations R the energy is quadratic in the
+/// deformed positions U (#V×3),
+///
+///     E(U, R) = tr(Uᵀ A U) − 2 tr(Uᵀ B(R)) + c,
+///
+/// with A (#V×#V, symmetric positive semi-definite) independent of U and R, so that
+///   - the global step (fixed R) solves A U = B(R) on the free vertices, with A factored once;
+///   - the gradient is ∂E/∂U = 2 (A U − B(R)) (checked by finite differences in the tests);
+///   - the local step (fixed U) minimizes E over each rotation independently.
+///
+/// Lifetime: Precompute() once per mesh level (weights, A, rotation coupling; the expensive part);
+/// the other methods are const, allocation-free and thread-safe, and may be called any number of
+/// times. Implementations parallelize internally with TBB inside `context`'s arena.
+///
+///   auto energy = registries.energies.Create(config.Child("energy"), "spokes_and_rims");
+///   energy->Precompute(mesh, context);
+///   double e = energy->FitRotations(u, rotations, context);   // local step
+///   energy->AssembleRhs(rotations, rhs, context);             // global step: A u = rhs
+class Energy {
+ public:
+  virtual ~Energy() = default;
+
+  /// Precomputes everything that depends only on the rest mesh. Throws InputError for meshes the
+  /// energy does not support (e.g. tetrahedra for a surface energy).
+  virtual void Precompute(const Mesh& rest, const Context& context) = 0;
+
+  virtual RotationSite rotation_site() const = 0;
+  /// Number of rotations: #V for per-vertex energies, #elements for per-element energies.
+  virtual Index num_rotations() const = 0;
+
+  /// A of the contract above (#V×#V, full symmetric storage). Rows of vertices no element
+  /// touches are empty.
+  virtual const SparseMatrix& system_matrix() const = 0;
+
+  /// Local step: replaces `rotations` (size num_rotations(); the input is a warm start) by the
+  /// minimizers of E(u, ·), and returns E(u, rotations) for the new rotations.
+  virtual double FitRotations(const Positions& u, Rotations& rotations,
+                              const Context& context) const = 0;
+
+  /// Global-step right-hand side B(R) (#V×3); `rhs` must have #V rows.
+  virtual void AssembleRhs(const Rotations& rotations, Positions& rhs,
+                           const Context& context) const = 0;
+
+  /// E(u, rotations).
+  virtual double Evaluate(const Positions& u, const Rotations& rotations,
+                          const Context& context) const = 0;
+
+ protected:
+  Energy() = default;
+};
+
+}  // namespace harap

@@ -1,0 +1,1167 @@
+// SPDX-License-Identifier: MIT
+//
+// Mesh reading and writing.
+//
+// Which parser reads what, and why (measured against OpenMesh 9.0, Debian 12):
+//   - OBJ, PLY and OFF are parsed here, not by OpenMesh. OpenMesh's readers hand every coordinate
+//     to the importer as a float (Vec3f) even when the file stores doubles, so a double-precision
+//     PLY written by WritePly would not read back bit-identically, and text coordinates such as
+//     "0.354446" would be rounded to float. They also produce silent garbage on bad input:
+//       * OBJ: a vertex line that fails to parse ("v nan 0 0", "v 1e39 0 0") is dropped, which
+//         shifts every later vertex index; faces with a repeated index ("f 1 1 3") are dropped;
+//         index 0 becomes vertex -1.
+//       * OFF: a non-numeric coordinate leaves later reads failing and faces are filled with
+//         uninitialized indices; a header that declares 2e9 faces on a short file, or random
+//         bytes, keep the reader looping for minutes.
+//       * PLY: a truncated binary file is reported as success with the vertices read so far.
+//   - STL goes through OpenMesh's reader (its coordinates are float32 in the format anyway, and
+//     OpenMesh welds the per-triangle corners into shared vertices). It is pre-validated here:
+//     OpenMesh's binary reader trusts the triangle count in the header (a truncated file makes it
+//     read zeros for up to 2^32 triangles) and its ASCII reader turns an unparsable coordinate
+//     into 0 silently.
+// Every reader keeps the file's vertex order and unreferenced vertices and fan-triangulates
+// polygons; nothing is dropped silently.
+#include "framework/io/mesh_io.h"
+
+#include <lzma.h>
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/Options.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/IO/reader/STLReader.hh>
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "framework/error.h"
+#include "framework/io/openmesh_log.h"
+
+namespace harap {
+
+namespace {
+
+constexpr std::string_view kSupportedFormats =
+    ".obj, .ply, .off, .stl (each optionally compressed as .xz, e.g. .obj.xz)";
+
+[[noreturn]] void Fail(const std::string& what, std::string_view problem) {
+  throw InputError(fmt::format("{}: {}", what, problem));
+}
+
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+bool EndsWith(std::string_view text, std::string_view suffix) {
+  return text.size() >= suffix.size() && text.substr(text.size() - suffix.size()) == suffix;
+}
+
+// The format extension ("obj", "ply", ...) of a file name, looking through a trailing ".xz".
+struct FileFormat {
+  std::string extension;  // lower case, without dot; "" if none
+  bool xz = false;
+};
+
+FileFormat DetectFormat(const std::filesystem::path& file) {
+  FileFormat format;
+  std::filesystem::path name = file.filename();
+  if (Lower(name.extension().string()) == ".xz") {
+    format.xz = true;
+    name = name.stem();
+  }
+  std::string extension = Lower(name.extension().string());
+  if (!extension.empty()) extension.erase(0, 1);
+  format.extension = extension;
+  return format;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Whole-file reading and xz decompression.
+
+std::string ReadWholeFile(const std::filesystem::path& file) {
+  const std::string what = file.string();
+  std::error_code error;
+  const auto status = std::filesystem::status(file, error);
+  if (!std::filesystem::exists(status)) Fail(what, "file not found");
+  if (std::filesystem::is_directory(status)) Fail(what, "is a directory, not a file");
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) Fail(what, "cannot open the file for reading");
+  std::string data;
+  const auto size = std::filesystem::file_size(file, error);
+  if (!error) data.reserve(static_cast<size_t>(size));
+  data.assign(std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>());
+  if (stream.bad()) Fail(what, "read error");
+  return data;
+}
+
+std::string DecompressXz(const std::string& compressed, const std::string& what) {
+  if (compressed.empty()) Fail(what, "not xz-compressed data: the file is empty");
+  lzma_stream stream = LZMA_STREAM_INIT;
+  // LZMA_CONCATENATED: `xz` itself accepts several concatenated streams in one file.
+  lzma_ret ret = lzma_stream_decoder(&stream, UINT64_MAX, LZMA_CONCATENATED);
+  if (ret != LZMA_OK) Fail(what, fmt::format("cannot start the xz decoder (liblzma error {})",
+                                             static_cast<int>(ret)));
+  struct Guard {
+    lzma_stream* stream;
+    ~Guard() { lzma_end(stream); }
+  } guard{&stream};
+
+  std::string out;
+  out.resize(std::max<size_t>(size_t{1} << 16, compressed.size() * 6));
+  stream.next_in = reinterpret_cast<const uint8_t*>(compressed.data());
+  stream.avail_in = compressed.size();
+  stream.next_out = reinterpret_cast<uint8_t*>(out.data());
+  stream.avail_out = out.size();
+  while (true) {
+    ret = lzma_code(&stream, LZMA_FINISH);
+    if (ret == LZMA_STREAM_END) break;
+    if (ret == LZMA_OK) {
+      if (stream.avail_out == 0) {
+        const size_t used = out.size();
+        out.resize(used * 2);
+        stream.next_out = reinterpret_cast<uint8_t*>(out.data()) + used;
+        stream.avail_out = out.size() - used;
+      }
+      continue;
+    }
+    switch (ret) {
+      case LZMA_FORMAT_ERROR:
+        Fail(what, "not xz-compressed data (the name ends in .xz but the xz magic bytes are "
+                   "missing)");
+      case LZMA_DATA_ERROR:
+        Fail(what, fmt::format("corrupt xz data (decoding failed after {} compressed bytes)",
+                               stream.total_in));
+      case LZMA_BUF_ERROR:
+        Fail(what, fmt::format("truncated xz data (the compressed stream ends after {} bytes "
+                               "without its end marker)",
+                               stream.total_in));
+      case LZMA_MEM_ERROR:
+        Fail(what, "out of memory while decompressing xz data");
+      case LZMA_OPTIONS_ERROR:
+        Fail(what, "unsupported xz compression options");
+      default:
+        Fail(what, fmt::format("xz decompression failed (liblzma error {})",
+                               static_cast<int>(ret)));
+    }
+  }
+  out.resize(stream.total_out);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// What the parsers produce before validation.
+
+struct RawMesh {
+  std::vector<double> xyz;       // 3 per vertex
+  std::vector<int64_t> corners;  // 3 per triangle, 0-based, not yet range checked
+  // Per triangle: where it came from, for error messages ("line 12", "face 7").
+  std::vector<int64_t> origin;
+  const char* origin_kind = "line";
+
+  void AddPolygon(const std::vector<int64_t>& polygon, int64_t where) {
+    // Fan triangulation (v0, vi, vi+1): exact for the triangles and convex polygons real files
+    // contain; the format gives no geometry to do better with.
+    for (size_t i = 1; i + 1 < polygon.size(); ++i) {
+      corners.push_back(polygon[0]);
+      corners.push_back(polygon[i]);
+      corners.push_back(polygon[i + 1]);
+      origin.push_back(where);
+    }
+  }
+};
+
+// Turns the raw lists into a Mesh, checking what ValidateMesh checks but with the file position
+// of the offending face in the message.
+Mesh BuildMesh(const RawMesh& raw, const std::string& what) {
+  const int64_t num_vertices = static_cast<int64_t>(raw.xyz.size() / 3);
+  const int64_t num_triangles = static_cast<int64_t>(raw.corners.size() / 3);
+  if (num_vertices > std::numeric_limits<Index>::max() ||
+      num_triangles > std::numeric_limits<Index>::max()) {
+    Fail(what, fmt::format("too large: {} vertices and {} triangles (at most {} each)",
+                           num_vertices, num_triangles, std::numeric_limits<Index>::max()));
+  }
+  if (num_vertices == 0) {
+    Fail(what, num_triangles == 0 ? "the file contains no vertices and no faces"
+                                  : "the file contains no vertices");
+  }
+  if (num_triangles == 0) {
+    Fail(what, fmt::format("no faces: the file contains {} vertices but no faces", num_vertices));
+  }
+  Mesh mesh;
+  mesh.vertices.resize(num_vertices, 3);
+  for (int64_t v = 0; v < num_vertices; ++v) {
+    for (int d = 0; d < 3; ++d) {
+      const double value = raw.xyz[3 * v + d];
+      if (!std::isfinite(value)) {
+        Fail(what, fmt::format("non-finite coordinate: vertex {} (0-based) is ({}, {}, {})", v,
+                               raw.xyz[3 * v], raw.xyz[3 * v + 1], raw.xyz[3 * v + 2]));
+      }
+      mesh.vertices(v, d) = value;
+    }
+  }
+  mesh.elements.resize(num_triangles, 3);
+  for (int64_t t = 0; t < num_triangles; ++t) {
+    for (int a = 0; a < 3; ++a) {
+      const int64_t v = raw.corners[3 * t + a];
+      if (v < 0 || v >= num_vertices) {
+        Fail(what, fmt::format("{} {}: vertex index out of range: {} (0-based), but the file has "
+                               "{} vertices",
+                               raw.origin_kind, raw.origin[t], v, num_vertices));
+      }
+      for (int b = 0; b < a; ++b) {
+        if (raw.corners[3 * t + b] == v) {
+          Fail(what, fmt::format("{} {}: degenerate face: it uses vertex {} (0-based) twice",
+                                 raw.origin_kind, raw.origin[t], v));
+        }
+      }
+      mesh.elements(t, a) = static_cast<Index>(v);
+    }
+  }
+  ValidateMesh(mesh, what);
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text scanning shared by the OBJ, OFF and ASCII PLY parsers.
+
+bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Splits off the next whitespace-separated token of `line` (which is advanced past it).
+std::string_view NextToken(std::string_view& line) {
+  size_t start = 0;
+  while (start < line.size() && IsSpace(line[start])) ++start;
+  size_t end = start;
+  while (end < line.size() && !IsSpace(line[end])) ++end;
+  std::string_view token = line.substr(start, end - start);
+  line.remove_prefix(end);
+  return token;
+}
+
+// Parses a whole token as a double; false if it is not a number. Non-finite spellings ("nan",
+// "inf") parse, so the caller can say that the number is non-finite rather than malformed.
+bool ParseDouble(std::string_view token, double& value) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
+  if (end != token.data() + token.size()) return false;
+  if (error == std::errc::result_out_of_range) {
+    // from_chars reports both overflow and underflow; strtod tells them apart (denormals and
+    // zero are fine, overflow becomes inf and is reported as non-finite by the caller).
+    value = std::strtod(std::string(token).c_str(), nullptr);
+    return true;
+  }
+  return error == std::errc();
+}
+
+bool ParseInteger(std::string_view token, int64_t& value) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return error == std::errc() && end == token.data() + token.size();
+}
+
+// Iterates over the lines of a text buffer, counting them (1-based).
+class LineReader {
+ public:
+  explicit LineReader(std::string_view data) : data_(data) {}
+
+  bool Next(std::string_view& line) {
+    if (position_ >= data_.size()) return false;
+    const size_t end = data_.find('\n', position_);
+    const size_t stop = end == std::string_view::npos ? data_.size() : end;
+    line = data_.substr(position_, stop - position_);
+    position_ = stop + 1;
+    ++line_number_;
+    return true;
+  }
+  size_t line_number() const { return line_number_; }
+
+ private:
+  std::string_view data_;
+  size_t position_ = 0;
+  size_t line_number_ = 0;
+};
+
+std::string_view StripComment(std::string_view line) {
+  const size_t hash = line.find('#');
+  return hash == std::string_view::npos ? line : line.substr(0, hash);
+}
+
+std::string Quote(std::string_view token) {
+  constexpr size_t kMax = 40;
+  std::string text(token.substr(0, kMax));
+  for (char& c : text) {
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  }
+  return fmt::format("'{}{}'", text, token.size() > kMax ? "..." : "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ: `v x y z` and `f a b c ...` (a = i, i/t, i//n or i/t/n; 1-based, negative = relative).
+
+RawMesh ParseObj(std::string_view data, const std::string& what) {
+  RawMesh raw;
+  raw.xyz.reserve(data.size() / 16);
+  raw.corners.reserve(data.size() / 8);
+  LineReader lines(data);
+  std::string_view line;
+  std::vector<int64_t> polygon;
+  while (lines.Next(line)) {
+    line = StripComment(line);
+    const std::string_view keyword = NextToken(line);
+    if (keyword == "v") {
+      for (int d = 0; d < 3; ++d) {
+        const std::string_view token = NextToken(line);
+        double value = 0.0;
+        if (token.empty()) {
+          Fail(what, fmt::format("line {}: vertex has fewer than three coordinates",
+                                 lines.line_number()));
+        }
+        if (!ParseDouble(token, value)) {
+          Fail(what, fmt::format("line {}: vertex coordinate {} is not a number",
+                                 lines.line_number(), Quote(token)));
+        }
+        if (!std::isfinite(value)) {
+          Fail(what, fmt::format("line {}: non-finite coordinate {} (vertex {}, 1-based)",
+                                 lines.line_number(), Quote(token), raw.xyz.size() / 3 + 1));
+        }
+        raw.xyz.push_back(value);
+      }
+      // Further values (w, or r g b colours) are ignored.
+    } else if (keyword == "f") {
+      polygon.clear();
+      const int64_t vertices_so_far = static_cast<int64_t>(raw.xyz.size() / 3);
+      for (std::string_view token = NextToken(line); !token.empty(); token = NextToken(line)) {
+        const std::string_view index_text = token.substr(0, token.find('/'));
+        int64_t index = 0;
+        if (!ParseInteger(index_text, index)) {
+          Fail(what, fmt::format("line {}: face vertex {} is not an index", lines.line_number(),
+                                 Quote(token)));
+        }
+        if (index == 0) {
+          Fail(what, fmt::format("line {}: vertex index out of range: 0 (OBJ indices start at 1; "
+                                 "negative ones count back from the last vertex)",
+                                 lines.line_number()));
+        }
+        if (index < 0) {
+          if (-index > vertices_so_far) {
+            Fail(what, fmt::format("line {}: vertex index out of range: relative index {} "
+                                   "points before the first vertex ({} vertices read so far)",
+                                   lines.line_number(), index, vertices_so_far));
+          }
+          polygon.push_back(vertices_so_far + index);
+        } else {
+          // Forward references are legal OBJ; the range is checked once all vertices are read.
+          polygon.push_back(index - 1);
+        }
+      }
+      if (polygon.size() < 3) {
+        Fail(what, fmt::format("line {}: face has {} vertices (at least 3 are needed)",
+                               lines.line_number(), polygon.size()));
+      }
+      raw.AddPolygon(polygon, static_cast<int64_t>(lines.line_number()));
+    }
+    // Everything else (vt, vn, g, o, s, usemtl, mtllib, l, p, ...) carries nothing we use.
+  }
+  return raw;
+}
+
+// ---------------------------------------------------------------------------------------------
+// OFF (ASCII): header `OFF` (or COFF, NOFF, STOFF, ...), counts `nv nf ne`, then one vertex per
+// line (x y z, further values ignored) and one face per line (n i1 ... in, 0-based).
+
+RawMesh ParseOff(std::string_view data, const std::string& what) {
+  RawMesh raw;
+  LineReader lines(data);
+  std::string_view line;
+  // The next line with content (comments and blank lines skipped); false at the end.
+  auto next_content_line = [&](std::string_view& out) {
+    while (lines.Next(out)) {
+      out = StripComment(out);
+      std::string_view probe = out;
+      if (!NextToken(probe).empty()) return true;
+    }
+    return false;
+  };
+  if (!next_content_line(line)) Fail(what, "empty file (no OFF header)");
+  const std::string header(NextToken(line));
+  if (!EndsWith(header, "OFF")) {
+    Fail(what, fmt::format("not an OFF file: the first line starts with {} instead of OFF",
+                           Quote(header)));
+  }
+  const std::string prefix = header.substr(0, header.size() - 3);
+  // Optional per-vertex data: ST (texture), C (colour), N (normal); all come after x y z on the
+  // line, so line-based parsing ignores them. 4OFF (homogeneous) and nOFF (n-dimensional) change
+  // the meaning of the coordinates and are refused.
+  {
+    std::string rest = prefix;
+    for (const char* part : {"ST", "C", "N"}) {
+      if (rest.rfind(part, 0) == 0) rest.erase(0, std::strlen(part));
+    }
+    if (!rest.empty()) {
+      Fail(what, fmt::format("unsupported OFF variant {} (supported: OFF with optional ST, C, N "
+                             "prefixes)",
+                             Quote(header)));
+    }
+  }
+  std::string_view counts_line = line;
+  {
+    std::string_view probe = counts_line;
+    const std::string_view first = NextToken(probe);
+    if (first == "BINARY") {
+      Fail(what, "binary OFF is not supported (convert it to PLY or ASCII OFF)");
+    }
+    if (first.empty() && !next_content_line(counts_line)) {
+      Fail(what, "the file ends after the OFF header (no vertex/face counts)");
+    }
+  }
+  int64_t counts[2] = {0, 0};
+  for (int64_t& count : counts) {
+    const std::string_view token = NextToken(counts_line);
+    if (!ParseInteger(token, count) || count < 0) {
+      Fail(what, fmt::format("line {}: expected the vertex and face counts, found {}",
+                             lines.line_number(), Quote(token)));
+    }
+  }
+  const int64_t num_vertices = counts[0];
+  const int64_t num_faces = counts[1];
+  // Each vertex line has at least 6 bytes ("0 0 0\n"): a larger count cannot be right, and
+  // checking it here keeps a corrupt header from triggering a huge allocation.
+  if (num_vertices > static_cast<int64_t>(data.size() / 6) + 1) {
+    Fail(what, fmt::format("truncated file: the header declares {} vertices, more than a file of "
+                           "{} bytes can hold",
+                           num_vertices, data.size()));
+  }
+  raw.xyz.reserve(static_cast<size_t>(num_vertices) * 3);
+  for (int64_t v = 0; v < num_vertices; ++v) {
+    if (!next_content_line(line)) {
+      Fail(what, fmt::format("truncated file: it ends after {} of the {} vertices the header "
+                             "declares",
+                             v, num_vertices));
+    }
+    for (int d = 0; d < 3; ++d) {
+      const std::string_view token = NextToken(line);
+      double value = 0.0;
+      if (!ParseDouble(token, value)) {
+        Fail(what, fmt::format("line {}: vertex coordinate {} is not a number",
+                               lines.line_number(), token.empty() ? "(missing)" : Quote(token)));
+      }
+      if (!std::isfinite(value)) {
+        Fail(what, fmt::format("line {}: non-finite coordinate {} (vertex {}, 0-based)",
+                               lines.line_number(), Quote(token), v));
+      }
+      raw.xyz.push_back(value);
+    }
+  }
+  std::vector<int64_t> polygon;
+  for (int64_t f = 0; f < num_faces; ++f) {
+    if (!next_content_line(line)) {
+      Fail(what, fmt::format("truncated file: it ends after {} of the {} faces the header "
+                             "declares",
+                             f, num_faces));
+    }
+    const std::string_view count_token = NextToken(line);
+    int64_t count = 0;
+    if (!ParseInteger(count_token, count) || count < 0) {
+      Fail(what, fmt::format("line {}: face vertex count {} is not a non-negative integer",
+                             lines.line_number(), Quote(count_token)));
+    }
+    if (count < 3) {
+      Fail(what, fmt::format("line {}: face has {} vertices (at least 3 are needed)",
+                             lines.line_number(), count));
+    }
+    polygon.clear();
+    for (int64_t i = 0; i < count; ++i) {
+      const std::string_view token = NextToken(line);
+      int64_t index = 0;
+      if (!ParseInteger(token, index)) {
+        Fail(what, fmt::format("line {}: face has {} of its {} vertex indices ({} found)",
+                               lines.line_number(), i, count,
+                               token.empty() ? "end of line" : Quote(token)));
+      }
+      polygon.push_back(index);
+    }
+    raw.AddPolygon(polygon, static_cast<int64_t>(lines.line_number()));
+  }
+  return raw;
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY: ASCII and binary (both byte orders); `vertex` with x y z of any scalar type, `face` with a
+// `vertex_indices` (or `vertex_index`) list; other elements and properties are skipped.
+
+enum class PlyType { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+
+bool ParsePlyType(std::string_view name, PlyType& type) {
+  static const std::pair<std::string_view, PlyType> kTypes[] = {
+      {"char", PlyType::kInt8},     {"int8", PlyType::kInt8},      {"uchar", PlyType::kUInt8},
+      {"uint8", PlyType::kUInt8},   {"short", PlyType::kInt16},    {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUInt16}, {"uint16", PlyType::kUInt16},  {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},   {"uint", PlyType::kUInt32},    {"uint32", PlyType::kUInt32},
+      {"float", PlyType::kFloat32}, {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"float64", PlyType::kFloat64}};
+  for (const auto& [text, value] : kTypes) {
+    if (text == name) {
+      type = value;
+      return true;
+    }
+  }
+  return false;
+}
+
+size_t PlyTypeSize(PlyType type) {
+  switch (type) {
+    case PlyType::kInt8:
+    case PlyType::kUInt8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUInt16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUInt32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
+  }
+  return 0;
+}
+
+bool IsIntegerType(PlyType type) { return type != PlyType::kFloat32 && type != PlyType::kFloat64; }
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::kFloat32;
+  bool is_list = false;
+  PlyType count_type = PlyType::kUInt8;
+};
+
+struct PlyElement {
+  std::string name;
+  int64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::kAscii;
+  std::vector<PlyElement> elements;
+  size_t data_offset = 0;  // first byte after end_header's line
+};
+
+PlyHeader ParsePlyHeader(std::string_view data, const std::string& what) {
+  PlyHeader header;
+  LineReader lines(data);
+  std::string_view line;
+  if (!lines.Next(line) || NextToken(line) != "ply") {
+    Fail(what, "not a PLY file (it does not start with the line \"ply\")");
+  }
+  bool have_format = false;
+  size_t consumed = data.find('\n') + 1;
+  while (true) {
+    if (!lines.Next(line)) Fail(what, "PLY header has no end_header line");
+    consumed += line.size() + 1;
+    std::string_view rest = line;
+    const std::string_view keyword = NextToken(rest);
+    const size_t number = lines.line_number();
+    if (keyword == "end_header") break;
+    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
+    if (keyword == "format") {
+      const std::string_view kind = NextToken(rest);
+      if (kind == "ascii") {
+        header.format = PlyFormat::kAscii;
+      } else if (kind == "binary_little_endian") {
+        header.format = PlyFormat::kBinaryLittleEndian;
+      } else if (kind == "binary_big_endian") {
+        header.format = PlyFormat::kBinaryBigEndian;
+      } else {
+        Fail(what, fmt::format("PLY header line {}: unknown format {}", number, Quote(kind)));
+      }
+      have_format = true;
+    } else if (keyword == "element") {
+      PlyElement element;
+      element.name = std::string(NextToken(rest));
+      const std::string_view count = NextToken(rest);
+      if (element.name.empty() || !ParseInteger(count, element.count) || element.count < 0) {
+        Fail(what, fmt::format("PLY header line {}: malformed element line", number));
+      }
+      header.elements.push_back(std::move(element));
+    } else if (keyword == "property") {
+      if (header.elements.empty()) {
+        Fail(what, fmt::format("PLY header line {}: property before any element", number));
+      }
+      PlyProperty property;
+      std::string_view type = NextToken(rest);
+      if (type == "list") {
+        property.is_list = true;
+        const std::string_view count_type = NextToken(rest);
+        if (!ParsePlyType(count_type, property.count_type) ||
+            !IsIntegerType(property.count_type)) {
+          Fail(what, fmt::format("PLY header line {}: bad list count type {}", number,
+                                 Quote(count_type)));
+        }
+        type = NextToken(rest);
+      }
+      if (!ParsePlyType(type, property.type)) {
+        Fail(what, fmt::format("PLY header line {}: unknown property type {}", number,
+                               Quote(type)));
+      }
+      property.name = std::string(NextToken(rest));
+      if (property.name.empty()) {
+        Fail(what, fmt::format("PLY header line {}: property without a name", number));
+      }
+      header.elements.back().properties.push_back(std::move(property));
+    } else {
+      Fail(what, fmt::format("PLY header line {}: unknown keyword {}", number, Quote(keyword)));
+    }
+  }
+  if (!have_format) Fail(what, "PLY header has no format line");
+  header.data_offset = std::min(consumed, data.size());
+  return header;
+}
+
+// Sequential access to the body of a binary PLY file with bounds checks.
+class BinaryCursor {
+ public:
+  BinaryCursor(std::string_view data, bool big_endian, const std::string& what)
+      : data_(data), swap_(big_endian != (std::endian::native == std::endian::big)), what_(what) {}
+
+  size_t remaining() const { return data_.size() - position_; }
+
+  [[noreturn]] void Truncated(const PlyElement& element, int64_t item) const {
+    Fail(what_, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
+                            "{})",
+                            element.name, item, element.count));
+  }
+
+  // Reads one scalar of `type`; false at the end of the data.
+  bool Read(PlyType type, double& as_double, int64_t& as_integer) {
+    const size_t size = PlyTypeSize(type);
+    if (remaining() < size) return false;
+    unsigned char bytes[8];
+    std::memcpy(bytes, data_.data() + position_, size);
+    position_ += size;
+    if (swap_) std::reverse(bytes, bytes + size);
+    switch (type) {
+      case PlyType::kInt8: as_integer = static_cast<int8_t>(bytes[0]); break;
+      case PlyType::kUInt8: as_integer = bytes[0]; break;
+      case PlyType::kInt16: as_integer = Load<int16_t>(bytes); break;
+      case PlyType::kUInt16: as_integer = Load<uint16_t>(bytes); break;
+      case PlyType::kInt32: as_integer = Load<int32_t>(bytes); break;
+      case PlyType::kUInt32: as_integer = Load<uint32_t>(bytes); break;
+      case PlyType::kFloat32: as_double = Load<float>(bytes); return true;
+      case PlyType::kFloat64: as_double = Load<double>(bytes); return true;
+    }
+    as_double = static_cast<double>(as_integer);
+    return true;
+  }
+
+  bool Skip(size_t bytes) {
+    if (remaining() < bytes) return false;
+    position_ += bytes;
+    return true;
+  }
+
+ private:
+  template <class T>
+  static T Load(const unsigned char* bytes) {
+    T value;
+    std::memcpy(&value, bytes, sizeof(T));
+    return value;
+  }
+
+  std::string_view data_;
+  size_t position_ = 0;
+  bool swap_;
+  const std::string& what_;
+};
+
+// Sequential whitespace-separated tokens of an ASCII PLY body, with line numbers.
+class AsciiCursor {
+ public:
+  AsciiCursor(std::string_view data, size_t first_line) : data_(data), line_(first_line) {}
+
+  std::string_view Next() {
+    while (position_ < data_.size() &&
+           (IsSpace(data_[position_]) || data_[position_] == '\n')) {
+      if (data_[position_] == '\n') ++line_;
+      ++position_;
+    }
+    const size_t start = position_;
+    while (position_ < data_.size() && !IsSpace(data_[position_]) && data_[position_] != '\n') {
+      ++position_;
+    }
+    return data_.substr(start, position_ - start);
+  }
+  size_t line() const { return line_; }
+
+ private:
+  std::string_view data_;
+  size_t position_ = 0;
+  size_t line_;
+};
+
+RawMesh ParsePly(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const std::string_view body = data.substr(header.data_offset);
+  const bool binary = header.format != PlyFormat::kAscii;
+
+  // Locate the vertex coordinates and the face index list.
+  const PlyElement* vertex_element = nullptr;
+  const PlyElement* face_element = nullptr;
+  int coordinate_slot[3] = {-1, -1, -1};
+  int index_slot = -1;
+  for (const PlyElement& element : header.elements) {
+    if (element.name == "vertex") {
+      vertex_element = &element;
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        for (int d = 0; d < 3; ++d) {
+          if (property.name == std::string(1, static_cast<char>('x' + d)) && !property.is_list) {
+            coordinate_slot[d] = static_cast<int>(p);
+          }
+        }
+      }
+    } else if (element.name == "face") {
+      face_element = &element;
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        if (property.is_list &&
+            (property.name == "vertex_indices" || property.name == "vertex_index")) {
+          index_slot = static_cast<int>(p);
+        }
+      }
+    }
+  }
+  if (!vertex_element) Fail(what, "PLY header declares no 'vertex' element");
+  for (int d = 0; d < 3; ++d) {
+    if (coordinate_slot[d] < 0) {
+      Fail(what, fmt::format("PLY 'vertex' element has no scalar property '{}'",
+                             static_cast<char>('x' + d)));
+    }
+  }
+  if (!face_element || face_element->count == 0) {
+    Fail(what, fmt::format("no faces: the PLY file declares {} vertices but no faces",
+                           vertex_element->count));
+  }
+  if (index_slot < 0) {
+    Fail(what, "PLY 'face' element has no list property 'vertex_indices' (or 'vertex_index')");
+  }
+  if (!IsIntegerType(face_element->properties[index_slot].type)) {
+    Fail(what, "PLY face property 'vertex_indices' has a floating-point type");
+  }
+
+  // A lower bound on the bytes each item needs, so that a corrupt count fails before it makes us
+  // reserve gigabytes.
+  for (const PlyElement& element : header.elements) {
+    size_t min_bytes = 0;
+    for (const PlyProperty& property : element.properties) {
+      min_bytes += binary ? PlyTypeSize(property.is_list ? property.count_type : property.type)
+                          : 2;  // "0 " in ASCII
+    }
+    if (min_bytes > 0 &&
+        static_cast<uint64_t>(element.count) > body.size() / std::max<size_t>(min_bytes, 1)) {
+      Fail(what, fmt::format("truncated PLY data: the header declares {} '{}' items, more than "
+                             "the {} bytes after the header can hold",
+                             element.count, element.name, body.size()));
+    }
+  }
+
+  RawMesh raw;
+  raw.origin_kind = "face";
+  raw.xyz.reserve(static_cast<size_t>(vertex_element->count) * 3);
+  raw.corners.reserve(static_cast<size_t>(face_element->count) * 3);
+  raw.origin.reserve(static_cast<size_t>(face_element->count));
+  std::vector<int64_t> polygon;
+
+  if (binary) {
+    BinaryCursor cursor(body, header.format == PlyFormat::kBinaryBigEndian, what);
+    bool vertices_done = false;
+    for (const PlyElement& element : header.elements) {
+      const bool is_vertex = &element == vertex_element;
+      const bool is_face = &element == face_element;
+      if (element.properties.empty()) continue;  // nothing stored per item
+      for (int64_t item = 0; item < element.count; ++item) {
+        double xyz[3] = {0.0, 0.0, 0.0};
+        for (size_t p = 0; p < element.properties.size(); ++p) {
+          const PlyProperty& property = element.properties[p];
+          double as_double = 0.0;
+          int64_t as_integer = 0;
+          if (!property.is_list) {
+            if (!cursor.Read(property.type, as_double, as_integer)) cursor.Truncated(element, item);
+            if (is_vertex) {
+              for (int d = 0; d < 3; ++d) {
+                if (coordinate_slot[d] == static_cast<int>(p)) xyz[d] = as_double;
+              }
+            }
+            continue;
+          }
+          if (!cursor.Read(property.count_type, as_double, as_integer)) {
+            cursor.Truncated(element, item);
+          }
+          const int64_t count = as_integer;
+          if (count < 0) {
+            Fail(what, fmt::format("PLY element '{}' item {}: negative list length {}",
+                                   element.name, item, count));
+          }
+          if (is_face && static_cast<int>(p) == index_slot) {
+            if (count < 3) {
+              Fail(what, fmt::format("face {}: face has {} vertices (at least 3 are needed)", item,
+                                     count));
+            }
+            polygon.clear();
+            for (int64_t i = 0; i < count; ++i) {
+              if (!cursor.Read(property.type, as_double, as_integer)) {
+                cursor.Truncated(element, item);
+              }
+              polygon.push_back(as_integer);
+            }
+            raw.AddPolygon(polygon, item);
+          } else if (!cursor.Skip(static_cast<size_t>(count) * PlyTypeSize(property.type))) {
+            cursor.Truncated(element, item);
+          }
+        }
+        if (is_vertex) raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+      }
+      vertices_done = vertices_done || is_vertex;
+      if (is_face && vertices_done) break;  // later elements hold nothing we use
+    }
+  } else {
+    AsciiCursor cursor(body, 0);
+    auto line_of = [&](size_t body_line) {
+      // Lines in messages count from the top of the file.
+      return body_line + 1 + static_cast<size_t>(std::count(
+                                 data.begin(), data.begin() + header.data_offset, '\n'));
+    };
+    auto truncated = [&](const PlyElement& element, int64_t item) {
+      Fail(what, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
+                             "{})",
+                             element.name, item, element.count));
+    };
+    bool vertices_done = false;
+    for (const PlyElement& element : header.elements) {
+      const bool is_vertex = &element == vertex_element;
+      const bool is_face = &element == face_element;
+      if (element.properties.empty()) continue;  // nothing stored per item
+      for (int64_t item = 0; item < element.count; ++item) {
+        double xyz[3] = {0.0, 0.0, 0.0};
+        for (size_t p = 0; p < element.properties.size(); ++p) {
+          const PlyProperty& property = element.properties[p];
+          if (!property.is_list) {
+            const std::string_view token = cursor.Next();
+            if (token.empty()) truncated(element, item);
+            if (is_vertex) {
+              for (int d = 0; d < 3; ++d) {
+                if (coordinate_slot[d] != static_cast<int>(p)) continue;
+                if (!ParseDouble(token, xyz[d])) {
+                  Fail(what, fmt::format("line {}: vertex coordinate {} is not a number",
+                                         line_of(cursor.line()), Quote(token)));
+                }
+              }
+            }
+            continue;
+          }
+          const std::string_view count_token = cursor.Next();
+          if (count_token.empty()) truncated(element, item);
+          int64_t count = 0;
+          if (!ParseInteger(count_token, count) || count < 0) {
+            Fail(what, fmt::format("line {}: list length {} is not a non-negative integer",
+                                   line_of(cursor.line()), Quote(count_token)));
+          }
+          const bool indices = is_face && static_cast<int>(p) == index_slot;
+          if (indices && count < 3) {
+            Fail(what, fmt::format("line {}: face has {} vertices (at least 3 are needed)",
+                                   line_of(cursor.line()), count));
+          }
+          polygon.clear();
+          for (int64_t i = 0; i < count; ++i) {
+            const std::string_view token = cursor.Next();
+            if (token.empty()) truncated(element, item);
+            if (!indices) continue;
+            int64_t index = 0;
+            if (!ParseInteger(token, index)) {
+              Fail(what, fmt::format("line {}: face vertex index {} is not an integer",
+                                     line_of(cursor.line()), Quote(token)));
+            }
+            polygon.push_back(index);
+          }
+          if (indices) raw.AddPolygon(polygon, item);
+        }
+        if (is_vertex) raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+      }
+      vertices_done = vertices_done || is_vertex;
+      if (is_face && vertices_done) break;  // later elements hold nothing we use
+    }
+  }
+  return raw;
+}
+
+// ---------------------------------------------------------------------------------------------
+// STL through OpenMesh, collecting raw positions and triangles.
+
+// Collects what an OpenMesh reader produces without building a halfedge mesh (a halfedge mesh
+// would refuse non-manifold faces, and real meshes have them).
+class RawImporter final : public OpenMesh::IO::BaseImporter {
+ public:
+  explicit RawImporter(RawMesh& raw) : raw_(raw) {}
+
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& point) override {
+    return add_vertex(OpenMesh::Vec3d(point[0], point[1], point[2]));
+  }
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& point) override {
+    raw_.xyz.insert(raw_.xyz.end(), {point[0], point[1], point[2]});
+    return OpenMesh::VertexHandle(static_cast<int>(raw_.xyz.size() / 3 - 1));
+  }
+  OpenMesh::VertexHandle add_vertex() override { return add_vertex(OpenMesh::Vec3d(0, 0, 0)); }
+  void set_point(OpenMesh::VertexHandle vertex, const OpenMesh::Vec3f& point) override {
+    const size_t v = static_cast<size_t>(vertex.idx());
+    if (vertex.idx() < 0 || 3 * v + 2 >= raw_.xyz.size()) return;
+    raw_.xyz[3 * v] = point[0];
+    raw_.xyz[3 * v + 1] = point[1];
+    raw_.xyz[3 * v + 2] = point[2];
+  }
+  OpenMesh::FaceHandle add_face(const VHandles& vertices) override {
+    polygon_.clear();
+    for (const auto& vertex : vertices) polygon_.push_back(vertex.idx());
+    raw_.AddPolygon(polygon_, faces_);
+    return OpenMesh::FaceHandle(static_cast<int>(faces_++));
+  }
+  size_t n_vertices() const override { return raw_.xyz.size() / 3; }
+  size_t n_faces() const override { return static_cast<size_t>(faces_); }
+  size_t n_edges() const override { return 0; }
+
+  // Attributes and connectivity hints we do not keep.
+  OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle, OpenMesh::VertexHandle) override {
+    return OpenMesh::HalfedgeHandle();
+  }
+  OpenMesh::FaceHandle add_face(OpenMesh::HalfedgeHandle) override {
+    return OpenMesh::FaceHandle();
+  }
+  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle,
+                          const std::vector<OpenMesh::Vec2f>&) override {}
+  void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle,
+                          const std::vector<OpenMesh::Vec3f>&) override {}
+  void set_face_texindex(OpenMesh::FaceHandle, int) override {}
+  void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
+  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3d&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
+  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
+  void set_status(OpenMesh::VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_next(OpenMesh::HalfedgeHandle, OpenMesh::HalfedgeHandle) override {}
+  void set_face(OpenMesh::HalfedgeHandle, OpenMesh::FaceHandle) override {}
+  void request_face_texcoords2D() override {}
+  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
+  void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+  void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
+  void set_status(OpenMesh::HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
+  void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
+  void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3d&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3uc&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4uc&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
+  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4f&) override {}
+  void set_status(OpenMesh::FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  void add_texture_information(int, std::string) override {}
+
+ private:
+  RawMesh& raw_;
+  std::vector<int64_t> polygon_;
+  int64_t faces_ = 0;
+};
+
+// Checks what OpenMesh's STL readers take on trust (see the top of this file). Returns whether
+// the data is binary STL.
+bool PrevalidateStl(std::string_view data, const std::string& what) {
+  if (data.size() >= 84) {
+    uint32_t triangles = 0;
+    std::memcpy(&triangles, data.data() + 80, 4);
+    if constexpr (std::endian::native == std::endian::big) triangles = __builtin_bswap32(triangles);
+    if (84 + 50 * static_cast<uint64_t>(triangles) == data.size()) {
+      for (uint64_t t = 0; t < triangles; ++t) {
+        for (int corner = 0; corner < 3; ++corner) {
+          for (int d = 0; d < 3; ++d) {
+            float value = 0.0f;
+            std::memcpy(&value, data.data() + 84 + 50 * t + 12 + 12 * corner + 4 * d, 4);
+            if constexpr (std::endian::native == std::endian::big) {
+              value = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(value)));
+            }
+            if (!std::isfinite(value)) {
+              Fail(what, fmt::format("non-finite coordinate in triangle {} (0-based) of the "
+                                     "binary STL data",
+                                     t));
+            }
+          }
+        }
+      }
+      return true;
+    }
+  }
+  std::string_view probe = data;
+  while (!probe.empty() && (IsSpace(probe.front()) || probe.front() == '\n')) {
+    probe.remove_prefix(1);
+  }
+  if (probe.substr(0, 5) != "solid") {
+    uint32_t triangles = 0;
+    if (data.size() >= 84) std::memcpy(&triangles, data.data() + 80, 4);
+    Fail(what, fmt::format("neither ASCII STL (it does not start with \"solid\") nor binary STL "
+                           "(a binary STL of {} bytes would declare {} triangles; its header "
+                           "declares {}: truncated or not STL)",
+                           data.size(), data.size() >= 84 ? (data.size() - 84) / 50 : 0,
+                           triangles));
+  }
+  // ASCII: OpenMesh reads the three lines after each line containing "outer" as vertices.
+  LineReader lines(data);
+  std::string_view line;
+  while (lines.Next(line)) {
+    if (line.find("outer") == std::string_view::npos &&
+        line.find("OUTER") == std::string_view::npos) {
+      continue;
+    }
+    for (int corner = 0; corner < 3; ++corner) {
+      if (!lines.Next(line)) {
+        Fail(what, fmt::format("truncated STL: the file ends inside the facet loop started at "
+                               "line {}",
+                               lines.line_number() - corner));
+      }
+      std::string_view rest = line;
+      const std::string_view keyword = NextToken(rest);
+      if (keyword != "vertex") {
+        Fail(what, fmt::format("line {}: expected 'vertex x y z' inside a facet loop, found {}",
+                               lines.line_number(), Quote(keyword)));
+      }
+      for (int d = 0; d < 3; ++d) {
+        const std::string_view token = NextToken(rest);
+        double value = 0.0;
+        if (!ParseDouble(token, value)) {
+          Fail(what, fmt::format("line {}: vertex coordinate {} is not a number",
+                                 lines.line_number(), Quote(token)));
+        }
+        if (!std::isfinite(value) ||
+            std::abs(value) > static_cast<double>(std::numeric_limits<float>::max())) {
+          Fail(what, fmt::format("line {}: non-finite coordinate {} (as float)",
+                                 lines.line_number(), Quote(token)));
+        }
+      }
+    }
+  }
+  return false;
+}
+
+RawMesh ParseStl(const std::string& data, const std::string& what) {
+  const bool binary = PrevalidateStl(data, what);
+  RawMesh raw;
+  raw.origin_kind = "triangle";
+  RawImporter importer(raw);
+  OpenMesh::IO::Options options;
+  if (binary) options += OpenMesh::IO::Options::Binary;
+  io_internal::OpenMeshLogCapture capture;
+  std::istringstream stream(data);
+  if (!OpenMesh::IO::IOManager().read(stream, "stl", importer, options)) {
+    const std::string errors = capture.Errors();
+    Fail(what, fmt::format("OpenMesh's STL reader failed{}",
+                           errors.empty() ? "" : fmt::format(": {}", errors)));
+  }
+  return raw;
+}
+
+}  // namespace
+
+std::string ReadFileMaybeXz(const std::filesystem::path& file) {
+  std::string data = ReadWholeFile(file);
+  if (DetectFormat(file).xz) return DecompressXz(data, file.string());
+  return data;
+}
+
+Mesh ReadMesh(const std::filesystem::path& file) {
+  const std::string what = file.string();
+  const FileFormat format = DetectFormat(file);
+  const std::string& extension = format.extension;
+  if (extension == "node" || extension == "ele" || extension == "mesh") {
+    Fail(what, "tetrahedral meshes are not supported yet (TetGen .node/.ele and MEDIT .mesh "
+               "files will be)");
+  }
+  if (extension != "obj" && extension != "ply" && extension != "off" && extension != "stl") {
+    Fail(what, fmt::format("unknown mesh file extension '{}{}'; supported: {}",
+                           extension.empty() ? "" : ".", extension, kSupportedFormats));
+  }
+  const std::string data = ReadFileMaybeXz(file);
+  RawMesh raw;
+  if (extension == "obj") {
+    raw = ParseObj(data, what);
+  } else if (extension == "ply") {
+    raw = ParsePly(data, what);
+  } else if (extension == "off") {
+    raw = ParseOff(data, what);
+  } else {
+    raw = ParseStl(data, what);
+  }
+  return BuildMesh(raw, what);
+}
+
+void WritePly(const std::filesystem::path& file, const Positions& vertices,
+              const Elements& elements) {
+  HARAP_CHECK(elements.rows() == 0 || elements.cols() == 3,
+              "WritePly writes triangles, got elements with {} vertices", elements.cols());
+  for (Index f = 0; f < elements.rows(); ++f) {
+    for (int a = 0; a < 3; ++a) {
+      HARAP_CHECK(elements(f, a) >= 0 && elements(f, a) < vertices.rows(),
+                  "face {} references vertex {} of {}", f, elements(f, a), vertices.rows());
+    }
+  }
+  std::string buffer = fmt::format(
+      "ply\nformat binary_little_endian 1.0\ncomment written by harap\n"
+      "element vertex {}\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+      vertices.rows(), elements.rows());
+  const size_t header_size = buffer.size();
+  buffer.resize(header_size + static_cast<size_t>(vertices.rows()) * 24 +
+                static_cast<size_t>(elements.rows()) * 13);
+  char* out = buffer.data() + header_size;
+  auto put = [&out](auto value) {
+    if constexpr (std::endian::native == std::endian::big) {
+      unsigned char bytes[sizeof(value)];
+      std::memcpy(bytes, &value, sizeof(value));
+      std::reverse(bytes, bytes + sizeof(value));
+      std::memcpy(out, bytes, sizeof(value));
+    } else {
+      std::memcpy(out, &value, sizeof(value));
+    }
+    out += sizeof(value);
+  };
+  for (Index v = 0; v < vertices.rows(); ++v) {
+    for (int d = 0; d < 3; ++d) put(static_cast<double>(vertices(v, d)));
+  }
+  for (Index f = 0; f < elements.rows(); ++f) {
+    put(static_cast<uint8_t>(3));
+    for (int a = 0; a < 3; ++a) put(static_cast<int32_t>(elements(f, a)));
+  }
+  std::ofstream stream(file, std::ios::binary | std::ios::trunc);
+  if (!stream) throw Error(fmt::format("{}: cannot open the file for writing", file.string()));
+  stream.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  stream.close();
+  if (!stream) throw Error(fmt::format("{}: write failed (disk full?)", file.string()));
+}
+
+}  // namespace harap

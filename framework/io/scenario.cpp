@@ -1,0 +1,582 @@
+// SPDX-License-Identifier: MIT
+//
+// Scenario files (shared/scenarios/FORMAT.md). Decisions the format leaves open:
+//   - "The bounding box of the rest mesh" is the box of the vertices referenced by some triangle
+//     (the same set BoundingBoxDiagonal uses), after `refine`. Unreferenced vertices (the
+//     Stanford bunny has 1,113) are stray points, not surface: they neither stretch the box nor
+//     get picked by `slab`/`ball` selections. `indices`/`index_file` may name any vertex.
+//   - An axis along which the box is flat (extent 0) gives every vertex the fraction 0 there.
+//   - Everything written in the scenario text (unknown keys, bad values, selections that match
+//     nothing) is a ConfigError; problems with the files it names (missing, unreadable, bad
+//     index files) are InputErrors. Every message starts with "file:line:column".
+//   - The whole text is checked before the mesh is read, so a typo does not cost a mesh load.
+#include "framework/io/scenario.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "framework/config.h"
+#include "framework/error.h"
+#include "framework/io/builtin_meshes.h"
+#include "framework/io/mesh_io.h"
+#include "framework/io/subdivision.h"
+
+namespace harap {
+
+namespace {
+
+enum class SelectionKind { kSlab, kBall, kIndices, kIndexFile };
+enum class TargetKind { kMotion, kInitial };
+
+struct HandleSpec {
+  std::string name;
+  std::string label;         // "handle 'feet'" or "handle 2" (for messages)
+  std::string select_where;  // position of `select`, for selection errors
+  SelectionKind kind = SelectionKind::kSlab;
+  int axis = 0;  // slab
+  double from = 0.0, to = 0.0;
+  Eigen::Vector3d ball_center = Eigen::Vector3d::Zero();  // box fractions
+  double radius = 0.0;                                    // in box diagonals
+  std::vector<int64_t> indices;
+  std::vector<std::string> index_where;  // per inline index
+  std::filesystem::path index_file;
+  std::string index_file_where;
+  std::string description;  // of the selection, for "matches no vertex"
+
+  TargetKind target = TargetKind::kMotion;
+  bool has_rotation = false;
+  Eigen::Vector3d axis_vector = Eigen::Vector3d::UnitZ();
+  double degrees = 0.0;
+  std::optional<Eigen::Vector3d> center;  // box fractions
+  bool has_translation = false;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
+class Parser {
+ public:
+  Parser(std::string source, std::filesystem::path base)
+      : source_(std::move(source)), base_(std::move(base)) {}
+
+  std::string Where(const toml::source_region& region) const {
+    if (region.begin.line == 0) return source_;
+    return fmt::format("{}:{}:{}", source_, region.begin.line, region.begin.column);
+  }
+  std::string Where(const toml::node& node) const { return Where(node.source()); }
+
+  [[noreturn]] void Fail(const std::string& where, const std::string& label,
+                         std::string_view problem) const {
+    if (label.empty()) throw ConfigError(fmt::format("{}: {}", where, problem));
+    throw ConfigError(fmt::format("{}: {}: {}", where, label, problem));
+  }
+
+  // Rejects keys of `table` not in `valid`; `what` names the table in the message.
+  void CheckKeys(const toml::table& table, std::initializer_list<std::string_view> valid,
+                 const std::string& label, std::string_view what) const {
+    for (const auto& [key, value] : table) {
+      if (std::find(valid.begin(), valid.end(), key.str()) != valid.end()) continue;
+      Fail(Where(key.source()), label,
+           fmt::format("unknown key '{}' in {}; valid keys: {}", key.str(), what,
+                       fmt::join(valid, ", ")));
+    }
+  }
+
+  double Number(const toml::node& node, const std::string& label, std::string_view what) const {
+    double value = 0.0;
+    if (const auto* integer = node.as_integer()) {
+      value = static_cast<double>(integer->get());
+    } else if (const auto* floating = node.as_floating_point()) {
+      value = floating->get();
+    } else {
+      Fail(Where(node), label, fmt::format("{} must be a number", what));
+    }
+    if (!std::isfinite(value)) {
+      Fail(Where(node), label, fmt::format("{} is a non-finite number ({})", what, value));
+    }
+    return value;
+  }
+
+  Eigen::Vector3d Vector3(const toml::node& node, const std::string& label,
+                          std::string_view what) const {
+    const toml::array* array = node.as_array();
+    if (!array || array->size() != 3) {
+      Fail(Where(node), label, fmt::format("{} must be an array of three numbers", what));
+    }
+    Eigen::Vector3d vector;
+    for (int d = 0; d < 3; ++d) vector[d] = Number(*array->get(d), label, what);
+    return vector;
+  }
+
+  const toml::node& Required(const toml::table& table, std::string_view key,
+                             const std::string& where, const std::string& label,
+                             std::string_view what) const {
+    const toml::node* node = table.get(key);
+    if (!node) Fail(where, label, fmt::format("{} needs '{}'", what, key));
+    return *node;
+  }
+
+  std::filesystem::path Resolve(const std::string& relative) const {
+    std::filesystem::path path(relative);
+    if (path.is_relative()) path = base_ / path;
+    return path.lexically_normal();
+  }
+
+  HandleSpec ParseHandle(const toml::table& table, int number) const {
+    HandleSpec spec;
+    spec.label = fmt::format("handle {}", number);
+    spec.name = spec.label;
+    const std::string where = Where(table);
+    if (const toml::node* name = table.get("name")) {
+      if (!name->is_string()) Fail(Where(*name), spec.label, "'name' must be a string");
+      spec.name = name->as_string()->get();
+      spec.label = fmt::format("handle '{}'", spec.name);
+    }
+    CheckKeys(table, {"name", "select", "rotate", "translate", "target"}, spec.label,
+              "a [[handle]]");
+
+    // Selection: exactly one of slab, ball, indices, index_file.
+    const toml::node* select = table.get("select");
+    if (!select) {
+      Fail(where, spec.label,
+           "has no selection; give exactly one of select.slab, select.ball, select.indices, "
+           "select.index_file");
+    }
+    spec.select_where = Where(*select);
+    const toml::table* selection = select->as_table();
+    if (!selection) {
+      Fail(spec.select_where, spec.label,
+           "'select' must be a table (select.slab = {...}, select.ball = {...}, "
+           "select.indices = [...] or select.index_file = \"...\")");
+    }
+    CheckKeys(*selection, {"slab", "ball", "indices", "index_file"}, spec.label, "'select'");
+    // toml++ iterates keys in sorted order; report them in the order written.
+    std::vector<std::pair<toml::source_position, std::string>> written;
+    for (const auto& [key, value] : *selection) {
+      written.emplace_back(key.source().begin, std::string(key.str()));
+    }
+    std::sort(written.begin(), written.end(), [](const auto& x, const auto& y) {
+      return std::pair(x.first.line, x.first.column) < std::pair(y.first.line, y.first.column);
+    });
+    std::vector<std::string> kinds;
+    for (auto& entry : written) kinds.push_back(std::move(entry.second));
+    if (kinds.size() != 1) {
+      Fail(spec.select_where, spec.label,
+           kinds.empty() ? std::string("'select' is empty; give exactly one selection")
+                         : fmt::format("has {} selections ({}); give exactly one", kinds.size(),
+                                       fmt::join(kinds, ", ")));
+    }
+    const std::string& kind = kinds.front();
+    const toml::node& body = *selection->get(kind);
+    if (kind == "slab") {
+      spec.kind = SelectionKind::kSlab;
+      const toml::table* slab = body.as_table();
+      if (!slab) Fail(Where(body), spec.label, "select.slab must be a table {axis, from, to}");
+      CheckKeys(*slab, {"axis", "from", "to"}, spec.label, "select.slab");
+      const toml::node& axis = Required(*slab, "axis", Where(body), spec.label, "select.slab");
+      const std::string axis_name = axis.value_or(std::string());
+      if (axis_name != "x" && axis_name != "y" && axis_name != "z") {
+        Fail(Where(axis), spec.label, "select.slab axis must be \"x\", \"y\" or \"z\"");
+      }
+      spec.axis = axis_name[0] - 'x';
+      spec.from = Number(Required(*slab, "from", Where(body), spec.label, "select.slab"),
+                         spec.label, "select.slab from");
+      spec.to = Number(Required(*slab, "to", Where(body), spec.label, "select.slab"), spec.label,
+                       "select.slab to");
+      if (spec.from > spec.to) {
+        Fail(Where(body), spec.label,
+             fmt::format("select.slab has from = {} > to = {}", spec.from, spec.to));
+      }
+      spec.description = fmt::format("slab {} in [{}, {}]", axis_name, spec.from, spec.to);
+    } else if (kind == "ball") {
+      spec.kind = SelectionKind::kBall;
+      const toml::table* ball = body.as_table();
+      if (!ball) Fail(Where(body), spec.label, "select.ball must be a table {center, radius}");
+      CheckKeys(*ball, {"center", "radius"}, spec.label, "select.ball");
+      spec.ball_center = Vector3(Required(*ball, "center", Where(body), spec.label, "select.ball"),
+                                 spec.label, "select.ball center");
+      spec.radius = Number(Required(*ball, "radius", Where(body), spec.label, "select.ball"),
+                           spec.label, "select.ball radius");
+      if (spec.radius < 0.0) {
+        Fail(Where(*ball->get("radius")), spec.label, "select.ball radius must be >= 0");
+      }
+      spec.description =
+          fmt::format("ball at ({}, {}, {}) of radius {}", spec.ball_center[0],
+                      spec.ball_center[1], spec.ball_center[2], spec.radius);
+    } else if (kind == "indices") {
+      spec.kind = SelectionKind::kIndices;
+      const toml::array* indices = body.as_array();
+      if (!indices) Fail(Where(body), spec.label, "select.indices must be an array of integers");
+      for (const toml::node& index : *indices) {
+        const auto* integer = index.as_integer();
+        if (!integer) {
+          Fail(Where(index), spec.label, "select.indices must hold integers (0-based indices)");
+        }
+        spec.indices.push_back(integer->get());
+        spec.index_where.push_back(Where(index));
+      }
+      spec.description = "select.indices (empty)";
+    } else {
+      spec.kind = SelectionKind::kIndexFile;
+      if (!body.is_string()) Fail(Where(body), spec.label, "select.index_file must be a string");
+      spec.index_file = Resolve(body.as_string()->get());
+      spec.index_file_where = Where(body);
+      spec.description = fmt::format("index file '{}'", spec.index_file.string());
+    }
+
+    // Motion.
+    if (const toml::node* target = table.get("target")) {
+      if (target->value_or(std::string()) != "initial") {
+        Fail(Where(*target), spec.label, "'target' must be \"initial\" (the only target mode)");
+      }
+      if (table.contains("rotate") || table.contains("translate")) {
+        Fail(Where(*target), spec.label,
+             "target = \"initial\" cannot be combined with rotate or translate");
+      }
+      spec.target = TargetKind::kInitial;
+    }
+    if (const toml::node* rotate = table.get("rotate")) {
+      const toml::table* rotation = rotate->as_table();
+      if (!rotation) {
+        Fail(Where(*rotate), spec.label, "'rotate' must be a table {axis, degrees, center?}");
+      }
+      CheckKeys(*rotation, {"axis", "degrees", "center"}, spec.label, "'rotate'");
+      spec.has_rotation = true;
+      const toml::node& axis = Required(*rotation, "axis", Where(*rotate), spec.label, "'rotate'");
+      spec.axis_vector = Vector3(axis, spec.label, "rotate axis");
+      if (spec.axis_vector.norm() == 0.0) {
+        Fail(Where(axis), spec.label, "the rotation axis is zero (it cannot be normalized)");
+      }
+      spec.degrees = Number(Required(*rotation, "degrees", Where(*rotate), spec.label, "'rotate'"),
+                            spec.label, "rotate degrees");
+      if (const toml::node* center = rotation->get("center")) {
+        spec.center = Vector3(*center, spec.label, "rotate center");
+      }
+    }
+    if (const toml::node* translate = table.get("translate")) {
+      spec.has_translation = true;
+      spec.translation = Vector3(*translate, spec.label, "translate");
+    }
+    return spec;
+  }
+
+  // Vertices `spec` selects, ascending.
+  std::vector<Index> Select(const HandleSpec& spec, const Mesh& mesh,
+                            const std::vector<bool>& referenced, const Eigen::Vector3d& lo,
+                            const Eigen::Vector3d& extent, double diagonal) const {
+    std::vector<Index> selected;
+    const Index n = mesh.num_vertices();
+    auto fraction = [&](Index v, int d) {
+      return extent[d] > 0.0 ? (mesh.vertices(v, d) - lo[d]) / extent[d] : 0.0;
+    };
+    switch (spec.kind) {
+      case SelectionKind::kSlab:
+        for (Index v = 0; v < n; ++v) {
+          if (!referenced[v]) continue;
+          const double f = fraction(v, spec.axis);
+          if (f >= spec.from && f <= spec.to) selected.push_back(v);
+        }
+        break;
+      case SelectionKind::kBall: {
+        const Eigen::Vector3d center = lo + spec.ball_center.cwiseProduct(extent);
+        const double radius = spec.radius * diagonal;
+        for (Index v = 0; v < n; ++v) {
+          if (!referenced[v]) continue;
+          if ((mesh.vertices.row(v).transpose() - center).norm() <= radius) selected.push_back(v);
+        }
+        break;
+      }
+      case SelectionKind::kIndices:
+        for (size_t i = 0; i < spec.indices.size(); ++i) {
+          const int64_t index = spec.indices[i];
+          if (index < 0 || index >= n) {
+            Fail(spec.index_where[i], spec.label,
+                 fmt::format("select.indices: index {} out of range (the mesh has {} vertices, "
+                             "valid 0..{})",
+                             index, n, n - 1));
+          }
+          selected.push_back(static_cast<Index>(index));
+        }
+        break;
+      case SelectionKind::kIndexFile:
+        selected = ReadIndexFile(spec, n);
+        break;
+    }
+    std::sort(selected.begin(), selected.end());
+    selected.erase(std::unique(selected.begin(), selected.end()), selected.end());
+    if (selected.empty()) {
+      Fail(spec.select_where, spec.label,
+           fmt::format("the selection ({}) matches no vertex", spec.description));
+    }
+    return selected;
+  }
+
+  std::vector<Index> ReadIndexFile(const HandleSpec& spec, Index num_vertices) const {
+    const std::string file = spec.index_file.string();
+    auto fail = [&](const std::string& problem) {
+      throw InputError(fmt::format("{}: {}: index file {}: {}", spec.index_file_where, spec.label,
+                                   file, problem));
+    };
+    std::string text;
+    try {
+      text = ReadFileMaybeXz(spec.index_file);
+    } catch (const InputError& error) {
+      fail(error.what());
+    }
+    std::vector<Index> indices;
+    size_t line = 1;
+    size_t position = 0;
+    while (position < text.size()) {
+      const char c = text[position];
+      if (c == '\n') ++line;
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        ++position;
+        continue;
+      }
+      size_t end = position;
+      while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end]))) ++end;
+      const std::string_view token(text.data() + position, end - position);
+      int64_t index = 0;
+      const auto [stop, error] = std::from_chars(token.data(), token.data() + token.size(), index);
+      if (error != std::errc() || stop != token.data() + token.size()) {
+        fail(fmt::format("line {}: '{}' is not a vertex index", line,
+                         token.substr(0, std::min<size_t>(token.size(), 40))));
+      }
+      if (index < 0 || index >= num_vertices) {
+        fail(fmt::format("line {}: index {} out of range (the mesh has {} vertices, valid 0..{})",
+                         line, index, num_vertices, num_vertices - 1));
+      }
+      indices.push_back(static_cast<Index>(index));
+      position = end;
+    }
+    return indices;
+  }
+
+  Scenario Parse(std::string_view toml_text) const {
+    toml::table root;
+    try {
+      root = toml::parse(toml_text, source_);
+    } catch (const toml::parse_error& error) {
+      throw ConfigError(fmt::format("{}: TOML syntax error: {}", Where(error.source()),
+                                    error.description()));
+    }
+    CheckKeys(root, {"mesh", "refine", "initial", "handle"}, "", "the top level");
+
+    // Everything in the text first (see the top of this file).
+    const toml::node* mesh_node = root.get("mesh");
+    if (!mesh_node) {
+      Fail(source_, "",
+           "no 'mesh' given (mesh = \"file.obj\" or mesh = { builtin = \"cylinder\", ... })");
+    }
+    int refine = 0;
+    if (const toml::node* node = root.get("refine")) {
+      const auto* integer = node->as_integer();
+      if (!integer || integer->get() < 0 || integer->get() > 10) {
+        Fail(Where(*node), "", "'refine' must be an integer in 0..10 (Loop subdivision rounds)");
+      }
+      refine = static_cast<int>(integer->get());
+    }
+    std::optional<std::filesystem::path> initial_file;
+    std::string initial_where;
+    if (const toml::node* node = root.get("initial")) {
+      if (!node->is_string()) Fail(Where(*node), "", "'initial' must be a file name (string)");
+      initial_file = Resolve(node->as_string()->get());
+      initial_where = Where(*node);
+    }
+    std::vector<HandleSpec> specs;
+    if (const toml::node* node = root.get("handle")) {
+      const toml::array* handles = node->as_array();
+      if (!handles) Fail(Where(*node), "", "'handle' must be an array of tables ([[handle]])");
+      int number = 0;
+      for (const toml::node& entry : *handles) {
+        ++number;
+        const toml::table* table = entry.as_table();
+        if (!table) Fail(Where(entry), fmt::format("handle {}", number), "must be a table");
+        specs.push_back(ParseHandle(*table, number));
+        if (specs.back().target == TargetKind::kInitial && !initial_file) {
+          Fail(Where(*table->get("target")), specs.back().label,
+               "target = \"initial\" needs a top-level initial = \"file\"");
+        }
+      }
+    }
+
+    Scenario scenario;
+    if (const toml::table* table = mesh_node->as_table()) {
+      // ConfigNode carries the line numbers and the unknown-key check into MakeBuiltinMesh.
+      const ConfigNode parameters = ConfigNode::Parse(toml_text, source_).Child("mesh");
+      scenario.mesh = MakeBuiltinMesh(parameters);
+      std::string description = "builtin";
+      for (const auto& [key, value] : *table) {
+        std::ostringstream text;
+        value.visit([&](const auto& v) { text << v; });
+        description += fmt::format(" {}={}", key.str(), text.str());
+      }
+      scenario.mesh_source = description;
+    } else if (const auto* name = mesh_node->as_string()) {
+      const std::filesystem::path path = Resolve(name->get());
+      scenario.mesh_source = path.string();
+      scenario.mesh = LoadMeshFile(path, Where(*mesh_node), "mesh");
+    } else {
+      Fail(Where(*mesh_node), "",
+           "'mesh' must be a file name or a table { builtin = \"cylinder\", ... }");
+    }
+    if (refine > 0) {
+      const double growth = std::pow(4.0, refine);
+      if (static_cast<double>(scenario.mesh.num_elements()) * growth >
+          static_cast<double>(std::numeric_limits<Index>::max())) {
+        Fail(Where(*root.get("refine")), "",
+             fmt::format("refine = {} would make more than {} triangles from {}", refine,
+                         std::numeric_limits<Index>::max(), scenario.mesh.num_elements()));
+      }
+      try {
+        scenario.mesh = LoopSubdivide(scenario.mesh, refine);
+      } catch (const InputError& error) {
+        throw InputError(fmt::format("{}: refine = {} of mesh {}: {}", Where(*root.get("refine")),
+                                     refine, scenario.mesh_source, error.what()));
+      }
+    }
+    if (initial_file) {
+      const Mesh initial = LoadMeshFile(*initial_file, initial_where, "initial");
+      if (initial.num_vertices() != scenario.mesh.num_vertices()) {
+        throw InputError(fmt::format("{}: initial configuration {} has {} vertices, but the mesh "
+                                     "has {}{} (same count and order needed)",
+                                     initial_where, initial_file->string(),
+                                     initial.num_vertices(), scenario.mesh.num_vertices(),
+                                     refine > 0 ? " after refine" : ""));
+      }
+      scenario.initial = initial.vertices;
+    }
+
+    // Box of the referenced vertices (see the top of this file).
+    const Mesh& mesh = scenario.mesh;
+    const std::vector<bool> referenced = ReferencedVertices(mesh);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector3d hi = -lo;
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (!referenced[v]) continue;
+      lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
+      hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
+    }
+    const Eigen::Vector3d extent = hi - lo;
+    const double diagonal = BoundingBoxDiagonal(mesh);
+
+    for (const HandleSpec& spec : specs) {
+      ScenarioHandle handle;
+      handle.name = spec.name;
+      handle.vertices = Select(spec, mesh, referenced, lo, extent, diagonal);
+      const Index count = static_cast<Index>(handle.vertices.size());
+      handle.targets.resize(count, 3);
+      if (spec.target == TargetKind::kInitial) {
+        for (Index i = 0; i < count; ++i) {
+          handle.targets.row(i) = scenario.initial->row(handle.vertices[i]);
+        }
+      } else {
+        Eigen::Vector3d center = Eigen::Vector3d::Zero();
+        if (spec.center) {
+          center = lo + spec.center->cwiseProduct(extent);
+        } else {
+          for (const Index v : handle.vertices) center += mesh.vertices.row(v).transpose();
+          center /= static_cast<double>(count);
+        }
+        const Eigen::Matrix3d rotation =
+            Eigen::AngleAxisd(spec.degrees * std::numbers::pi / 180.0,
+                              spec.axis_vector.normalized())
+                .toRotationMatrix();
+        const Eigen::Vector3d shift = spec.translation * diagonal;
+        for (Index i = 0; i < count; ++i) {
+          const Eigen::Vector3d p = mesh.vertices.row(handle.vertices[i]).transpose();
+          // Without a rotation, p + t*D exactly (no round trip through the centre), so a fixed
+          // handle holds its vertices at bit-identical rest positions.
+          const Eigen::Vector3d target =
+              spec.has_rotation ? Eigen::Vector3d(center + rotation * (p - center) + shift)
+                                : Eigen::Vector3d(p + shift);
+          handle.targets.row(i) = target.transpose();
+        }
+      }
+      scenario.handles.push_back(std::move(handle));
+    }
+    return scenario;
+  }
+
+ private:
+  // Reads a mesh named by the scenario; `what` is "mesh" or "initial".
+  Mesh LoadMeshFile(const std::filesystem::path& path, const std::string& where,
+                    std::string_view what) const {
+    std::string extension = path.filename().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension.ends_with(".xz")) extension.resize(extension.size() - 3);
+    if (extension.ends_with(".node") || extension.ends_with(".mesh") ||
+        extension.ends_with(".ele")) {
+      throw InputError(fmt::format("{}: {} {}: tetrahedral meshes are not supported yet", where,
+                                   what, path.string()));
+    }
+    std::error_code error;
+    if (!std::filesystem::exists(path, error)) {
+      throw InputError(fmt::format("{}: {} file {} not found", where, what, path.string()));
+    }
+    try {
+      return ReadMesh(path);
+    } catch (const InputError& error) {
+      throw InputError(fmt::format("{}: {}: {}", where, what, error.what()));
+    }
+  }
+
+  std::string source_;
+  std::filesystem::path base_;
+};
+
+}  // namespace
+
+Constraints Scenario::MergedConstraints() const {
+  const Index n = mesh.num_vertices();
+  // For each vertex, the first handle (and row) that selects it.
+  std::vector<std::pair<int, Index>> owner(n, {-1, 0});
+  for (size_t h = 0; h < handles.size(); ++h) {
+    const ScenarioHandle& handle = handles[h];
+    for (size_t i = 0; i < handle.vertices.size(); ++i) {
+      const Index v = handle.vertices[i];
+      HARAP_CHECK(v >= 0 && v < n, "handle '{}' selects vertex {} of {}", handle.name, v, n);
+      if (owner[v].first < 0) owner[v] = {static_cast<int>(h), static_cast<Index>(i)};
+    }
+  }
+  Constraints constraints;
+  for (Index v = 0; v < n; ++v) {
+    if (owner[v].first >= 0) constraints.indices.push_back(v);
+  }
+  constraints.targets.resize(static_cast<Index>(constraints.indices.size()), 3);
+  for (size_t k = 0; k < constraints.indices.size(); ++k) {
+    const auto [h, row] = owner[constraints.indices[k]];
+    constraints.targets.row(static_cast<Index>(k)) = handles[h].targets.row(row);
+  }
+  return constraints;
+}
+
+Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,
+                       const std::filesystem::path& base_directory) {
+  return Parser(source_name, base_directory).Parse(toml_text);
+}
+
+Scenario LoadScenario(const std::filesystem::path& file) {
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) {
+    throw InputError(fmt::format("{}: scenario file not found", file.string()));
+  }
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) throw InputError(fmt::format("{}: cannot open the scenario file", file.string()));
+  std::stringstream buffer;
+  buffer << stream.rdbuf();
+  Scenario scenario = ParseScenario(buffer.str(), file.string(), file.parent_path());
+  scenario.file = file;
+  return scenario;
+}
+
+}  // namespace harap

@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework/mesh.h"
+#include "framework/optimizer.h"
+
+namespace harap {
+
+/// One [[handle]] of a scenario: the selected vertices and their targets.
+struct ScenarioHandle {
+  std::string name;             ///< `name`, or "handle N" (1-based) if absent.
+  std::vector<Index> vertices;  ///< Selected vertices, ascending.
+  Positions targets;            ///< #vertices×3 target positions.
+};
+
+/// A deformation scenario (../shared/scenarios/FORMAT.md): the mesh and its handles.
+struct Scenario {
+  std::filesystem::path file;       ///< The scenario file ("" for in-memory scenarios).
+  std::string mesh_source;          ///< Mesh file path or builtin description, for reports.
+  Mesh mesh;                        ///< After `refine`.
+  std::vector<ScenarioHandle> handles;
+  std::optional<Positions> initial; ///< From `initial = "file"`.
+
+  /// All handles merged; a vertex selected by several handles takes the first handle's target.
+  Constraints MergedConstraints() const;
+};
+
+/// Loads a scenario file. Mesh paths are relative to the scenario file. Throws ConfigError or
+/// InputError naming the file, the handle and the problem.
+Scenario LoadScenario(const std::filesystem::path& file);
+
+/// Same from TOML text; relative paths are resolved against `base_directory`.
+Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,
+                       const std::filesystem::path& base_directory);
+
+}  // namespace harap

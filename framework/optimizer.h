@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework/context.h"
+#include "framework/energy.h"
+#include "framework/hierarchy.h"
+#include "framework/linear_solver.h"
+#include "framework/mesh.h"
+#include "framework/upsampler.h"
+
+namespace harap {
+
+/// Vertex constraints: vertex indices[k] goes to targets.row(k). Indices are unique.
+struct Constraints {
+  std::vector<Index> indices;
+  Positions targets;  ///< #indices×3
+};
+
+/// A deformation problem: the rest mesh, the constraints and, optionally, a start configuration
+/// (default: rest positions with constrained vertices at their targets).
+struct DeformationProblem {
+  const Mesh* mesh = nullptr;
+  Constraints constraints;
+  std::optional<Positions> initial;
+};
+
+/// Creates the pluggable pieces an optimizer uses, configured by the caller (the experiments
+/// layer implements it with the registries and the config tables). Optimizers that work on
+/// several levels ask for one energy and one solver per level.
+class ComponentFactory {
+ public:
+  virtual ~ComponentFactory() = default;
+  virtual std::unique_ptr<Energy> MakeEnergy() const = 0;
+  /// `level` is the hierarchy level (0 = finest), `num_unknowns` the size of the reduced system.
+  virtual std::unique_ptr<LinearSolver> MakeLinearSolver(int level, Index num_unknowns) const = 0;
+  virtual std::unique_ptr<Hierarchy> MakeHierarchy() const = 0;
+  virtual std::unique_ptr<Upsampler> MakeUpsampler() const = 0;
+};
+
+/// Wall time per phase (seconds), as in the paper's Table 1.
+struct PhaseTimings {
+  double hierarchy = 0.0;   ///< H: building the mesh hierarchy.
+  double precompute = 0.0;  ///< P: energy precomputation (weights, matrices) on all levels.
+  double constrain = 0.0;   ///< C: constraint elimination and factorization on all levels.
+  double solve = 0.0;       ///< S: local/global iterations (and up-sampling).
+  double total = 0.0;       ///< T: the whole Optimize() call.
+};
+
+/// Per-level outcome (one entry for single-level optimizers).
+struct LevelResult {
+  int level = 0;
+  Index vertices = 0;
+  Index elements = 0;
+  int iterations = 0;
+  double energy = 0.0;   ///< At the end of the level, rotations fitted to the final positions.
+  double seconds = 0.0;  ///< Wall time spent on the level (precompute, factor and iterations).
+  bool converged = false;
+};
+
+/// What the constraint handling did to keep the global system non-singular.
+struct ConstraintReport {
+  Index constrained_vertices = 0;
+  Index isolated_vertices = 0;          ///< no element uses them: kept where they are
+  Index free_components = 0;            ///< connected components without any constraint
+  Index vertices_in_free_components = 0;
+};
+
+struct OptimizeResult {
+  Positions positions;  ///< #V×3 deformed positions on the input mesh.
+  double energy = 0.0;  ///< Final energy, rotations re-fitted to `positions`.
+  int iterations = 0;   ///< Iterations on the finest level.
+  int total_iterations = 0;
+  bool converged = false;
+  bool stopped_by_callback = false;
+  PhaseTimings timings;
+  std::vector<LevelResult> levels;  ///< Finest level first.
+  ConstraintReport constraints;     ///< On the finest level.
+  std::vector<std::string> notes;   ///< Human-readable remarks (pinned components, ...).
+};
+
+/// Minimizes an energy subject to vertex constraints (classic local/global, hierarchical, ADMM).
+/// Options come from the optimizer's config table at creation; the pieces it uses come from the
+/// factory. Reports each iteration through context.iteration_callback; never prints.
+class Optimizer {
+ public:
+  virtual ~Optimizer() = default;
+  virtual OptimizeResult Optimize(const DeformationProblem& problem,
+                                  const ComponentFactory& factory,
+                                  const Context& context) const = 0;
+
+ protected:
+  Optimizer() = default;
+};
+
+}  // namespace harap

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include "framework/context.h"
+#include "framework/energy.h"
+#include "framework/hierarchy.h"
+
+namespace harap {
+
+/// The solution state on one level: deformed positions and the rotations of the energy's sites.
+struct LevelState {
+  Positions positions;
+  Rotations rotations;
+};
+
+/// What an upsampler hands to the finer level, and so which step the finer level starts with.
+enum class UpsampleOutput {
+  kRotations,  ///< fine rotations are set: the finer level starts with a global step (Eq. 7)
+  kPositions,  ///< fine positions are set: the finer level starts with a local step (Eq. 6)
+};
+
+/// Turns the solution on a coarse level into the initial state of the next finer level
+/// (Section 5.1 of the paper).
+///
+/// Contract: `fine.coarse_vertex` maps fine vertices to `coarse` vertices; `site` says whether
+/// the rotations live on vertices or elements of each level. On return `fine_state.rotations`
+/// has one rotation per fine site and `fine_state.positions` one row per fine vertex (both are
+/// always filled: positions from the coarse solution by Eq. 6 where the output is rotations, so a
+/// caller can look at them). Const and thread-safe.
+class Upsampler {
+ public:
+  virtual ~Upsampler() = default;
+
+  virtual UpsampleOutput output() const = 0;
+
+  virtual void Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse,
+                        RotationSite site, const LevelState& coarse_state,
+                        LevelState& fine_state, const Context& context) const = 0;
+
+ protected:
+  Upsampler() = default;
+};
+
+}  // namespace harap

@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: MIT
+#include "hierarchies/upsamplers/cell_upsampler.h"
+
+#include "framework/error.h"
+#include "hierarchies/upsamplers/upsampling.h"
+
+namespace harap {
+
+CellUpsampler::Options CellUpsampler::Options::FromConfig(const ConfigNode& node, Mode mode) {
+  Options options;
+  options.mode = mode;
+  if (mode == Mode::kSmoothedRotations) {
+    options.passes = node.Get("passes", options.passes,
+                              "smoothing passes: average over the fine 1-ring, project to SO(3)");
+    if (options.passes < 1) {
+      throw ConfigError(fmt::format("{}: upsampler.passes must be >= 1, got {}",
+                                    node.Where("passes"), options.passes));
+    }
+  }
+  node.RejectUnknownKeys();
+  return options;
+}
+
+std::unique_ptr<Upsampler> CellUpsampler::CreateRotations(const ConfigNode& node) {
+  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kRotations));
+}
+
+std::unique_ptr<Upsampler> CellUpsampler::CreatePositions(const ConfigNode& node) {
+  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kPositions));
+}
+
+std::unique_ptr<Upsampler> CellUpsampler::CreateSmoothedRotations(const ConfigNode& node) {
+  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kSmoothedRotations));
+}
+
+void CellUpsampler::Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse,
+                             RotationSite site, const LevelState& coarse_state,
+                             LevelState& fine_state, const Context& context) const {
+  const int passes = options_.mode == Mode::kSmoothedRotations ? options_.passes : 0;
+  UpsampleCells(fine, coarse, site, coarse_state, passes, fine_state, context);
+}
+
+}  // namespace harap

@@ -1,0 +1,12 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include "framework/upsampler.h"
+#include "framework/registry.h"
+
+namespace harap {
+
+/// Adds every Upsampler implementation of this module to `registry` (the module's one list).
+void RegisterUpsamplers(Registry<Upsampler>& registry);
+
+}  // namespace harap

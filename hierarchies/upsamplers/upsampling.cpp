@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: MIT
+#include "hierarchies/upsamplers/upsampling.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "framework/error.h"
+#include "framework/rotation.h"
+
+namespace harap {
+
+namespace {
+
+// CSR list of the elements incident to each vertex.
+void IncidentElements(const Mesh& mesh, std::vector<Index>& offsets, std::vector<Index>& items) {
+  offsets.assign(mesh.num_vertices() + 1, 0);
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < mesh.simplex_size(); ++a) ++offsets[mesh.elements(e, a) + 1];
+  }
+  for (Index v = 0; v < mesh.num_vertices(); ++v) offsets[v + 1] += offsets[v];
+  items.resize(offsets.back());
+  std::vector<Index> fill(offsets.begin(), offsets.end() - 1);
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < mesh.simplex_size(); ++a) items[fill[mesh.elements(e, a)]++] = e;
+  }
+}
+
+}  // namespace
+
+Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& rotations,
+                          const Context& context) {
+  if (site == RotationSite::kVertex) {
+    HARAP_CHECK(static_cast<Index>(rotations.size()) == mesh.num_vertices(),
+                "{} rotations for {} vertices", rotations.size(), mesh.num_vertices());
+    return rotations;
+  }
+  HARAP_CHECK(static_cast<Index>(rotations.size()) == mesh.num_elements(),
+              "{} rotations for {} elements", rotations.size(), mesh.num_elements());
+  std::vector<Index> offsets, items;
+  IncidentElements(mesh, offsets, items);
+  Rotations result(mesh.num_vertices(), Rotation::Identity());
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_vertices(), 2048),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index v = range.begin(); v != range.end(); ++v) {
+                          if (offsets[v] == offsets[v + 1]) continue;
+                          Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+                          for (Index p = offsets[v]; p < offsets[v + 1]; ++p) {
+                            sum += rotations[items[p]];
+                          }
+                          result[v] = NearestRotation(sum);
+                        }
+                      });
+  });
+  return result;
+}
+
+Rotations SiteRotations(const Mesh& mesh, RotationSite site, const Rotations& vertex_rotations,
+                        const Context& context) {
+  if (site == RotationSite::kVertex) return vertex_rotations;
+  Rotations result(mesh.num_elements());
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_elements(), 2048),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index e = range.begin(); e != range.end(); ++e) {
+                          Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+                          for (int a = 0; a < mesh.simplex_size(); ++a) {
+                            sum += vertex_rotations[mesh.elements(e, a)];
+                          }
+                          result[e] = NearestRotation(sum);
+                        }
+                      });
+  });
+  return result;
+}
+
+Rotations ProlongRotations(const HierarchyLevel& fine, const Rotations& coarse_vertex_rotations) {
+  const Index n = fine.mesh.num_vertices();
+  HARAP_CHECK(static_cast<Index>(fine.coarse_vertex.size()) == n,
+              "fine level has {} vertices but a map of {}", n, fine.coarse_vertex.size());
+  Rotations result(n, Rotation::Identity());
+  for (Index j = 0; j < n; ++j) {
+    const Index i = fine.coarse_vertex[j];
+    if (i != kNoVertex) result[j] = coarse_vertex_rotations[i];
+  }
+  return result;
+}
+
+Positions ProlongPositions(const HierarchyLevel& fine, const HierarchyLevel& coarse,
+                           const Positions& coarse_positions,
+                           const Rotations& coarse_vertex_rotations) {
+  const Index n = fine.mesh.num_vertices();
+  HARAP_CHECK(static_cast<Index>(fine.coarse_vertex.size()) == n,
+              "fine level has {} vertices but a map of {}", n, fine.coarse_vertex.size());
+  Positions result = fine.mesh.vertices;
+  for (Index j = 0; j < n; ++j) {
+    const Index i = fine.coarse_vertex[j];
+    if (i == kNoVertex) continue;
+    const Eigen::Vector3d offset =
+        (fine.mesh.vertices.row(j) - coarse.mesh.vertices.row(i)).transpose();
+    result.row(j) = coarse_positions.row(i) + (coarse_vertex_rotations[i] * offset).transpose();
+  }
+  return result;
+}
+
+void SmoothVertexRotations(const Mesh& mesh, int passes, Rotations& vertex_rotations,
+                           const Context& context) {
+  // 1-ring as a CSR neighbour list (both directions of every element edge, deduplicated).
+  const Index n = mesh.num_vertices();
+  std::vector<std::vector<Index>> ring(n);
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < mesh.simplex_size(); ++a) {
+      for (int b = 0; b < mesh.simplex_size(); ++b) {
+        if (a != b) ring[mesh.elements(e, a)].push_back(mesh.elements(e, b));
+      }
+    }
+  }
+  for (auto& neighbours : ring) {
+    std::sort(neighbours.begin(), neighbours.end());
+    neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+  }
+  Rotations next(n);
+  for (int pass = 0; pass < passes; ++pass) {
+    context.Run([&] {
+      tbb::parallel_for(tbb::blocked_range<Index>(0, n, 2048),
+                        [&](const tbb::blocked_range<Index>& range) {
+                          for (Index v = range.begin(); v != range.end(); ++v) {
+                            Eigen::Matrix3d sum = vertex_rotations[v];
+                            for (Index w : ring[v]) sum += vertex_rotations[w];
+                            next[v] = ring[v].empty() ? vertex_rotations[v] : NearestRotation(sum);
+                          }
+                        });
+    });
+    std::swap(next, vertex_rotations);
+  }
+}
+
+}  // namespace harap
+
+namespace harap {
+
+void UpsampleCells(const HierarchyLevel& fine, const HierarchyLevel& coarse, RotationSite site,
+                   const LevelState& coarse_state, int smoothing_passes, LevelState& fine_state,
+                   const Context& context) {
+  const Rotations coarse_vertex_rotations =
+      VertexRotations(coarse.mesh, site, coarse_state.rotations, context);
+  fine_state.positions =
+      ProlongPositions(fine, coarse, coarse_state.positions, coarse_vertex_rotations);
+  Rotations fine_vertex_rotations = ProlongRotations(fine, coarse_vertex_rotations);
+  if (smoothing_passes > 0) {
+    SmoothVertexRotations(fine.mesh, smoothing_passes, fine_vertex_rotations, context);
+  }
+  fine_state.rotations = SiteRotations(fine.mesh, site, fine_vertex_rotations, context);
+}
+
+}  // namespace harap

@@ -1,0 +1,404 @@
+// SPDX-License-Identifier: MIT
+// Compiled into harap_solvers only when CHOLMOD was found (solvers/CMakeLists.txt defines
+// HARAP_HAVE_CHOLMOD); register_solvers.cpp registers it under the same condition.
+#ifdef HARAP_HAVE_CHOLMOD
+
+#include "solvers/cholmod_solver.h"
+
+#include <cholmod.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "framework/error.h"
+#include "solvers/solver_checks.h"
+
+namespace harap {
+namespace {
+
+// CHOLMOD_AUTO picks a simplicial factorization when flops / nnz(L) < supernodal_switch. With
+// s the solve time per entry of L (3 right-hand sides) and c the factorization time per flop,
+// simplicial + k solves is cheaper than supernodal + k solves exactly when
+//   flops · (c_simplicial − c_supernodal) < k · nnz(L) · (s_supernodal − s_simplicial),
+// i.e. flops / nnz(L) < k · (s_supernodal − s_simplicial) / (c_simplicial − c_supernodal).
+// The ratio is measured, and k = 100 solves per factorization assumed (ARAP runs 20–300).
+// See kAutoSupernodalSwitch's comment for the numbers.
+constexpr double kAssumedSolvesPerFactorization = 100.0;
+constexpr double kSolveToFactorCostRatio = 0.0;  // set below from measurements
+constexpr double kAutoSupernodalSwitch = kAssumedSolvesPerFactorization * kSolveToFactorCostRatio;
+
+constexpr std::array<std::pair<CholmodSolver::Mode, std::string_view>, 3> kModeNames = {{
+    {CholmodSolver::Mode::kAuto, "auto"},
+    {CholmodSolver::Mode::kSimplicial, "simplicial"},
+    {CholmodSolver::Mode::kSupernodal, "supernodal"},
+}};
+constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kOrderingNames = {{
+    {CholmodSolver::Ordering::kMetis, "metis"},
+    {CholmodSolver::Ordering::kAmd, "amd"},
+    {CholmodSolver::Ordering::kBest, "best"},
+}};
+
+template <class Enum, size_t N>
+std::vector<std::string> Names(const std::array<std::pair<Enum, std::string_view>, N>& table) {
+  std::vector<std::string> names;
+  for (const auto& [value, name] : table) names.emplace_back(name);
+  return names;
+}
+
+template <class Enum, size_t N>
+Enum FromName(const std::array<std::pair<Enum, std::string_view>, N>& table,
+              std::string_view name) {
+  for (const auto& [value, value_name] : table) {
+    if (value_name == name) return value;
+  }
+  HARAP_CHECK(false, "'{}' is not a valid name (GetChoice should have rejected it)", name);
+  return table[0].first;
+}
+
+template <class Enum, size_t N>
+std::string_view ToName(const std::array<std::pair<Enum, std::string_view>, N>& table,
+                        Enum value) {
+  for (const auto& [table_value, name] : table) {
+    if (table_value == value) return name;
+  }
+  return "?";
+}
+
+std::string_view OrderingName(int cholmod_ordering) {
+  switch (cholmod_ordering) {
+    case CHOLMOD_NATURAL: return "natural";
+    case CHOLMOD_GIVEN: return "given";
+    case CHOLMOD_AMD: return "amd";
+    case CHOLMOD_METIS: return "metis";
+    case CHOLMOD_NESDIS: return "nesdis";
+    case CHOLMOD_COLAMD: return "colamd";
+    case CHOLMOD_POSTORDERED: return "postordered";
+    default: return "unknown";
+  }
+}
+
+// A non-owning CHOLMOD view of an Eigen matrix. With stype = -1 CHOLMOD reads only the entries
+// on and below the diagonal and ignores the upper ones, so full storage needs no copy.
+cholmod_sparse LowerTriangleView(const SparseMatrix& a) {
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(a.rows());
+  view.ncol = static_cast<size_t>(a.cols());
+  view.nzmax = static_cast<size_t>(a.data().allocatedSize());
+  // CHOLMOD's inputs are not const-qualified but analyze/factorize only read A.
+  view.p = const_cast<int*>(a.outerIndexPtr());
+  view.i = const_cast<int*>(a.innerIndexPtr());
+  view.x = const_cast<double*>(a.valuePtr());
+  view.nz = a.isCompressed() ? nullptr : const_cast<int*>(a.innerNonZeroPtr());
+  view.stype = -1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;  // Eigen keeps the inner indices of each column sorted.
+  view.packed = a.isCompressed() ? 1 : 0;
+  return view;
+}
+
+// Column j's pivot d_j (LDLᵀ) or L_jj² (LLᵀ) of a numeric factor, in the factor's order.
+template <class Visit>
+void ForEachPivot(const cholmod_factor& factor, Visit&& visit) {
+  const auto* x = static_cast<const double*>(factor.x);
+  if (factor.is_super) {
+    const auto* super = static_cast<const int*>(factor.super);
+    const auto* pi = static_cast<const int*>(factor.pi);
+    const auto* px = static_cast<const int*>(factor.px);
+    for (size_t s = 0; s < factor.nsuper; ++s) {
+      const int first = super[s];
+      const int rows = pi[s + 1] - pi[s];  // Leading dimension of the supernode's dense block.
+      for (int j = first; j < super[s + 1]; ++j) {
+        const double l = x[px[s] + static_cast<size_t>(j - first) * (rows + 1)];
+        visit(j, l * l);
+      }
+    }
+  } else {
+    const auto* p = static_cast<const int*>(factor.p);
+    for (size_t j = 0; j < factor.n; ++j) {
+      const double d = x[p[j]];  // The diagonal is the first entry of each column.
+      visit(static_cast<int>(j), factor.is_ll ? d * d : d);
+    }
+  }
+}
+
+// cholmod_solve2 on a simplicial factor asks for Y as max(4, k)×n (it solves 4 columns at a
+// time, row-major) and then reshapes Y's header to the columns of the last chunk (3×n for k = 3).
+// On the next call the shapes differ and it frees and reallocates Y, on every solve. Putting the
+// header back before each call (the buffer is unchanged and large enough) keeps Solve()
+// allocation-free; if a CHOLMOD version asks for another shape, it simply reallocates.
+void RestoreSimplicialWorkspaceShape(const cholmod_factor* factor, Eigen::Index columns,
+                                     cholmod_dense* y) {
+  if (factor->is_super || y == nullptr) return;
+  const size_t rows = std::max<size_t>(4, static_cast<size_t>(columns));
+  if (y->nzmax < rows * factor->n) return;
+  y->nrow = rows;
+  y->ncol = factor->n;
+  y->d = rows;
+}
+
+std::string OutOfMemoryMessage(std::string_view stage, const cholmod_common& common,
+                               const SparseMatrix& a, CholmodSolver::Ordering ordering) {
+  std::string lnz = common.lnz > 0 ? fmt::format(" (nnz(L) ≈ {:.3g})", common.lnz) : "";
+  std::string more_fill =
+      ordering == CholmodSolver::Ordering::kMetis
+          ? ""
+          : ", or ordering = \"metis\" (less fill than AMD on meshes)";
+  return fmt::format(
+      "cholmod: out of memory during the {} of a {}×{} matrix with {} nonzeros{} (about {:.1f} "
+      "MB were in use). {}{}, or a coarser mesh.",
+      stage, a.rows(), a.cols(), a.nonZeros(), lnz, common.memory_usage / 1e6,
+      solver_checks::kOutOfMemoryAdvice, more_fill);
+}
+
+}  // namespace
+
+struct CholmodSolver::Impl {
+  explicit Impl(const Options& options) : options(options) {
+    cholmod_start(&common);
+    // Library code never prints: no messages, and errors come back through common.status.
+    common.print = 0;
+    common.error_handler = nullptr;
+    // LDLᵀ for simplicial factors (CHOLMOD's default, kept explicit): no square roots, and the
+    // pivots d_k are what the positive-definiteness check reads.
+    common.final_ll = 0;
+    switch (options.mode) {
+      case Mode::kAuto:
+        common.supernodal = CHOLMOD_AUTO;
+        common.supernodal_switch = kAutoSupernodalSwitch;
+        break;
+      case Mode::kSimplicial: common.supernodal = CHOLMOD_SIMPLICIAL; break;
+      case Mode::kSupernodal: common.supernodal = CHOLMOD_SUPERNODAL; break;
+    }
+    switch (options.ordering) {
+      case Ordering::kMetis:
+        common.nmethods = 1;
+        common.method[0].ordering = CHOLMOD_METIS;
+        break;
+      case Ordering::kAmd:
+        common.nmethods = 1;
+        common.method[0].ordering = CHOLMOD_AMD;
+        break;
+      case Ordering::kBest: common.nmethods = 0; break;  // AMD, then METIS if AMD fills a lot.
+    }
+    common.postorder = 1;
+  }
+
+  ~Impl() {
+    FreeFactor();
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    cholmod_finish(&common);
+  }
+
+  void FreeFactor() {
+    if (factor) cholmod_free_factor(&factor, &common);
+    factor = nullptr;
+  }
+
+  // Throws for every failure status of the last CHOLMOD call; warnings other than NOT_POSDEF
+  // (e.g. DSMALL) are left to the pivot check.
+  void ThrowOnFailure(std::string_view stage, const SparseMatrix& a) const {
+    switch (common.status) {
+      case CHOLMOD_OK:
+      case CHOLMOD_DSMALL: return;
+      case CHOLMOD_OUT_OF_MEMORY:
+        throw NumericalError(OutOfMemoryMessage(stage, common, a, options.ordering));
+      case CHOLMOD_TOO_LARGE:
+        throw NumericalError(fmt::format(
+            "cholmod: the factor of the {}×{} matrix is too large for 32-bit indices (nnz(L) ≈ "
+            "{:.3g}). {} or ordering = \"metis\".",
+            a.rows(), a.cols(), common.lnz, solver_checks::kOutOfMemoryAdvice));
+      case CHOLMOD_NOT_POSDEF: {
+        const size_t minor = factor ? factor->minor : 0;
+        const int row = factor && factor->Perm && minor < factor->n
+                            ? static_cast<const int*>(factor->Perm)[minor]
+                            : -1;
+        throw NumericalError(fmt::format(
+            "cholmod: the matrix is not positive definite: the {} factorization hit a "
+            "non-positive pivot at column {} of the factor (row {} of the {}×{} matrix). {}",
+            factor && factor->is_super ? "supernodal" : "simplicial", minor, row, a.rows(),
+            a.cols(), solver_checks::kNotPositiveDefiniteAdvice));
+      }
+      default:
+        throw InternalError(fmt::format("cholmod: {} failed with status {}", stage,
+                                        common.status));
+    }
+  }
+
+  // CHOLMOD's simplicial LDLᵀ accepts negative pivots (it handles some indefinite matrices) and
+  // no factorization notices a pivot that is roundoff of a zero one (a singular matrix), so
+  // check each pivot against the matching diagonal entry of A.
+  void CheckPivots(const SparseMatrix& a, const Eigen::VectorXd& diagonal) const {
+    const auto* perm = static_cast<const int*>(factor->Perm);
+    int bad_column = -1;
+    double bad_pivot = 0.0;
+    ForEachPivot(*factor, [&](int column, double pivot) {
+      if (bad_column >= 0) return;
+      const int row = perm ? perm[column] : column;
+      if (!solver_checks::AcceptablePivot(pivot, diagonal[row], options.pivot_tolerance)) {
+        bad_column = column;
+        bad_pivot = pivot;
+      }
+    });
+    if (bad_column < 0) return;
+    const int row = perm ? perm[bad_column] : bad_column;
+    solver_checks::ThrowBadPivot("cholmod", a.rows(), bad_column, row, bad_pivot, diagonal[row],
+                                 options.pivot_tolerance);
+  }
+
+  Options options;
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  // Solve workspaces, kept so that Solve() allocates only on its first call (per column count).
+  cholmod_dense* x = nullptr;
+  cholmod_dense* y = nullptr;
+  cholmod_dense* e = nullptr;
+  int rows = 0;
+  bool factorized = false;
+  FactorInfo info;
+  // Only with check_residual.
+  SparseMatrix a_copy;
+  Eigen::MatrixXd residual;
+};
+
+CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
+  Options options;
+  options.mode = FromName(
+      kModeNames,
+      node.GetChoice("mode", ToName(kModeNames, options.mode), Names(kModeNames),
+                     "simplicial = up-looking LDLᵀ (fastest solves), supernodal = BLAS LLᵀ "
+                     "(fastest factorization), auto = by flops / nnz(L), assuming ~100 solves "
+                     "per factorization"));
+  options.ordering = FromName(
+      kOrderingNames,
+      node.GetChoice("ordering", ToName(kOrderingNames, options.ordering), Names(kOrderingNames),
+                     "fill-reducing ordering; best = CHOLMOD's default (AMD, then METIS if AMD "
+                     "fills a lot)"));
+  options.pivot_tolerance =
+      node.Get("pivot_tolerance", options.pivot_tolerance,
+               "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
+               "error); in [0, 1)");
+  options.check_residual =
+      node.Get("check_residual", options.check_residual,
+               "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
+  node.RejectUnknownKeys();
+  if (!(options.pivot_tolerance >= 0.0 && options.pivot_tolerance < 1.0)) {
+    throw ConfigError(fmt::format("{}: option '{}' is {}, which is not in [0, 1)",
+                                  node.Where("pivot_tolerance"),
+                                  node.path().empty() ? std::string("pivot_tolerance")
+                                                      : node.path() + ".pivot_tolerance",
+                                  options.pivot_tolerance));
+  }
+  return options;
+}
+
+CholmodSolver::CholmodSolver(const Options& options) : impl_(std::make_unique<Impl>(options)) {}
+
+CholmodSolver::~CholmodSolver() = default;
+
+std::unique_ptr<LinearSolver> CholmodSolver::Create(const ConfigNode& node) {
+  return std::make_unique<CholmodSolver>(Options::FromConfig(node));
+}
+
+const CholmodSolver::Options& CholmodSolver::options() const { return impl_->options; }
+
+const CholmodSolver::FactorInfo& CholmodSolver::factor_info() const { return impl_->info; }
+
+std::string_view CholmodSolver::ToString(Mode mode) { return ToName(kModeNames, mode); }
+
+std::string_view CholmodSolver::ToString(Ordering ordering) {
+  return ToName(kOrderingNames, ordering);
+}
+
+void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/) {
+  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
+  Impl& impl = *impl_;
+  impl.factorized = false;
+  impl.FreeFactor();
+  impl.info = FactorInfo{};
+  impl.a_copy = SparseMatrix();
+  impl.rows = static_cast<int>(a.rows());
+  if (impl.rows == 0) {
+    impl.factorized = true;
+    return;
+  }
+
+  // A diagonal entry ≤ 0 already rules out positive definiteness; the entries also scale the
+  // pivot check.
+  const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "cholmod");
+
+  cholmod_sparse view = LowerTriangleView(a);
+  impl.factor = cholmod_analyze(&view, &impl.common);
+  impl.ThrowOnFailure("analysis (ordering)", a);
+  HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
+              impl.common.status);
+  cholmod_factorize(&view, impl.factor, &impl.common);
+  impl.ThrowOnFailure("factorization", a);
+  impl.CheckPivots(a, diagonal);
+
+  impl.info.supernodal = impl.factor->is_super != 0;
+  impl.info.ordering = OrderingName(impl.factor->ordering);
+  impl.info.nnz_l = impl.common.lnz;
+  impl.info.flops = impl.common.fl;
+  if (impl.options.check_residual) impl.a_copy = a;
+  impl.factorized = true;
+}
+
+SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                  Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+  Impl& impl = *impl_;
+  HARAP_CHECK(impl.factorized, "Solve() needs a successful Factorize() first");
+  HARAP_CHECK(b.rows() == impl.rows && x.rows() == impl.rows && x.cols() == b.cols(),
+              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
+              x.cols(), impl.rows);
+  SolveSummary summary;
+  if (impl.rows == 0 || b.cols() == 0) return summary;
+
+  // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
+  cholmod_dense rhs{};
+  rhs.nrow = static_cast<size_t>(b.rows());
+  rhs.ncol = static_cast<size_t>(b.cols());
+  rhs.d = static_cast<size_t>(b.outerStride());
+  rhs.nzmax = rhs.d * rhs.ncol;
+  rhs.x = const_cast<double*>(b.data());
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  RestoreSimplicialWorkspaceShape(impl.factor, b.cols(), impl.y);
+  if (!cholmod_solve2(CHOLMOD_A, impl.factor, &rhs, nullptr, &impl.x, nullptr, &impl.y, &impl.e,
+                      &impl.common)) {
+    if (impl.common.status == CHOLMOD_OUT_OF_MEMORY) {
+      throw NumericalError(fmt::format(
+          "cholmod: out of memory allocating the {}×{} solve workspaces. Try an iterative solver "
+          "([solver] type = \"cg\" or \"gauss_seidel\", or --solver cg).",
+          b.rows(), b.cols()));
+    }
+    throw InternalError(fmt::format("cholmod: solve failed with status {}", impl.common.status));
+  }
+  x = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
+      static_cast<const double*>(impl.x->x), b.rows(), b.cols(),
+      Eigen::OuterStride<>(static_cast<Eigen::Index>(impl.x->d)));
+
+  if (!x.allFinite()) {
+    summary.success = false;
+    summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
+    return summary;
+  }
+  if (impl.options.check_residual) {
+    summary.relative_residual =
+        solver_checks::MaxRelativeResidual(impl.a_copy, b, x, impl.residual);
+  }
+  return summary;
+}
+
+}  // namespace harap
+
+#endif  // HARAP_HAVE_CHOLMOD

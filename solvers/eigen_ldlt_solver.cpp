@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/eigen_ldlt_solver.h"
+
+#include <fmt/format.h>
+
+#include <string>
+
+#include "framework/error.h"
+#include "solvers/solver_checks.h"
+
+namespace harap {
+
+EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(const ConfigNode& node) {
+  Options options;
+  options.pivot_tolerance =
+      node.Get("pivot_tolerance", options.pivot_tolerance,
+               "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
+               "error); in [0, 1)");
+  options.check_residual =
+      node.Get("check_residual", options.check_residual,
+               "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
+  node.RejectUnknownKeys();
+  if (!(options.pivot_tolerance >= 0.0 && options.pivot_tolerance < 1.0)) {
+    throw ConfigError(fmt::format("{}: option 'pivot_tolerance' is {}, which is not in [0, 1)",
+                                  node.Where("pivot_tolerance"), options.pivot_tolerance));
+  }
+  return options;
+}
+
+std::unique_ptr<LinearSolver> EigenLdltSolver::Create(const ConfigNode& node) {
+  return std::make_unique<EigenLdltSolver>(Options::FromConfig(node));
+}
+
+void EigenLdltSolver::Factorize(const SparseMatrix& a, const Context& /*context*/) {
+  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
+  factorized_ = false;
+  a_copy_ = SparseMatrix();
+  rows_ = a.rows();
+  if (rows_ == 0) {
+    factorized_ = true;
+    return;
+  }
+  const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "eigen_ldlt");
+
+  ldlt_.compute(a);
+  if (ldlt_.info() == Eigen::InvalidInput) {
+    throw InternalError("eigen_ldlt: Eigen rejected the matrix as invalid input");
+  }
+  // Eigen stops only at an exactly zero pivot (NumericalIssue) and accepts negative ones, so
+  // check every pivot, up to and including the one Eigen stopped at (the later ones are unset).
+  // Pivot k belongs to row Pinv(k) of A, since Eigen factors P A P⁻¹.
+  pivots_ = ldlt_.vectorD();  // vectorD() returns a copy: keep one for Solve().
+  const Eigen::VectorXd& pivots = pivots_;
+  const auto& to_row = ldlt_.permutationPinv().indices();
+  for (Eigen::Index k = 0; k < pivots.size(); ++k) {
+    const Eigen::Index row = to_row.size() > 0 ? to_row[k] : k;
+    if (!solver_checks::AcceptablePivot(pivots[k], diagonal[row], options_.pivot_tolerance)) {
+      solver_checks::ThrowBadPivot("eigen_ldlt", a.rows(), k, row, pivots[k], diagonal[row],
+                                   options_.pivot_tolerance);
+    }
+  }
+  HARAP_CHECK(ldlt_.info() == Eigen::Success, "SimplicialLDLT failed but every pivot is positive");
+  if (options_.check_residual) a_copy_ = a;
+  factorized_ = true;
+}
+
+SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                    Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+  HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
+  HARAP_CHECK(b.rows() == rows_ && x.rows() == rows_ && x.cols() == b.cols(),
+              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
+              x.cols(), rows_);
+  SolveSummary summary;
+  if (b.rows() == 0 || b.cols() == 0) return summary;
+
+  // Eigen's own solve() permutes the result in place and copies D, which allocates on every
+  // call; going through a kept workspace and pivot copy makes every step allocation-free.
+  workspace_.resize(b.rows(), b.cols());
+  workspace_.noalias() = ldlt_.permutationP() * b;
+  ldlt_.matrixL().solveInPlace(workspace_);
+  for (Eigen::Index j = 0; j < workspace_.cols(); ++j) workspace_.col(j).array() /= pivots_.array();
+  ldlt_.matrixU().solveInPlace(workspace_);
+  x.noalias() = ldlt_.permutationPinv() * workspace_;
+
+  if (!x.allFinite()) {
+    summary.success = false;
+    summary.message = solver_checks::NonFiniteSolutionMessage("eigen_ldlt", b);
+    return summary;
+  }
+  if (options_.check_residual) {
+    summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy_, b, x, residual_);
+  }
+  return summary;
+}
+
+}  // namespace harap

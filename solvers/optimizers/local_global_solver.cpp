@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/optimizers/local_global_solver.h"
+
+#include <cmath>
+
+#include "framework/config.h"
+#include "framework/error.h"
+
+namespace harap {
+
+LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
+                                     const ComponentFactory& factory, int level,
+                                     const Context& context)
+    : level_(level) {
+  Stopwatch clock;
+  energy_ = factory.MakeEnergy();
+  energy_->Precompute(mesh, context);
+  precompute_seconds_ = clock.Seconds();
+
+  clock.Restart();
+  system_ = std::make_unique<ConstrainedSystem>(energy_->system_matrix(), constrained);
+  solver_ = factory.MakeLinearSolver(level, system_->num_free());
+  if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
+  constrain_seconds_ = clock.Seconds();
+
+  rhs_.resize(mesh.num_vertices(), 3);
+  reduced_rhs_.resize(system_->num_free(), 3);
+  reduced_x_.resize(system_->num_free(), 3);
+}
+
+LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& state, bool start_with_global_step,
+                                                    const LocalGlobalOptions& options,
+                                                    double diagonal, const Context& context,
+                                                    const FixedPositionUpdate& update_fixed) {
+  HARAP_CHECK(state.positions.rows() == system_->num_vertices(), "{} positions for {} vertices",
+              state.positions.rows(), system_->num_vertices());
+  if (static_cast<Index>(state.rotations.size()) != energy_->num_rotations()) {
+    state.rotations.assign(energy_->num_rotations(), Rotation::Identity());
+  }
+  system_->SetFixedPositions(state.positions);
+  RunResult result;
+  const double squared_diagonal = diagonal * diagonal;
+  double energy = start_with_global_step ? 0.0
+                                         : energy_->FitRotations(state.positions, state.rotations,
+                                                                 context);
+  if (system_->num_free() == 0) {
+    result.energy = start_with_global_step
+                        ? energy_->FitRotations(state.positions, state.rotations, context)
+                        : energy;
+    result.converged = true;
+    return result;
+  }
+  while (result.iterations < options.max_iterations) {
+    if (update_fixed) {
+      update_fixed(state.rotations, state.positions);
+      system_->SetFixedPositions(state.positions);
+    }
+    // Global step: A_ff U_f = B_f(R) − A_fc U_c, all three coordinates at once.
+    energy_->AssembleRhs(state.rotations, rhs_, context);
+    system_->ReducedRhs(rhs_, reduced_rhs_);
+    system_->GatherFree(state.positions, reduced_x_);
+    const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
+    if (!summary.success) {
+      throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
+                                       summary.message));
+    }
+    const double displacement = system_->ScatterFree(reduced_x_, state.positions) /
+                                squared_diagonal;
+    // Local step: best-fit rotations for the new positions; also yields E(U, R).
+    energy = energy_->FitRotations(state.positions, state.rotations, context);
+    ++result.iterations;
+    if (!std::isfinite(energy)) {
+      throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
+                                       energy, level_, result.iterations));
+    }
+    if (context.iteration_callback) {
+      IterationSummary summary_for_callback{level_, result.iterations, energy, displacement,
+                                            context.run_clock.Seconds()};
+      if (context.iteration_callback(summary_for_callback) == CallbackAction::kStop) {
+        result.stopped_by_callback = true;
+        break;
+      }
+    }
+    if (displacement < options.tolerance) {
+      result.converged = true;
+      break;
+    }
+  }
+  result.energy = energy;
+  return result;
+}
+
+Positions InitialPositions(const DeformationProblem& problem) {
+  HARAP_CHECK(problem.mesh != nullptr, "deformation problem without a mesh");
+  const Mesh& mesh = *problem.mesh;
+  const Constraints& constraints = problem.constraints;
+  Positions u = problem.initial ? *problem.initial : mesh.vertices;
+  if (u.rows() != mesh.num_vertices()) {
+    throw InputError(fmt::format("the initial configuration has {} vertices, the mesh {}",
+                                 u.rows(), mesh.num_vertices()));
+  }
+  if (!u.allFinite()) throw InputError("the initial configuration has non-finite coordinates");
+  if (static_cast<Index>(constraints.indices.size()) != constraints.targets.rows()) {
+    throw InputError(fmt::format("{} constrained vertices but {} targets",
+                                 constraints.indices.size(), constraints.targets.rows()));
+  }
+  for (size_t k = 0; k < constraints.indices.size(); ++k) {
+    const Index v = constraints.indices[k];
+    if (v < 0 || v >= mesh.num_vertices()) {
+      throw InputError(fmt::format("constrained vertex {} is out of range (the mesh has {} "
+                                   "vertices)",
+                                   v, mesh.num_vertices()));
+    }
+    if (!constraints.targets.row(k).allFinite()) {
+      throw InputError(fmt::format("the target of constrained vertex {} is not finite", v));
+    }
+    u.row(v) = constraints.targets.row(k);
+  }
+  return u;
+}
+
+LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
+  LocalGlobalOptions options;
+  options.tolerance = node.Get("tolerance", options.tolerance,
+                               "stop when max squared vertex displacement of a global step / "
+                               "squared bounding-box diagonal falls below this (0: never)");
+  options.max_iterations = node.Get("max_iterations", options.max_iterations,
+                                    "cap on local/global iterations (per level)");
+  if (options.tolerance < 0.0) {
+    throw ConfigError(fmt::format("{}: tolerance must be >= 0, got {}", node.Where("tolerance"),
+                                  options.tolerance));
+  }
+  if (options.max_iterations < 1) {
+    throw ConfigError(fmt::format("{}: max_iterations must be >= 1, got {}",
+                                  node.Where("max_iterations"), options.max_iterations));
+  }
+  return options;
+}
+
+}  // namespace harap

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <functional>
+#include <memory>
+
+#include "framework/config.h"
+#include "framework/constrained_system.h"
+#include "framework/optimizer.h"
+
+namespace harap {
+
+/// Options of the local/global iteration on one level (shared by every optimizer that runs it).
+struct LocalGlobalOptions {
+  /// Stop when max_i ‖Δu_i‖² / diag² of a global step falls below this (the paper's criterion,
+  /// Section 5.1; 1e-6 in its experiments). 0 runs to max_iterations.
+  double tolerance = 1e-6;
+  int max_iterations = 1000;  ///< Cap on local/global iterations on the level.
+};
+
+/// Local/global ARAP iterations on one mesh level with a fixed constraint set: owns the level's
+/// energy, constrained system and factored linear solver. Construction does the precomputation
+/// (energy weights, constraint elimination, factorization: the paper's P and C phases);
+/// Run() does the S phase. Per-iteration work allocates nothing.
+class LocalGlobalSolver {
+ public:
+  /// `constrained`: vertex indices whose positions are prescribed (their rows of `u` at Run()).
+  LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
+                    const ComponentFactory& factory, int level, const Context& context);
+
+  /// What the level's run did.
+  struct RunResult {
+    int iterations = 0;
+    double energy = 0.0;  ///< E(u, R) with R fitted to the final u.
+    bool converged = false;
+    bool stopped_by_callback = false;
+  };
+
+  /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
+  /// the first global step (rotation up-sampling, Eq. 7); otherwise the first step is a local step
+  /// from state.positions. Fixed vertices keep their rows of state.positions. `diagonal` scales the
+  /// convergence test. On return `state` holds the final positions and fitted rotations.
+  ///
+  /// `update_fixed`, if set, is called before every global step with the current rotations and
+  /// may move constrained vertices in the positions (coarse constraint targets that follow the
+  /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
+  using FixedPositionUpdate = std::function<void(const Rotations&, Positions&)>;
+  RunResult Run(LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
+                double diagonal, const Context& context,
+                const FixedPositionUpdate& update_fixed = {});
+
+  const Energy& energy() const { return *energy_; }
+  const ConstrainedSystem& system() const { return *system_; }
+  double precompute_seconds() const { return precompute_seconds_; }
+  double constrain_seconds() const { return constrain_seconds_; }
+
+ private:
+  int level_;
+  std::unique_ptr<Energy> energy_;
+  std::unique_ptr<ConstrainedSystem> system_;
+  std::unique_ptr<LinearSolver> solver_;
+  double precompute_seconds_ = 0.0;
+  double constrain_seconds_ = 0.0;
+  // Per-iteration buffers, allocated once.
+  Positions rhs_;
+  Eigen::MatrixXd reduced_rhs_;
+  Eigen::MatrixXd reduced_x_;
+};
+
+/// Initial positions of a problem: `problem.initial` or the rest positions, with constrained
+/// vertices at their targets. Validates the constraints (index range, finite targets).
+Positions InitialPositions(const DeformationProblem& problem);
+
+/// Reads the options shared by all local/global optimizers from their config table.
+LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node);
+
+}  // namespace harap

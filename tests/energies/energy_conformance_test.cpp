@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: MIT
+// Properties every registered energy must have; a new energy is tested the moment it is
+// registered.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Eigenvalues>
+#include <random>
+
+#include "experiments/builtins.h"
+#include "framework/error.h"
+#include "tests/support/test_meshes.h"
+
+using namespace harap;
+using namespace harap::testing;
+
+namespace {
+
+std::vector<std::pair<std::string, Mesh>> ConformanceMeshes() {
+  Mesh grid = Grid(7, 6);
+  // Lift the grid out of the plane so no rest neighbourhood is flat.
+  for (Index i = 0; i < grid.num_vertices(); ++i) {
+    grid.vertices(i, 2) = 0.2 * std::sin(3.0 * grid.vertices(i, 0)) * grid.vertices(i, 1);
+  }
+  return {{"icosphere", Icosphere(2)}, {"curved grid", grid}, {"tube", Tube(9, 12)}};
+}
+
+Rotations Identities(const Energy& energy) {
+  return Rotations(energy.num_rotations(), Rotation::Identity());
+}
+
+}  // namespace
+
+TEST_CASE("every energy: rest pose and rigid motions have zero energy", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Context context;
+  for (const auto& name : registries.energies.Names()) {
+    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
+      DYNAMIC_SECTION(name << " on " << mesh_name) {
+        auto energy = registries.energies.Create(name, ConfigNode());
+        energy->Precompute(mesh, context);
+        Rotations rotations = Identities(*energy);
+        const double scale = energy->system_matrix().diagonal().sum();
+        CHECK(std::abs(energy->FitRotations(mesh.vertices, rotations, context)) < 1e-12 * scale);
+
+        const Eigen::Matrix3d r = RandomRotation(7);
+        Positions moved = (mesh.vertices * r.transpose()).rowwise() +
+                          Eigen::RowVector3d(0.3, -1.0, 2.0);
+        const double e = energy->FitRotations(moved, rotations, context);
+        CHECK(std::abs(e) < 1e-10 * scale);
+        for (const auto& fitted : rotations) CHECK((fitted - r).norm() < 1e-8);
+        CHECK(std::abs(energy->Evaluate(moved, rotations, context)) < 1e-10 * scale);
+      }
+    }
+  }
+}
+
+TEST_CASE("every energy: system matrix is symmetric PSD and annihilates translations",
+          "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Context context;
+  for (const auto& name : registries.energies.Names()) {
+    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
+      DYNAMIC_SECTION(name << " on " << mesh_name) {
+        auto energy = registries.energies.Create(name, ConfigNode());
+        energy->Precompute(mesh, context);
+        const Eigen::MatrixXd a = Eigen::MatrixXd(energy->system_matrix());
+        REQUIRE(a.rows() == mesh.num_vertices());
+        CHECK((a - a.transpose()).norm() < 1e-12 * a.norm());
+        CHECK((a * Eigen::VectorXd::Ones(a.rows())).norm() < 1e-10 * a.norm());
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+        CHECK(eigen.eigenvalues().minCoeff() > -1e-10 * eigen.eigenvalues().maxCoeff());
+      }
+    }
+  }
+}
+
+TEST_CASE("every energy: gradient matches finite differences", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Context context;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal;
+  for (const auto& name : registries.energies.Names()) {
+    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
+      DYNAMIC_SECTION(name << " on " << mesh_name) {
+        auto energy = registries.energies.Create(name, ConfigNode());
+        energy->Precompute(mesh, context);
+        const Positions u = SmoothlyDeformed(mesh.vertices, 0.7);
+        Rotations rotations = Identities(*energy);
+        energy->FitRotations(u, rotations, context);
+        // Perturb the rotations away from the optimum so the gradient is not tiny.
+        for (size_t s = 0; s < rotations.size(); ++s) {
+          rotations[s] = rotations[s] * RandomRotation(static_cast<unsigned>(s) + 11);
+        }
+        // ∂E/∂U = 2 (A U − B(R)) by the Energy contract.
+        Positions rhs(mesh.num_vertices(), 3);
+        energy->AssembleRhs(rotations, rhs, context);
+        const Positions gradient = 2.0 * (energy->system_matrix() * u - rhs);
+        for (int trial = 0; trial < 5; ++trial) {
+          Positions direction(u.rows(), 3);
+          for (Eigen::Index i = 0; i < direction.size(); ++i) direction.data()[i] = normal(rng);
+          const double h = 1e-6;
+          const Positions plus = u + h * direction;
+          const Positions minus = u - h * direction;
+          const double numeric = (energy->Evaluate(plus, rotations, context) -
+                                  energy->Evaluate(minus, rotations, context)) /
+                                 (2.0 * h);
+          const double analytic = gradient.cwiseProduct(direction).sum();
+          CHECK(numeric == Approx(analytic).epsilon(1e-6).margin(1e-8));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("every energy: the local step never increases the energy", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Context context;
+  for (const auto& name : registries.energies.Names()) {
+    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
+      DYNAMIC_SECTION(name << " on " << mesh_name) {
+        auto energy = registries.energies.Create(name, ConfigNode());
+        energy->Precompute(mesh, context);
+        const Positions u = SmoothlyDeformed(mesh.vertices, 1.5);
+        Rotations rotations = Identities(*energy);
+        for (size_t s = 0; s < rotations.size(); ++s) {
+          rotations[s] = RandomRotation(static_cast<unsigned>(s));
+        }
+        const double before = energy->Evaluate(u, rotations, context);
+        const double after = energy->FitRotations(u, rotations, context);
+        CHECK(after <= before);
+        CHECK(after == Approx(energy->Evaluate(u, rotations, context)).epsilon(1e-12));
+        // Optimality: no random perturbation of a fitted rotation lowers the energy.
+        Rotations perturbed = rotations;
+        for (size_t s = 0; s < perturbed.size(); s += 3) {
+          Eigen::Matrix3d small = Eigen::AngleAxisd(1e-3, Eigen::Vector3d(1, 2, 3).normalized())
+                                      .toRotationMatrix();
+          perturbed[s] = perturbed[s] * small;
+        }
+        CHECK(energy->Evaluate(u, perturbed, context) >= after);
+      }
+    }
+  }
+}
+
+TEST_CASE("surface energies reject tetrahedral meshes with a clear error", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  Mesh tet;
+  tet.vertices = Positions::Identity(4, 3);
+  tet.vertices.row(3).setZero();
+  tet.elements.resize(1, 4);
+  tet.elements << 0, 1, 2, 3;
+  for (const auto* name : {"spokes", "spokes_and_rims"}) {
+    auto energy = registries.energies.Create(name, ConfigNode());
+    CHECK_THROWS_WITH(energy->Precompute(tet, Context()),
+                      Catch::Contains(name) && Catch::Contains("triangle"));
+  }
+}
+
+TEST_CASE("energy options: unknown keys are rejected", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  ConfigNode config = ConfigNode::Parse("[energy]\ntype = \"spokes\"\nlambda = 0.5\n", "test");
+  CHECK_THROWS_AS(registries.energies.Create(config.Child("energy"), "spokes"), ConfigError);
+  CHECK_THROWS_WITH(registries.energies.Create("nonexistent", ConfigNode()),
+                    Catch::Contains("spokes_and_rims") && Catch::Contains("nonexistent"));
+}

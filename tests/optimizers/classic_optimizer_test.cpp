@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: MIT
+#include <catch2/catch.hpp>
+
+#include "framework/error.h"
+#include "tests/support/test_factory.h"
+#include "tests/support/test_meshes.h"
+
+using namespace harap;
+using namespace harap::testing;
+
+namespace {
+
+// A tube with its bottom ring fixed and its top ring turned and shifted.
+DeformationProblem BendTube(const Mesh& mesh, int rings, int segments) {
+  DeformationProblem problem;
+  problem.mesh = &mesh;
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  std::vector<Index> indices;
+  for (int s = 0; s < segments; ++s) indices.push_back(s);
+  for (int s = 0; s < segments; ++s) indices.push_back((rings - 1) * segments + s);
+  problem.constraints.indices = indices;
+  problem.constraints.targets.resize(indices.size(), 3);
+  for (size_t k = 0; k < indices.size(); ++k) {
+    Eigen::Vector3d p = mesh.vertices.row(indices[k]);
+    if (k >= static_cast<size_t>(segments)) p = turn * p + Eigen::Vector3d(0.0, 0.4, -0.2);
+    problem.constraints.targets.row(k) = p.transpose();
+  }
+  return problem;
+}
+
+}  // namespace
+
+TEST_CASE("classic ARAP: energy never increases and constraints hold exactly", "[optimizers]") {
+  const Mesh mesh = Tube(24, 16);
+  const DeformationProblem problem = BendTube(mesh, 24, 16);
+  for (const char* energy : {"spokes_and_rims", "spokes"}) {
+    for (const char* solver : {"cholmod", "eigen_ldlt"}) {
+      DYNAMIC_SECTION(energy << " with " << solver) {
+        TestSetup setup(fmt::format("[energy]\ntype = \"{}\"\n[solver]\ntype = \"{}\"\n"
+                                    "[optimizer]\ntolerance = 1e-8\nmax_iterations = 2000\n",
+                                    energy, solver));
+        std::vector<double> energies;
+        Context context;
+        context.iteration_callback = [&](const IterationSummary& s) {
+          energies.push_back(s.energy);
+          return CallbackAction::kContinue;
+        };
+        const OptimizeResult result =
+            setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
+        REQUIRE(energies.size() >= 3);
+        for (size_t i = 1; i < energies.size(); ++i) {
+          CHECK(energies[i] <= energies[i - 1] * (1.0 + 1e-12) + 1e-15);
+        }
+        CHECK(energies.front() > 1.5 * energies.back());
+        CHECK(result.energy == Approx(energies.back()));
+        for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
+          CHECK(result.positions.row(problem.constraints.indices[k]) ==
+                problem.constraints.targets.row(k));
+        }
+        CHECK(result.converged);
+        CHECK(result.positions.allFinite());
+      }
+    }
+  }
+}
+
+TEST_CASE("classic ARAP: a rigid handle motion of the whole boundary gives a rigid result",
+          "[optimizers]") {
+  const Mesh mesh = Tube(12, 10);
+  DeformationProblem problem;
+  problem.mesh = &mesh;
+  const Eigen::Matrix3d r = RandomRotation(5);
+  const Eigen::RowVector3d t(1.0, 2.0, -0.5);
+  for (Index v : {0, 3, 7, 50, 119}) problem.constraints.indices.push_back(v);
+  problem.constraints.targets.resize(5, 3);
+  for (int k = 0; k < 5; ++k) {
+    problem.constraints.targets.row(k) =
+        mesh.vertices.row(problem.constraints.indices[k]) * r.transpose() + t;
+  }
+  TestSetup setup("[optimizer]\ntolerance = 1e-16\nmax_iterations = 3000\n");
+  const OptimizeResult result = setup.MakeOptimizer()->Optimize(problem, setup.factory, Context());
+  const Positions expected = (mesh.vertices * r.transpose()).rowwise() + t;
+  CHECK((result.positions - expected).cwiseAbs().maxCoeff() < 1e-6);
+  CHECK(result.energy < 1e-10);
+}
+
+TEST_CASE("classic ARAP: components without handles and unused vertices are pinned, not fatal",
+          "[optimizers]") {
+  // A handled tube, a floating icosphere, and two vertices no face uses.
+  Mesh floating = Icosphere(1);
+  floating.vertices.col(0).array() += 3.0;
+  Mesh mesh = Concatenate(Tube(12, 10), floating);
+  const Index extra = mesh.num_vertices();
+  mesh.vertices.conservativeResize(extra + 2, 3);
+  mesh.vertices.row(extra) << 9.0, 9.0, 9.0;
+  mesh.vertices.row(extra + 1) << -9.0, 0.0, 1.0;
+  DeformationProblem problem = BendTube(mesh, 12, 10);
+  TestSetup setup;
+  const OptimizeResult result = setup.MakeOptimizer()->Optimize(problem, setup.factory, Context());
+  CHECK(result.constraints.free_components == 1);
+  CHECK(result.constraints.isolated_vertices == 2);
+  CHECK(result.constraints.vertices_in_free_components == floating.num_vertices());
+  CHECK(result.positions.allFinite());
+  CHECK(result.positions.row(extra) == mesh.vertices.row(extra));
+  CHECK(result.positions.row(extra + 1) == mesh.vertices.row(extra + 1));
+  // The floating sphere has no reason to deform: it stays where it was, undeformed.
+  const Index first = 12 * 10;
+  CHECK((result.positions.middleRows(first, floating.num_vertices()) - floating.vertices)
+            .cwiseAbs()
+            .maxCoeff() < 1e-9);
+  CHECK(result.notes.size() == 2);
+}
+
+TEST_CASE("classic ARAP: bad constraints give clear errors", "[optimizers]") {
+  const Mesh mesh = Tube(6, 8);
+  TestSetup setup;
+  DeformationProblem problem;
+  problem.mesh = &mesh;
+  problem.constraints.indices = {0, 1000};
+  problem.constraints.targets = Positions::Zero(2, 3);
+  CHECK_THROWS_WITH(setup.MakeOptimizer()->Optimize(problem, setup.factory, Context()),
+                    Catch::Contains("1000") && Catch::Contains("out of range"));
+  problem.constraints.indices = {0, 1};
+  problem.constraints.targets(1, 2) = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_WITH(setup.MakeOptimizer()->Optimize(problem, setup.factory, Context()),
+                    Catch::Contains("not finite"));
+}
+
+TEST_CASE("optimizer options are validated", "[optimizers]") {
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntolerence = 1e-3\n").MakeOptimizer(),
+                    Catch::Contains("tolerence") && Catch::Contains("tolerance"));
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\nmax_iterations = 0\n").MakeOptimizer(),
+                    Catch::Contains("max_iterations"));
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"clasic\"\n").MakeOptimizer(),
+                    Catch::Contains("classic"));
+}

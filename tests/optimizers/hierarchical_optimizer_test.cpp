@@ -1,0 +1,148 @@
+// SPDX-License-Identifier: MIT
+#include <catch2/catch.hpp>
+
+#include <map>
+
+#include "solvers/optimizers/coarse_constraints.h"
+#include "tests/support/test_factory.h"
+#include "tests/support/test_meshes.h"
+
+using namespace harap;
+using namespace harap::testing;
+
+namespace {
+
+// A long tube (≈ 4000 vertices) with its bottom ring fixed and its top ring turned and shifted.
+struct BentTube {
+  static constexpr int kRings = 100, kSegments = 40;
+  Mesh mesh = Tube(kRings, kSegments);
+  DeformationProblem problem;
+  BentTube() {
+    mesh.vertices.col(2) *= 4.0;  // height 4, radius 0.25
+    problem.mesh = &mesh;
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    for (int s = 0; s < kSegments; ++s) problem.constraints.indices.push_back(s);
+    for (int s = 0; s < kSegments; ++s) {
+      problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
+    }
+    problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
+    for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
+      Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
+      if (k >= kSegments) p = turn * p + Eigen::Vector3d(0.0, 1.0, -1.5);
+      problem.constraints.targets.row(k) = p.transpose();
+    }
+  }
+};
+
+}  // namespace
+
+TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", "[optimizers]") {
+  BentTube tube;
+  TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n");
+  TestSetup hierarchical(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmax_levels = 1\n");
+  const OptimizeResult a = classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
+  const OptimizeResult b =
+      hierarchical.MakeOptimizer()->Optimize(tube.problem, hierarchical.factory, Context());
+  REQUIRE(b.levels.size() == 1);
+  CHECK(a.iterations == b.iterations);
+  CHECK(a.energy == b.energy);
+  CHECK((a.positions - b.positions).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints exact, levels "
+          "reported",
+          "[optimizers]") {
+  BentTube tube;
+  for (const char* upsampler : {"rotations", "positions", "smoothed_rotations"}) {
+    DYNAMIC_SECTION("upsampler " << upsampler) {
+      // Fixed coarse targets (update_constraints = false) make each level a plain local/global
+      // run, which must be monotone.
+      TestSetup setup(fmt::format(
+          "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
+          "[hierarchy]\nmin_vertices = 100\n[upsampler]\ntype = \"{}\"\n",
+          upsampler));
+      std::map<int, std::vector<double>> energies;
+      Context context;
+      context.iteration_callback = [&](const IterationSummary& s) {
+        energies[s.level].push_back(s.energy);
+        return CallbackAction::kContinue;
+      };
+      const OptimizeResult result =
+          setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+      REQUIRE(result.levels.size() >= 3);
+      CHECK(energies.size() == result.levels.size());
+      for (const auto& [level, trace] : energies) {
+        for (size_t i = 1; i < trace.size(); ++i) {
+          CHECK(trace[i] <= trace[i - 1] * (1.0 + 1e-12) + 1e-15);
+        }
+      }
+      for (size_t l = 1; l < result.levels.size(); ++l) {
+        CHECK(result.levels[l].vertices < result.levels[l - 1].vertices);
+        CHECK(result.levels[l].level == static_cast<int>(l));
+      }
+      CHECK(result.levels[0].vertices == tube.mesh.num_vertices());
+      CHECK(result.energy == result.levels[0].energy);
+      for (size_t k = 0; k < tube.problem.constraints.indices.size(); ++k) {
+        CHECK(result.positions.row(tube.problem.constraints.indices[k]) ==
+              tube.problem.constraints.targets.row(k));
+      }
+      CHECK(result.converged);
+      CHECK(result.timings.hierarchy > 0.0);
+    }
+  }
+}
+
+TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend",
+          "[optimizers]") {
+  BentTube tube;
+  TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-6\n");
+  TestSetup hierarchical("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+                         "[hierarchy]\nmin_vertices = 100\n");
+  const OptimizeResult a = classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
+  const OptimizeResult b =
+      hierarchical.MakeOptimizer()->Optimize(tube.problem, hierarchical.factory, Context());
+  CHECK(b.energy < a.energy);
+}
+
+TEST_CASE("coarse targets of a rigidly moved handle are the rigid motion of the coarse positions",
+          "[optimizers]") {
+  BentTube tube;
+  const Registries registries = MakeBuiltinRegistries();
+  ConfigNode options = ConfigNode::Parse("min_vertices = 100\n", "test");
+  const MeshHierarchy hierarchy =
+      registries.hierarchies.Create("octree", options)->Build(tube.mesh, Context());
+  REQUIRE(hierarchy.num_levels() >= 3);
+  // Every vertex of the top half moves rigidly.
+  const Eigen::Matrix3d r = RandomRotation(9);
+  const Eigen::RowVector3d t(0.5, -1.0, 2.0);
+  Constraints constraints;
+  for (Index v = 0; v < tube.mesh.num_vertices(); ++v) {
+    if (tube.mesh.vertices(v, 2) > 2.0) constraints.indices.push_back(v);
+  }
+  constraints.targets.resize(constraints.indices.size(), 3);
+  for (size_t k = 0; k < constraints.indices.size(); ++k) {
+    constraints.targets.row(k) = tube.mesh.vertices.row(constraints.indices[k]) * r.transpose() + t;
+  }
+  for (int level = 1; level < hierarchy.num_levels(); ++level) {
+    const Mesh& coarse = hierarchy.levels[level].mesh;
+    const LevelConstraints mapped = MapConstraints(hierarchy, level, constraints);
+    REQUIRE(!mapped.vertices.empty());
+    Rotations rotations(coarse.num_vertices(), r);
+    Positions positions = coarse.vertices;
+    PlaceConstrainedVertices(mapped, RotationSite::kVertex, &rotations, positions);
+    for (Index c : mapped.vertices) {
+      const Eigen::RowVector3d expected = coarse.vertices.row(c) * r.transpose() + t;
+      CHECK((positions.row(c) - expected).norm() < 1e-12);
+    }
+  }
+}
+
+TEST_CASE("hierarchical options are validated", "[optimizers]") {
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevel_step = 0\n")
+                        .MakeOptimizer(),
+                    Catch::Contains("level_step"));
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevels = 2\n").MakeOptimizer(),
+                    Catch::Contains("level_step") && Catch::Contains("levels"));
+}

@@ -1,0 +1,247 @@
+// SPDX-License-Identifier: MIT
+// CHOLMOD-specific behaviour (options, every mode × ordering, out of memory). Skipped when the
+// build has no CHOLMOD (the registry then has no "cholmod").
+
+#include <catch2/catch.hpp>
+
+#include <string>
+#include <vector>
+
+#include "framework/context.h"
+#include "framework/error.h"
+#include "tests/solvers/solver_test_matrices.h"
+
+#if defined(__linux__)
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+#endif
+
+#if defined(__SANITIZE_ADDRESS__)
+#define HARAP_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define HARAP_TEST_ASAN 1
+#endif
+#endif
+
+namespace harap::testing {
+namespace {
+
+const std::vector<std::string> kModes = {"auto", "simplicial", "supernodal"};
+const std::vector<std::string> kOrderings = {"metis", "amd", "best"};
+
+#define HARAP_REQUIRE_CHOLMOD(registry)                         \
+  if (!(registry).Contains("cholmod")) {                        \
+    WARN("skipped: this build has no CHOLMOD (HARAP_WITH_CHOLMOD)"); \
+    return;                                                     \
+  }
+
+std::string Options(const std::string& mode, const std::string& ordering) {
+  return "mode = \"" + mode + "\"\nordering = \"" + ordering + "\"\n";
+}
+
+}  // namespace
+
+TEST_CASE("cholmod: invalid option values list the valid choices", "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  CHECK_THROWS_AS(MakeSolver(registry, "cholmod", "mode = \"fast\""), ConfigError);
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "mode = \"fast\""),
+                    Catch::Contains("fast") && Catch::Contains("auto, simplicial, supernodal"));
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "ordering = \"nesdis\""),
+                    Catch::Contains("metis, amd, best"));
+  CHECK_THROWS_AS(MakeSolver(registry, "cholmod", "mode = 2"), ConfigError);
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "pivot_tolerance = 1.5"),
+                    Catch::Contains("pivot_tolerance") && Catch::Contains("[0, 1)"));
+  CHECK_THROWS_AS(MakeSolver(registry, "cholmod", "pivot_tolerance = -1e-3"), ConfigError);
+  CHECK_THROWS_AS(MakeSolver(registry, "cholmod", "check_residual = \"yes\""), ConfigError);
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "mdoe = \"simplicial\""),
+                    Catch::Contains("mode") && Catch::Contains("ordering") &&
+                        Catch::Contains("check_residual") && Catch::Contains("pivot_tolerance"));
+}
+
+TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const Context context;
+  // Large enough for METIS to partition and for supernodes to form.
+  const SparseMatrix a = PinnedGridLaplacian(62, 62, 21);
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 22);
+  // Catch2 reruns the test body once per section; the dense reference is computed once.
+  static const Eigen::MatrixXd reference = Eigen::MatrixXd(a).llt().solve(b);
+  for (const auto& mode : kModes) {
+    for (const auto& ordering : kOrderings) {
+      DYNAMIC_SECTION("mode = " << mode << ", ordering = " << ordering) {
+        auto solver = MakeSolver(registry, "cholmod", Options(mode, ordering));
+        solver->Factorize(a, context);
+        Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+        REQUIRE(solver->Solve(b, x, context).success);
+        CHECK(RelativeResidual(a, b, x) < 1e-10);
+        CHECK(RelativeDifference(x, reference) < 1e-10);
+      }
+    }
+  }
+}
+
+TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matrices",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const Context context;
+  SparseMatrix indefinite = PinnedGridLaplacian(40, 40, 23);
+  for (int i = 0; i < indefinite.rows(); ++i) indefinite.coeffRef(i, i) -= 0.5;
+  const SparseMatrix singular = GridLaplacian(40, 40, 24);
+  for (const auto& mode : kModes) {
+    for (const auto& ordering : kOrderings) {
+      DYNAMIC_SECTION("mode = " << mode << ", ordering = " << ordering) {
+        auto solver = MakeSolver(registry, "cholmod", Options(mode, ordering));
+        CHECK_THROWS_WITH(solver->Factorize(indefinite, context),
+                          Catch::Contains("not positive definite") &&
+                              Catch::Contains("constrained vertex"));
+        CHECK_THROWS_WITH(solver->Factorize(singular, context),
+                          Catch::Contains("positive definite"));
+        CHECK_THROWS_AS(solver->Factorize(singular, context), NumericalError);
+      }
+    }
+  }
+}
+
+TEST_CASE("cholmod: pivot_tolerance decides what counts as singular", "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const Context context;
+  // Nearly singular: one vertex hangs on by a weight of 1e-9 (pivot / diagonal ≈ 1e-9 / 2), a
+  // small positive pivot that only the tolerance can flag.
+  Eigen::MatrixXd dense(2, 2);
+  dense << 2.0, -2.0, -2.0, 2.0 + 1e-9;
+  const SparseMatrix a = FromDense(dense);
+  const Eigen::MatrixXd b = RandomRhs(2, 3, 25);
+  for (const std::string mode : {"simplicial", "supernodal"}) {
+    DYNAMIC_SECTION("mode = " << mode) {
+      const std::string options = "mode = \"" + mode + "\"\n";
+      auto strict = MakeSolver(registry, "cholmod", options + "pivot_tolerance = 1e-6");
+      CHECK_THROWS_WITH(strict->Factorize(a, context), Catch::Contains("numerically singular"));
+      auto lenient = MakeSolver(registry, "cholmod", options + "pivot_tolerance = 1e-12");
+      lenient->Factorize(a, context);
+      Eigen::MatrixXd x = Eigen::MatrixXd::Zero(2, 3);
+      CHECK(lenient->Solve(b, x, context).success);
+      CHECK(RelativeDifference(x, dense.llt().solve(b)) < 1e-4);  // cond(A) ≈ 8e9.
+    }
+  }
+}
+
+#if defined(__linux__) && !defined(HARAP_TEST_ASAN)
+namespace {
+
+// Virtual memory of this process in bytes (VmSize), or 0 if unknown.
+size_t VirtualMemoryBytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmSize:", 0) == 0) {
+      std::istringstream fields(line.substr(7));
+      size_t kilobytes = 0;
+      fields >> kilobytes;
+      return kilobytes * 1024;
+    }
+  }
+  return 0;
+}
+
+struct ChildResult {
+  int exit_code = -1;  ///< 0: NumericalError, 1: no exception, 2: other exception, 3: skipped.
+  std::string message;
+};
+
+// Factorizes `a` in a forked child whose address space is capped at its current size plus
+// `headroom` bytes, so the failure cannot disturb this process. Only async-signal-safe calls and
+// the solver run in the child; it leaves with _exit (no Catch2 state is touched).
+ChildResult FactorizeWithMemoryCap(const Registry<LinearSolver>& registry,
+                                   const std::string& options, const SparseMatrix& a,
+                                   size_t headroom) {
+  int fds[2];
+  if (pipe(fds) != 0) return {3, "pipe() failed"};
+  const pid_t pid = fork();
+  if (pid < 0) return {3, "fork() failed"};
+  if (pid == 0) {
+    close(fds[0]);
+    int code = 1;
+    std::string message = "Factorize() succeeded";
+    try {
+      auto solver = MakeSolver(registry, "cholmod", options);
+      const Context context;
+      rlimit limit{};
+      getrlimit(RLIMIT_AS, &limit);
+      const size_t cap = VirtualMemoryBytes() + headroom;
+      if (VirtualMemoryBytes() == 0 || (limit.rlim_max != RLIM_INFINITY && cap > limit.rlim_max)) {
+        code = 3;
+        message = "cannot read VmSize or the hard RLIMIT_AS is too low";
+      } else {
+        limit.rlim_cur = cap;
+        setrlimit(RLIMIT_AS, &limit);
+        solver->Factorize(a, context);
+      }
+    } catch (const NumericalError& error) {
+      code = 0;
+      message = error.what();
+    } catch (const std::exception& error) {
+      code = 2;
+      message = error.what();
+    }
+    const char* data = message.data();
+    size_t left = message.size();
+    while (left > 0) {
+      const ssize_t written = write(fds[1], data, left);
+      if (written <= 0) break;
+      data += written;
+      left -= static_cast<size_t>(written);
+    }
+    close(fds[1]);
+    _exit(code);
+  }
+  close(fds[1]);
+  ChildResult result;
+  char buffer[4096];
+  ssize_t got = 0;
+  while ((got = read(fds[0], buffer, sizeof buffer)) > 0) result.message.append(buffer, got);
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return result;
+}
+
+}  // namespace
+
+TEST_CASE("cholmod: running out of memory is a NumericalError suggesting an iterative solver",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  // 40³ unknowns: A has 0.4M entries (the analysis needs a few MB) while L with AMD has ~20M
+  // (~200 MB), so 64 MB of headroom fails in the numeric factorization itself.
+  const SparseMatrix a = PinnedCubeLaplacian(40);
+  for (const std::string mode : {"simplicial", "supernodal"}) {
+    DYNAMIC_SECTION("mode = " << mode) {
+      const ChildResult result =
+          FactorizeWithMemoryCap(registry, Options(mode, "amd"), a, size_t{64} << 20);
+      if (result.exit_code == 3) {
+        WARN("skipped: " << result.message);
+        return;
+      }
+      INFO(result.message);
+      CHECK(result.exit_code == 0);
+      CHECK_THAT(result.message, Catch::Contains("out of memory") &&
+                                     Catch::Contains("factorization") &&
+                                     Catch::Contains("--solver cg") &&
+                                     Catch::Contains("gauss_seidel") &&
+                                     Catch::Contains("ordering = \"metis\""));
+    }
+  }
+}
+#endif
+
+}  // namespace harap::testing

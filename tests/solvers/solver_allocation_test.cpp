@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: MIT
+// LinearSolver::Solve() must not allocate after its first call (the global step runs it every
+// iteration). Counted by interposing malloc/calloc/realloc in this executable (glibc: forwards to
+// __libc_*), which also sees CHOLMOD's and BLAS's allocations through the dynamic linker.
+
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "framework/context.h"
+#include "tests/solvers/solver_test_matrices.h"
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define HARAP_TEST_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
+#define HARAP_TEST_SANITIZER 1
+#endif
+#endif
+
+// Sanitizers replace malloc themselves; then the test is skipped.
+#if defined(__GLIBC__) && !defined(HARAP_TEST_SANITIZER)
+#define HARAP_COUNT_ALLOCATIONS 1
+
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+
+void Count() {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+extern "C" {
+void* __libc_malloc(size_t size);
+void* __libc_calloc(size_t count, size_t size);
+void* __libc_realloc(void* pointer, size_t size);
+
+void* malloc(size_t size) {
+  Count();
+  return __libc_malloc(size);
+}
+void* calloc(size_t count, size_t size) {
+  Count();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* pointer, size_t size) {
+  Count();
+  return __libc_realloc(pointer, size);
+}
+}
+#endif
+
+namespace harap::testing {
+
+#ifdef HARAP_COUNT_ALLOCATIONS
+namespace {
+
+// Allocations made while running `f`.
+template <class F>
+long AllocationsIn(F&& f) {
+  allocations = 0;
+  counting = true;
+  f();
+  counting = false;
+  return allocations.load();
+}
+
+}  // namespace
+
+TEST_CASE("linear solvers: the allocation counter sees allocations", "[solvers]") {
+  // Guards the test below against an interposition that silently stopped working.
+  // Called through volatile pointers so the compiler cannot elide the allocation pairs.
+  void* (*volatile allocate)(size_t) = &std::malloc;
+  void (*volatile release)(void*) = &std::free;
+  void* (*volatile allocate_new)(size_t) = static_cast<void* (*)(size_t)>(&::operator new);
+  void (*volatile release_new)(void*) = static_cast<void (*)(void*)>(&::operator delete);
+  CHECK(AllocationsIn([&] { release(allocate(64)); }) == 1);
+  CHECK(AllocationsIn([&] { release_new(allocate_new(64)); }) == 1);
+  CHECK(AllocationsIn([] {}) == 0);
+}
+
+TEST_CASE("linear solvers: Solve() does not allocate after its first call", "[solvers]") {
+  const auto registry = LinearSolverRegistry();
+  const SparseMatrix a = PinnedGridLaplacian(47, 47, 31);
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 32);
+  std::vector<std::string> configurations;
+  for (const auto& name : registry.Names()) configurations.push_back(name);
+  // Supernodal CHOLMOD solves go through BLAS, simplicial ones do not: both are covered.
+  if (registry.Contains("cholmod")) {
+    configurations = {"cholmod simplicial", "cholmod supernodal"};
+    for (const auto& name : registry.Names()) {
+      if (name != "cholmod") configurations.push_back(name);
+    }
+  }
+  for (const auto& configuration : configurations) {
+    DYNAMIC_SECTION(configuration) {
+      const auto space = configuration.find(' ');
+      const std::string name = configuration.substr(0, space);
+      const std::string options =
+          space == std::string::npos ? "" : "mode = \"" + configuration.substr(space + 1) + "\"";
+      auto solver = MakeSolver(registry, name, options);
+      const Context context;
+      solver->Factorize(a, context);
+      Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+      REQUIRE(solver->Solve(b, x, context).success);
+      SolveSummary summary;
+      const long count = AllocationsIn([&] {
+        for (int i = 0; i < 3; ++i) summary = solver->Solve(b, x, context);
+      });
+      CHECK(summary.success);
+      CHECK(count == 0);
+    }
+  }
+}
+#else
+TEST_CASE("linear solvers: Solve() does not allocate after its first call", "[solvers]") {
+  WARN("skipped: allocation counting needs glibc and no sanitizer");
+}
+#endif
+
+}  // namespace harap::testing

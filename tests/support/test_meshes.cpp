@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: MIT
+#include "tests/support/test_meshes.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+#include <random>
+
+namespace harap::testing {
+
+Mesh Grid(int nx, int ny) {
+  Mesh mesh;
+  mesh.vertices.resize(nx * ny, 3);
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      mesh.vertices.row(j * nx + i) << double(i) / (nx - 1), double(j) / (ny - 1), 0.0;
+    }
+  }
+  mesh.elements.resize(2 * (nx - 1) * (ny - 1), 3);
+  int f = 0;
+  for (int j = 0; j + 1 < ny; ++j) {
+    for (int i = 0; i + 1 < nx; ++i) {
+      const int a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
+      mesh.elements.row(f++) << a, b, d;
+      mesh.elements.row(f++) << a, d, c;
+    }
+  }
+  return mesh;
+}
+
+Mesh Icosphere(int subdivisions) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& p : v) p.normalize();
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> midpoint;
+    auto mid = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return midpoint[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<Eigen::Vector3i> next;
+    for (const auto& tri : f) {
+      const int ab = mid(tri[0], tri[1]), bc = mid(tri[1], tri[2]), ca = mid(tri[2], tri[0]);
+      next.push_back({tri[0], ab, ca});
+      next.push_back({tri[1], bc, ab});
+      next.push_back({tri[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    f = next;
+  }
+  Mesh mesh;
+  mesh.vertices.resize(v.size(), 3);
+  for (size_t i = 0; i < v.size(); ++i) mesh.vertices.row(i) = v[i].transpose();
+  mesh.elements.resize(f.size(), 3);
+  for (size_t i = 0; i < f.size(); ++i) mesh.elements.row(i) = f[i].transpose();
+  return mesh;
+}
+
+Mesh Tube(int rings, int segments) {
+  Mesh mesh;
+  mesh.vertices.resize(rings * segments, 3);
+  for (int r = 0; r < rings; ++r) {
+    for (int s = 0; s < segments; ++s) {
+      // Alternate rings are offset by half a segment for well-shaped triangles.
+      const double angle = 2.0 * M_PI * (s + 0.5 * (r % 2)) / segments;
+      mesh.vertices.row(r * segments + s) << 0.25 * std::cos(angle), 0.25 * std::sin(angle),
+          double(r) / (rings - 1);
+    }
+  }
+  mesh.elements.resize(2 * (rings - 1) * segments, 3);
+  int f = 0;
+  for (int r = 0; r + 1 < rings; ++r) {
+    for (int s = 0; s < segments; ++s) {
+      const int a = r * segments + s, b = r * segments + (s + 1) % segments;
+      const int c = (r + 1) * segments + s, d = (r + 1) * segments + (s + 1) % segments;
+      if (r % 2 == 0) {
+        mesh.elements.row(f++) << a, b, c;
+        mesh.elements.row(f++) << b, d, c;
+      } else {
+        mesh.elements.row(f++) << a, d, c;
+        mesh.elements.row(f++) << a, b, d;
+      }
+    }
+  }
+  return mesh;
+}
+
+Mesh Concatenate(const Mesh& a, const Mesh& b) {
+  Mesh mesh;
+  mesh.vertices.resize(a.num_vertices() + b.num_vertices(), 3);
+  mesh.vertices << a.vertices, b.vertices;
+  mesh.elements.resize(a.num_elements() + b.num_elements(), a.simplex_size());
+  mesh.elements.topRows(a.num_elements()) = a.elements;
+  mesh.elements.bottomRows(b.num_elements()) = b.elements.array() + a.num_vertices();
+  return mesh;
+}
+
+Eigen::Matrix3d RandomRotation(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  Eigen::Quaterniond q(normal(rng), normal(rng), normal(rng), normal(rng));
+  return q.normalized().toRotationMatrix();
+}
+
+Positions SmoothlyDeformed(const Positions& rest, double amount) {
+  Positions u = rest;
+  for (Eigen::Index i = 0; i < rest.rows(); ++i) {
+    const double x = rest(i, 0), y = rest(i, 1), z = rest(i, 2);
+    const double angle = amount * (z + 0.5 * x);
+    u(i, 0) = std::cos(angle) * x - std::sin(angle) * y + 0.3 * amount * z * z;
+    u(i, 1) = std::sin(angle) * x + std::cos(angle) * y + 0.2 * amount * x * y;
+    u(i, 2) = z * (1.0 + 0.1 * amount * x) + 0.15 * amount * y * y;
+  }
+  return u;
+}
+
+}  // namespace harap::testing
