@@ -144,7 +144,7 @@ void ConstrainedSystem::GatherFree(const Positions& u, Eigen::MatrixXd& x_f) con
 }
 
 double ConstrainedSystem::ScatterFree(const Eigen::MatrixXd& x_f, Positions& u) const {
-  return tbb::parallel_reduce(
+  return tbb::parallel_deterministic_reduce(
       tbb::blocked_range<Index>(0, num_free(), 4096), 0.0,
       [&](const tbb::blocked_range<Index>& range, double largest) {
         for (Index k = range.begin(); k != range.end(); ++k) {

@@ -3,12 +3,16 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -35,23 +39,50 @@ void ParallelFor(std::size_t n, F&& f) {
                     });
 }
 
-/// Union–find whose root is always the smallest member: parent[i] ≤ i holds throughout, so one
-/// increasing sweep flattens it.
-inline Index Find(Index* parent, Index i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];  // path halving keeps parent[i] ≤ i
-    i = parent[i];
+/// Per-vertex data is read in element order, i.e. scattered: prefetch it for the element
+/// kPrefetchDistance ahead of entry t (of `end` entries of K-simplices).
+constexpr std::size_t kPrefetchDistance = 16;
+
+template <int K, class T>
+inline void PrefetchAhead(const T* data, const Index* e, std::size_t t, std::size_t end) {
+  const std::size_t ahead = t + kPrefetchDistance * K;
+  if (ahead < end) {
+    for (int a = 0; a < K; ++a) __builtin_prefetch(data + e[ahead + a]);
   }
-  return i;
+}
+
+/// Runs f(part, begin, end) on `parts` contiguous ranges of [0, n) in parallel (one task each).
+template <class F>
+void ForEachPart(std::size_t n, int parts, F&& f) {
+  tbb::parallel_for(0, parts, [&](int p) { f(p, n * p / parts, n * (p + 1) / parts); });
+}
+
+/// Concurrent union–find (the hooking of ECL-CC, Jaiganesh & Burtscher 2018) whose root is
+/// always the smallest member: parent[i] ≤ i holds throughout, so the partition does not depend
+/// on the order of the unions and one increasing sweep flattens the forest. Path halving only
+/// ever stores an ancestor, so racing halvings are harmless; roots are hooked by CAS.
+inline Index Find(Index* parent, Index i) {
+  for (;;) {
+    std::atomic_ref<Index> link(parent[i]);
+    const Index p = link.load(std::memory_order_relaxed);
+    if (p == i) return i;
+    const Index grandparent = std::atomic_ref<Index>(parent[p]).load(std::memory_order_relaxed);
+    if (grandparent != p) link.store(grandparent, std::memory_order_relaxed);
+    i = grandparent;
+  }
 }
 
 inline void Union(Index* parent, Index a, Index b) {
-  a = Find(parent, a);
-  b = Find(parent, b);
-  if (a < b) {
-    parent[b] = a;
-  } else if (b < a) {
-    parent[a] = b;
+  for (;;) {
+    a = Find(parent, a);
+    b = Find(parent, b);
+    if (a == b) return;
+    if (b < a) std::swap(a, b);
+    Index expected = b;  // hook the larger root under the smaller one
+    if (std::atomic_ref<Index>(parent[b]).compare_exchange_weak(expected, a,
+                                                                std::memory_order_relaxed)) {
+      return;
+    }
   }
 }
 
@@ -71,9 +102,83 @@ void RadixSort(std::vector<KeyedIndex>& items, std::vector<KeyedIndex>& scratch,
     for (const KeyedIndex& item : items) ++count[(item.key >> shift) & (kBuckets - 1)];
     std::size_t sum = 0;
     for (std::size_t& c : count) sum += std::exchange(c, sum);
-    for (const KeyedIndex& item : items) scratch[count[(item.key >> shift) & (kBuckets - 1)]++] = item;
+    for (const KeyedIndex& item : items) {
+      scratch[count[(item.key >> shift) & (kBuckets - 1)]++] = item;
+    }
     items.swap(scratch);
   }
+}
+
+/// Sorts a small range in place (insertion sort; std::sort for long ranges).
+inline void SortSmall(Index* begin, Index* end) {
+  if (end - begin > 32) {
+    std::sort(begin, end);
+    return;
+  }
+  for (Index* i = begin + 1; i < end; ++i) {
+    const Index value = *i;
+    Index* j = i;
+    for (; j > begin && *(j - 1) > value; --j) *j = *(j - 1);
+    *j = value;
+  }
+}
+
+template <int K>
+inline bool Equal(const std::array<Index, K>& a, const std::array<Index, K>& b) {
+  bool equal = true;
+  for (int i = 0; i < K; ++i) equal = equal && a[i] == b[i];
+  return equal;
+}
+
+template <int K>
+inline bool Less(const std::array<Index, K>& a, const std::array<Index, K>& b) {
+  for (int i = 0; i < K; ++i) {
+    if (a[i] != b[i]) return a[i] < b[i];
+  }
+  return false;
+}
+
+template <int K>
+inline std::array<Index, K> SortedSimplex(const Index* c) {
+  std::array<Index, K> s;
+  for (int a = 0; a < K; ++a) s[a] = c[a];
+  auto order = [&](int a, int b) {
+    if (s[b] < s[a]) std::swap(s[a], s[b]);
+  };
+  if constexpr (K == 3) {
+    order(0, 1);
+    order(1, 2);
+    order(0, 1);
+  } else {
+    order(0, 1);
+    order(2, 3);
+    order(0, 2);
+    order(1, 3);
+    order(1, 2);
+  }
+  return s;
+}
+
+/// Row i of a row-major #V×3 array.
+inline Eigen::Map<const Eigen::Vector3d> Row(const double* xyz, Index i) {
+  return Eigen::Map<const Eigen::Vector3d>(xyz + 3 * std::size_t(i));
+}
+
+/// Integer cell coordinates packed in one word: x in bits 42–62, y in 21–41, z in 0–20.
+constexpr std::uint64_t kFieldMask = (std::uint64_t{1} << kMaxBits) - 1;
+
+inline std::uint64_t PackCell(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
+  return (x << (2 * kMaxBits)) | (y << kMaxBits) | z;
+}
+
+inline std::uint64_t CellField(std::uint64_t cell, int d) {
+  return (cell >> ((2 - d) * kMaxBits)) & kFieldMask;
+}
+
+/// The cell `delta` levels coarser (every coordinate shifted right by delta).
+inline std::uint64_t ShiftCell(std::uint64_t cell, int delta) {
+  const std::uint64_t field = kFieldMask >> delta;
+  return (cell >> delta) & (field | (field << kMaxBits) | (field << (2 * kMaxBits)));
 }
 
 /// The integer grid of Eq. (2).
@@ -83,73 +188,77 @@ struct Quantization {
   std::array<int, 3> bits = {0, 0, 0};               ///< q_d
   int max_bits = 0;
 
-  /// Bits per axis of a cell coordinate at `shift`.
-  std::array<int, 3> BitsAt(int shift) const {
-    return {std::max(bits[0] - shift, 0), std::max(bits[1] - shift, 0),
-            std::max(bits[2] - shift, 0)};
+  /// The cell coordinates at `shift` packed densely (for sorting): bits per axis max(q_d − s, 0).
+  std::uint64_t DenseKey(std::uint64_t cell, int shift) const {
+    const int by = std::max(bits[1] - shift, 0), bz = std::max(bits[2] - shift, 0);
+    return (CellField(cell, 0) << (by + bz)) | (CellField(cell, 1) << bz) | CellField(cell, 2);
+  }
+  int DenseKeyBits(int shift) const {
+    return std::max(bits[0] - shift, 0) + std::max(bits[1] - shift, 0) +
+           std::max(bits[2] - shift, 0);
   }
 
-  /// World position of the centre of cell `cell` (coordinates w >> shift), clipped to the
-  /// bounding box.
-  Eigen::Vector3d CellCentre(const std::uint32_t* cell, int shift) const {
+  /// World position of the centre of `cell` (coordinates w >> shift), clipped to the bounding
+  /// box.
+  Eigen::Vector3d CellCentre(std::uint64_t cell, int shift) const {
     Eigen::Vector3d p;
     for (int d = 0; d < 3; ++d) {
+      const auto c = static_cast<std::int64_t>(CellField(cell, d));
       const std::int64_t top = (std::int64_t{1} << bits[d]) - 1;
-      const std::int64_t lo = std::int64_t{cell[d]} << shift;
-      const std::int64_t hi = std::min(((std::int64_t{cell[d]} + 1) << shift) - 1, top);
+      const std::int64_t lo = c << shift;
+      const std::int64_t hi = std::min(((c + 1) << shift) - 1, top);
       p[d] = origin[d] + 0.5 * double(lo + hi) * step[d];
     }
     return p;
   }
 };
 
-/// Mean length of the unique element edges, edges bucketed by their smaller end.
-double MeanUniqueEdgeLength(const Mesh& mesh, std::vector<Index>& offsets,
-                            std::vector<Index>& others, std::vector<Index>& stamp) {
-  const Index n = mesh.num_vertices();
-  const int k = mesh.simplex_size();
-  const Index* e = mesh.elements.data();
-  const std::size_t entries = std::size_t(mesh.num_elements()) * k;
-  offsets.assign(n + 1, 0);
-  auto for_each_pair = [&](auto&& f) {
-    for (std::size_t t = 0; t < entries; t += k) {
-      for (int a = 0; a < k; ++a) {
-        for (int b = a + 1; b < k; ++b) f(e[t + a], e[t + b]);
-      }
+/// A scratch array that only grows. new T[] leaves trivial types uninitialized, so pages that
+/// are never written are never faulted in (the kernel zero-fills each fresh page on first touch,
+/// which costs as much as the work on it).
+template <class T>
+class Scratch {
+ public:
+  T* Resize(std::size_t size) {
+    if (size > capacity_) {
+      data_.reset(new T[size]);
+      capacity_ = size;
     }
-  };
-  for_each_pair([&](Index a, Index b) { ++offsets[std::min(a, b) + 1]; });
-  for (Index i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
-  others.resize(offsets[n]);
-  stamp.assign(offsets.begin(), offsets.end() - 1);  // fill cursors
-  for_each_pair([&](Index a, Index b) {
-    const auto [lo, hi] = std::minmax(a, b);
-    others[stamp[lo]++] = hi;
-  });
-  std::fill(stamp.begin(), stamp.end(), kNoVertex);
-  double sum = 0.0;
-  std::size_t count = 0;
-  const Positions& v = mesh.vertices;
-  for (Index a = 0; a < n; ++a) {
-    for (Index j = offsets[a]; j < offsets[a + 1]; ++j) {
-      const Index b = others[j];
-      if (stamp[b] == a) continue;
-      stamp[b] = a;
-      sum += (v.row(a) - v.row(b)).norm();
-      ++count;
-    }
+    size_ = size;
+    return data_.get();
   }
-  return count ? sum / double(count) : 0.0;
+  T* data() { return data_.get(); }
+  const T* data() const { return data_.get(); }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  std::size_t size() const { return size_; }
+  void swap(Scratch& other) noexcept {
+    data_.swap(other.data_);
+    std::swap(capacity_, other.capacity_);
+    std::swap(size_, other.size_);
+  }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  std::size_t capacity_ = 0;
+  std::size_t size_ = 0;
+};
+
+/// Splits [0, n) into fixed blocks (independent of the thread count, so sums over blocks taken
+/// in block order are deterministic) and runs f(block, begin, end) on them in parallel.
+template <class F>
+void ForEachBlock(std::size_t n, std::size_t block_size, F&& f) {
+  const std::size_t blocks = (n + block_size - 1) / block_size;
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t block) {
+    f(block, block * block_size, std::min(n, (block + 1) * block_size));
+  });
 }
 
-/// Sorted copy of element `t`'s first k entries (k ≤ 4).
-inline std::array<Index, 4> SortedTuple(const Index* t, int k) {
-  std::array<Index, 4> s = {t[0], t[1], t[2], k == 4 ? t[3] : std::numeric_limits<Index>::max()};
-  std::sort(s.begin(), s.end());
-  return s;
-}
+constexpr std::size_t kBlock = 16384;
 
-/// Builds the coarse levels. All buffers are sized for level 0 once and reused.
+/// Builds the coarse levels of a hierarchy of K-simplices (K = 3 triangles, 4 tetrahedra). The
+/// scratch buffers are sized on level 0 and reused by the coarser levels.
+template <int K>
 class Builder {
  public:
   Builder(const OctreeHierarchy::Options& options, MeshHierarchy& hierarchy)
@@ -158,261 +267,382 @@ class Builder {
   void Run() {
     // At most one level per shift 1..kMaxBits − 1 besides level 0: references stay valid.
     hierarchy_.levels.reserve(kMaxBits + 1);
-    const Mesh& input = hierarchy_.levels[0].mesh;
-    k_ = input.simplex_size();
-    SetUpFinestLevel(input);
+    SetUpFinestLevel(hierarchy_.levels[0].mesh);
     int shift = 0;
     for (;;) {
-      const Index n = hierarchy_.levels.back().mesh.num_vertices();
+      const Mesh& mesh = hierarchy_.levels.back().mesh;
+      const Index n = mesh.num_vertices();
       if (options_.max_levels > 0 && hierarchy_.num_levels() >= options_.max_levels) break;
       if (n <= options_.min_vertices) break;
       int next_shift = shift + 1;
-      for (; next_shift < grid_.max_bits; ++next_shift) {
-        if (Cluster(hierarchy_.levels.back().mesh, next_shift - shift, next_shift) < n) break;
+      while (next_shift < grid_.max_bits && Cluster(mesh, next_shift - shift) == n) {
+        ++next_shift;  // nothing merges at this shift
       }
       if (next_shift >= grid_.max_bits) break;
-      if (!AddCoarseLevel(next_shift - shift, next_shift)) break;
+      if (!AddCoarseLevel(next_shift)) break;
       shift = next_shift;
     }
   }
 
  private:
+  /// Level 0: referenced vertices, bounding box, mean unique edge length Ē, Eq. (2)–(3).
   void SetUpFinestLevel(const Mesh& mesh) {
     const Index n = mesh.num_vertices();
-    const std::size_t entries = std::size_t(mesh.num_elements()) * k_;
-    referenced_.assign(n, 0);
+    const std::size_t m = std::size_t(mesh.num_elements());
     const Index* e = mesh.elements.data();
-    for (std::size_t j = 0; j < entries; ++j) referenced_[e[j]] = 1;
+    parts_ = std::max(1, tbb::this_task_arena::max_concurrency());
 
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    for (Index i = 0; i < n; ++i) {
-      if (!referenced_[i]) continue;
-      lo = lo.cwiseMin(mesh.vertices.row(i).transpose());
-      hi = hi.cwiseMax(mesh.vertices.row(i).transpose());
-    }
-    const double mean_edge = MeanUniqueEdgeLength(mesh, offsets_, others_, index_scratch_);
-    grid_.origin = lo;
-    for (int d = 0; d < 3; ++d) {
-      const double extent = hi[d] - lo[d];
-      int q = 0;
-      if (mean_edge > 0.0 && extent > mean_edge) {
-        q = static_cast<int>(std::ceil(std::log2(extent / mean_edge + 1.0)));
-        // Guard against rounding in log2: the cell must not exceed Ē.
-        while (q < kMaxBits && extent / double((std::int64_t{1} << q) - 1) > mean_edge) ++q;
-        q = std::min(q, kMaxBits);
-      }
-      grid_.bits[d] = q;
-      grid_.step[d] = q > 0 ? extent / double((std::int64_t{1} << q) - 1) : 0.0;
-      grid_.max_bits = std::max(grid_.max_bits, q);
-    }
-
-    cells_.assign(3 * std::size_t(n), 0);
-    sums_.resize(3 * std::size_t(n));
-    counts_.resize(n);
+    // Row-major positions: the finest members' sums on level 0 (one member each).
+    double* xyz = sums_.Resize(3 * std::size_t(n));
     ParallelFor(n, [&](std::size_t i) {
-      for (int d = 0; d < 3; ++d) sums_[3 * i + d] = mesh.vertices(i, d);
-      counts_[i] = referenced_[i] ? 1 : 0;
-      if (!referenced_[i]) return;
-      for (int d = 0; d < 3; ++d) {
-        const int q = grid_.bits[d];
-        if (q == 0) continue;
-        const double top = double((std::int64_t{1} << q) - 1);
-        const double t = (mesh.vertices(i, d) - lo[d]) / (hi[d] - lo[d]);
-        const double w = std::floor(top * t + 0.5);
-        cells_[3 * i + d] = static_cast<std::uint32_t>(std::clamp(w, 0.0, top));
+      for (int d = 0; d < 3; ++d) xyz[3 * i + d] = mesh.vertices(i, d);
+    });
+
+    // Referenced vertices, and the element edges bucketed by their smaller end: one CSR per
+    // part of the elements (counting sort). After the fill, bucket i of a part is
+    // [end[i − 1], end[i]) with end[−1] = 0.
+    referenced_.assign(n, 0);
+    std::vector<std::vector<Index>> bucket_end(parts_), bucket_entries(parts_);
+    ForEachPart(m, parts_, [&](int part, std::size_t first, std::size_t last) {
+      std::vector<Index>& end = bucket_end[part];
+      end.assign(std::size_t(n) + 1, 0);
+      for (std::size_t t = first * K; t < last * K; t += K) {
+        for (int a = 0; a < K; ++a) {
+          std::atomic_ref<unsigned char>(referenced_[e[t + a]]).store(1, std::memory_order_relaxed);
+          for (int b = a + 1; b < K; ++b) ++end[std::min(e[t + a], e[t + b]) + 1];
+        }
       }
-    });
-    level0_ = true;
-
-    // Buffers for all levels, sized for the largest (level 0).
-    keys_.reserve(n);
-    parent_.reserve(n);
-    label_.reserve(n);
-    sorted_.reserve(n);
-    sort_scratch_.reserve(n);
-    mapped_.reserve(entries);
-    keep_.reserve(mesh.num_elements());
-    next_cells_.reserve(3 * std::size_t(n));
-    next_sums_.reserve(3 * std::size_t(n));
-    next_counts_.reserve(n);
-  }
-
-  /// Cell key of every vertex of the current level at `shift` (its cell coordinates shifted by
-  /// `delta`), packed with the bits the coordinates need.
-  void ComputeKeys(Index n, int delta, int shift) {
-    const std::array<int, 3> b = grid_.BitsAt(shift);
-    keys_.resize(n);
-    ParallelFor(n, [&](std::size_t i) {
-      const std::uint32_t* c = &cells_[3 * i];
-      keys_[i] = (std::uint64_t{c[0] >> delta} << (b[1] + b[2])) |
-                 (std::uint64_t{c[1] >> delta} << b[2]) | std::uint64_t{c[2] >> delta};
-    });
-  }
-
-  /// Clusters the current level's vertices at `shift` into parent_ (roots = smallest members);
-  /// returns the number of clusters (unreferenced vertices are singletons).
-  Index Cluster(const Mesh& mesh, int delta, int shift) {
-    const Index n = mesh.num_vertices();
-    ComputeKeys(n, delta, shift);
-    parent_.resize(n);
-    for (Index i = 0; i < n; ++i) parent_[i] = i;
-    Index* parent = parent_.data();
-    if (options_.topology_aware) {
-      const Index* e = mesh.elements.data();
-      const std::size_t entries = std::size_t(mesh.num_elements()) * k_;
-      for (std::size_t t = 0; t < entries; t += k_) {
-        for (int a = 0; a < k_; ++a) {
-          const Index va = e[t + a];
-          const std::uint64_t key = keys_[va];
-          for (int b = a + 1; b < k_; ++b) {
-            if (keys_[e[t + b]] == key) Union(parent, va, e[t + b]);
+      for (Index i = 0; i < n; ++i) end[i + 1] += end[i];
+      std::vector<Index>& entries = bucket_entries[part];
+      entries.resize(end[n]);
+      for (std::size_t t = first * K; t < last * K; t += K) {
+        for (int a = 0; a < K; ++a) {
+          for (int b = a + 1; b < K; ++b) {
+            const auto [lo, hi] = std::minmax(e[t + a], e[t + b]);
+            entries[end[lo]++] = hi;
           }
         }
       }
+    });
+
+    // Ē over the unique edges: the sorted bucket of a vertex holds each of its edges as a run of
+    // equal entries. Also the bounding box. Fixed blocks, summed in order.
+    struct BlockResult {
+      double length = 0.0;
+      std::size_t edges = 0;
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+      Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+    };
+    std::vector<BlockResult> block_results((std::size_t(n) + kBlock - 1) / kBlock);
+    ForEachBlock(n, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
+      BlockResult r;
+      std::vector<Index> merged;
+      auto bucket = [&](int part, std::size_t a) {
+        const std::vector<Index>& end = bucket_end[part];
+        const Index* entries = bucket_entries[part].data();
+        return std::make_pair(entries + (a == 0 ? 0 : end[a - 1]), entries + end[a]);
+      };
+      for (std::size_t a = first; a < last; ++a) {
+        if (!referenced_[a]) continue;
+        const Eigen::Vector3d pa = Row(xyz, Index(a));
+        r.lo = r.lo.cwiseMin(pa);
+        r.hi = r.hi.cwiseMax(pa);
+        // The neighbours' positions are scattered: fetch the next bucket's while sorting.
+        if (a + 1 < last) {
+          for (int part = 0; part < parts_; ++part) {
+            const auto [begin, end] = bucket(part, a + 1);
+            for (const Index* j = begin; j < end; ++j) __builtin_prefetch(&xyz[3 * std::size_t(*j)]);
+          }
+        }
+        merged.clear();
+        for (int part = 0; part < parts_; ++part) {
+          const auto [begin, end] = bucket(part, a);
+          merged.insert(merged.end(), begin, end);
+        }
+        SortSmall(merged.data(), merged.data() + merged.size());
+        for (std::size_t j = 0; j < merged.size(); ++j) {
+          if (j > 0 && merged[j] == merged[j - 1]) continue;
+          r.length += (pa - Row(xyz, merged[j])).norm();
+          ++r.edges;
+        }
+      }
+      block_results[block] = r;
+    });
+    BlockResult total;
+    for (const BlockResult& r : block_results) {
+      total.length += r.length;
+      total.edges += r.edges;
+      total.lo = total.lo.cwiseMin(r.lo);
+      total.hi = total.hi.cwiseMax(r.hi);
+    }
+    const double mean_edge = total.edges ? total.length / double(total.edges) : 0.0;
+    const Eigen::Vector3d lo = total.lo, hi = total.hi;
+
+    grid_.origin = lo;
+    std::array<double, 3> extent = {0.0, 0.0, 0.0};
+    std::array<double, 3> top = {0.0, 0.0, 0.0};  // 2^q − 1
+    for (int d = 0; d < 3; ++d) {
+      extent[d] = hi[d] - lo[d];
+      int q = 0;
+      if (mean_edge > 0.0 && extent[d] > mean_edge) {
+        q = static_cast<int>(std::ceil(std::log2(extent[d] / mean_edge + 1.0)));
+        // Guard against rounding in log2: the cell must not exceed Ē.
+        while (q < kMaxBits && extent[d] / double((std::int64_t{1} << q) - 1) > mean_edge) ++q;
+        q = std::clamp(q, 1, kMaxBits);
+      }
+      top[d] = double((std::int64_t{1} << q) - 1);
+      grid_.bits[d] = q;
+      grid_.step[d] = q > 0 ? extent[d] / top[d] : 0.0;
+      grid_.max_bits = std::max(grid_.max_bits, q);
+    }
+
+    // Eq. (2): w = ⌊(2^q − 1)(v̄ − b_min)/(b_max − b_min) + ½⌋ (unreferenced vertices: 0).
+    std::uint64_t* cells = cells_.Resize(n);
+    ParallelFor(n, [&](std::size_t i) {
+      std::array<std::uint64_t, 3> w = {0, 0, 0};
+      if (referenced_[i]) {
+        for (int d = 0; d < 3; ++d) {
+          if (top[d] == 0.0) continue;
+          // The argument is ≥ ½, so truncation is the floor.
+          const double t = (xyz[3 * i + d] - lo[d]) / extent[d];
+          w[d] = static_cast<std::uint64_t>(std::min(top[d] * t + 0.5, top[d]));
+        }
+      }
+      cells[i] = PackCell(w[0], w[1], w[2]);
+    });
+    level0_ = true;
+  }
+
+  bool Referenced(Index i) const { return !level0_ || referenced_[i]; }
+
+  /// Clusters the current level's vertices in the cells `delta` levels coarser (into
+  /// next_cells_); label_ numbers the clusters by their smallest member. Returns the number of
+  /// clusters; unreferenced vertices are singletons.
+  Index Cluster(const Mesh& mesh, int delta) {
+    const Index n = mesh.num_vertices();
+    const std::uint64_t* cells = cells_.data();
+    std::uint64_t* cell = next_cells_.Resize(n);
+    Index* parent = parent_.Resize(n);
+    ParallelFor(n, [&](std::size_t i) {
+      cell[i] = ShiftCell(cells[i], delta);
+      parent[i] = Index(i);
+    });
+    if (options_.topology_aware) {
+      // Connected components of the element edges inside a cell (Algorithm 1).
+      const Index* e = mesh.elements.data();
+      ForEachPart(mesh.num_elements(), parts_, [&](int, std::size_t first, std::size_t last) {
+        for (std::size_t t = first * K; t < last * K; t += K) {
+          PrefetchAhead<K>(cell, e, t, last * K);
+          std::array<std::uint64_t, K> key;
+          for (int a = 0; a < K; ++a) key[a] = cell[e[t + a]];
+          for (int a = 0; a < K; ++a) {
+            for (int b = a + 1; b < K; ++b) {
+              if (key[a] == key[b]) Union(parent, e[t + a], e[t + b]);
+            }
+          }
+        }
+      });
     } else {
-      // Every referenced vertex of a cell joins the cell's first (smallest) vertex.
+      // Every referenced vertex of a cell joins the cell's smallest vertex.
+      const int shift = current_shift_ + delta;
       sorted_.clear();
       for (Index i = 0; i < n; ++i) {
-        if (!level0_ || referenced_[i]) sorted_.push_back({keys_[i], i});
+        if (Referenced(i)) sorted_.push_back({grid_.DenseKey(cell[i], shift), i});
       }
-      const std::array<int, 3> b = grid_.BitsAt(shift);
-      RadixSort(sorted_, sort_scratch_, b[0] + b[1] + b[2]);
+      RadixSort(sorted_, sort_scratch_, grid_.DenseKeyBits(shift));
       for (std::size_t j = 1; j < sorted_.size(); ++j) {
-        if (sorted_[j].key == sorted_[j - 1].key) parent[sorted_[j].index] = parent[sorted_[j - 1].index];
+        if (sorted_[j].key == sorted_[j - 1].key) {
+          parent[sorted_[j].index] = parent[sorted_[j - 1].index];
+        }
       }
     }
     // Flatten (parent[i] ≤ i) and label clusters in the order of their smallest member.
-    label_.resize(n);
+    Index* label = label_.Resize(n);
     num_clusters_ = 0;
     for (Index i = 0; i < n; ++i) {
       const Index p = parent[parent[i]];
       parent[i] = p;
-      label_[i] = p == i ? num_clusters_++ : label_[p];
+      label[i] = p == i ? num_clusters_++ : label[p];
     }
     return num_clusters_;
   }
 
-  /// Builds level l+1 from the clusters in label_; false if no element survives.
-  bool AddCoarseLevel(int delta, int shift) {
+  /// Builds level l+1 (cells at `shift`) from the clusters in label_; false if no element
+  /// survives.
+  bool AddCoarseLevel(int shift) {
     HierarchyLevel& fine_level = hierarchy_.levels.back();
     const Mesh& fine = fine_level.mesh;
     const Index n = fine.num_vertices();
-    const Index m = fine.num_elements();
-    const int k = k_;
-
-    // Eq. (5)/(10): an element survives iff its vertices lie in k different clusters.
-    mapped_.resize(std::size_t(m) * k);
-    keep_.resize(m);
+    const std::size_t m = std::size_t(fine.num_elements());
     const Index* e = fine.elements.data();
-    ParallelFor(m, [&](std::size_t t) {
-      Index* c = &mapped_[t * k];
-      for (int a = 0; a < k; ++a) c[a] = label_[e[t * k + a]];
-      bool distinct = c[0] != c[1] && c[0] != c[2] && c[1] != c[2];
-      if (k == 4) distinct = distinct && c[3] != c[0] && c[3] != c[1] && c[3] != c[2];
-      keep_[t] = distinct ? 1 : 0;
-    });
-    RemoveDuplicates(m);
+    const Index* label = label_.data();
 
-    // Compact the used clusters (in label order) into coarse indices.
-    std::vector<Index>& coarse_of = index_scratch_;
-    coarse_of.assign(num_clusters_, kNoVertex);
-    Index coarse_elements = 0;
-    for (Index t = 0; t < m; ++t) {
-      if (!keep_[t]) continue;
-      ++coarse_elements;
-      for (int a = 0; a < k; ++a) coarse_of[mapped_[std::size_t(t) * k + a]] = 0;
-    }
-    if (coarse_elements == 0) return false;
+    // Eq. (5)/(10): an element survives iff its vertices lie in K different clusters. The
+    // survivors' clusters, in element order (two passes over fixed blocks: count, write).
+    auto survives = [&](std::size_t t, std::array<Index, K>& c) {
+      for (int a = 0; a < K; ++a) c[a] = label[e[t * K + a]];
+      bool distinct = true;
+      for (int a = 0; a < K; ++a) {
+        for (int b = a + 1; b < K; ++b) distinct = distinct && c[a] != c[b];
+      }
+      return distinct;
+    };
+    const std::size_t blocks = (m + kBlock - 1) / kBlock;
+    std::vector<Index> block_start(blocks + 1, 0);
+    unsigned char* alive = alive_.Resize(m);
+    ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
+      Index count = 0;
+      std::array<Index, K> c;
+      for (std::size_t t = first; t < last; ++t) {
+        PrefetchAhead<K>(label, e, t * K, last * K);
+        alive[t] = survives(t, c) ? 1 : 0;
+        count += alive[t];
+      }
+      block_start[block + 1] = count;
+    });
+    for (std::size_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
+    const Index num_survivors = block_start[blocks];
+    if (num_survivors == 0) return false;
+    Index* survivors = survivors_.Resize(std::size_t(num_survivors) * K);
+    ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
+      Index* out = survivors + std::size_t(block_start[block]) * K;
+      std::array<Index, K> c;
+      for (std::size_t t = first; t < last; ++t) {
+        if (!alive[t]) continue;
+        survives(t, c);
+        for (int a = 0; a < K; ++a) *out++ = c[a];
+      }
+    });
+
+    // Duplicates out; the used clusters (marked 0) compacted into coarse indices.
+    Index* coarse_of = coarse_of_.Resize(num_clusters_);
+    std::fill_n(coarse_of, num_clusters_, kNoVertex);
+    const Index num_elements = RemoveDuplicates(num_survivors, coarse_of);
     Index num_coarse = 0;
     for (Index c = 0; c < num_clusters_; ++c) {
       if (coarse_of[c] == 0) coarse_of[c] = num_coarse++;
     }
-
     HierarchyLevel coarse_level;
     Mesh& coarse = coarse_level.mesh;
     coarse.planar = fine.planar;
-    coarse.elements.resize(coarse_elements, k);
-    for (Index t = 0, out = 0; t < m; ++t) {
-      if (!keep_[t]) continue;
-      for (int a = 0; a < k; ++a) coarse.elements(out, a) = coarse_of[mapped_[std::size_t(t) * k + a]];
-      ++out;
+    coarse.elements.resize(num_elements, K);
+    Index* out = coarse.elements.data();
+    for (Index s = 0; s < num_survivors; ++s) {
+      if (!keep_[s]) continue;
+      for (int a = 0; a < K; ++a) *out++ = coarse_of[survivors[std::size_t(s) * K + a]];
     }
 
     // Fine → coarse map.
     fine_level.coarse_vertex.resize(n);
     fine_level.in_cluster.resize(n);
-    Index unresolved = 0;
-    for (Index i = 0; i < n; ++i) {
-      const Index c = coarse_of[label_[i]];
-      fine_level.coarse_vertex[i] = c;
-      fine_level.in_cluster[i] = c != kNoVertex ? 1 : 0;
-      if (c == kNoVertex && (!level0_ || referenced_[i])) ++unresolved;
-    }
+    std::atomic<Index> unresolved = 0;
+    ForEachBlock(n, kBlock, [&](std::size_t, std::size_t first, std::size_t last) {
+      Index count = 0;
+      for (std::size_t i = first; i < last; ++i) {
+        const Index c = coarse_of[label[i]];
+        fine_level.coarse_vertex[i] = c;
+        fine_level.in_cluster[i] = c != kNoVertex ? 1 : 0;
+        if (c == kNoVertex && Referenced(Index(i))) ++count;
+      }
+      unresolved += count;
+    });
     if (unresolved > 0) MapToClosestSurvivor(fine, fine_level, unresolved);
 
     // Per-vertex state of the coarse level: cell, sum and count of the finest members.
-    next_cells_.resize(3 * std::size_t(num_coarse));
-    next_sums_.assign(3 * std::size_t(num_coarse), 0.0);
-    next_counts_.assign(num_coarse, 0);
+    std::uint64_t* coarse_cells = coarse_cells_.Resize(num_coarse);
+    double* coarse_sums = coarse_sums_.Resize(3 * std::size_t(num_coarse));
+    Index* coarse_counts = coarse_counts_.Resize(num_coarse);
+    std::fill_n(coarse_sums, 3 * std::size_t(num_coarse), 0.0);
+    std::fill_n(coarse_counts, num_coarse, 0);
     for (Index i = 0; i < n; ++i) {
       if (!fine_level.in_cluster[i]) continue;
       const Index c = fine_level.coarse_vertex[i];
-      for (int d = 0; d < 3; ++d) {
-        next_cells_[3 * std::size_t(c) + d] = cells_[3 * std::size_t(i) + d] >> delta;
-        next_sums_[3 * std::size_t(c) + d] += sums_[3 * std::size_t(i) + d];
-      }
-      next_counts_[c] += counts_[i];
+      coarse_cells[c] = next_cells_[i];
+      for (int d = 0; d < 3; ++d) coarse_sums[3 * std::size_t(c) + d] += sums_[3 * std::size_t(i) + d];
+      coarse_counts[c] += level0_ ? 1 : counts_[i];
     }
-    cells_.swap(next_cells_);
-    sums_.swap(next_sums_);
-    counts_.swap(next_counts_);
+    cells_.swap(coarse_cells_);
+    sums_.swap(coarse_sums_);
+    counts_.swap(coarse_counts_);
     level0_ = false;
+    current_shift_ = shift;
 
     coarse.vertices.resize(num_coarse, 3);
     ParallelFor(num_coarse, [&](std::size_t c) {
-      coarse.vertices.row(c) = Eigen::RowVector3d(sums_[3 * c], sums_[3 * c + 1], sums_[3 * c + 2]) /
-                               double(counts_[c]);
+      for (int d = 0; d < 3; ++d) coarse.vertices(c, d) = sums_[3 * c + d] / double(counts_[c]);
     });
     if (options_.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized) {
-      SetQuantizedPositions(coarse, shift);
+      SetQuantizedPositions(coarse);
     }
     if (coarse.planar) coarse.vertices.col(2).setZero();
     hierarchy_.levels.push_back(std::move(coarse_level));
     return true;
   }
 
-  /// Clears keep_ for surviving elements whose cluster set equals that of an earlier survivor.
-  void RemoveDuplicates(Index m) {
-    const int k = k_;
-    // Bucket survivors by their smallest cluster (counting sort, stable in element order).
-    offsets_.assign(std::size_t(num_clusters_) + 1, 0);
-    for (Index t = 0; t < m; ++t) {
-      if (!keep_[t]) continue;
-      const Index* c = &mapped_[std::size_t(t) * k];
-      ++offsets_[*std::min_element(c, c + k) + 1];
-    }
-    for (Index c = 0; c < num_clusters_; ++c) offsets_[c + 1] += offsets_[c];
-    others_.resize(offsets_[num_clusters_]);
-    index_scratch_.assign(offsets_.begin(), offsets_.end() - 1);
-    for (Index t = 0; t < m; ++t) {
-      if (!keep_[t]) continue;
-      const Index* c = &mapped_[std::size_t(t) * k];
-      others_[index_scratch_[*std::min_element(c, c + k)]++] = t;
-    }
-    std::vector<std::pair<std::array<Index, 4>, Index>> bucket;
-    for (Index c = 0; c < num_clusters_; ++c) {
-      const Index begin = offsets_[c], end = offsets_[c + 1];
-      if (end - begin < 2) continue;
-      bucket.clear();
-      for (Index j = begin; j < end; ++j) {
-        bucket.emplace_back(SortedTuple(&mapped_[std::size_t(others_[j]) * k], k), others_[j]);
+  /// Sets keep_[s] = 0 for each survivor whose cluster set equals that of an earlier survivor
+  /// (1 otherwise) and marks the clusters the survivors use with 0 in `used`. Returns the number
+  /// of survivors kept.
+  Index RemoveDuplicates(Index num_survivors, Index* used) {
+    // Bucket the survivors by their smallest cluster (counting sort, stable); an entry holds
+    // the survivor and its other clusters, sorted, so a bucket is compared in place.
+    const Index* survivors = survivors_.data();
+    Index* offsets = offsets_.Resize(std::size_t(num_clusters_) + 1);
+    std::fill_n(offsets, std::size_t(num_clusters_) + 1, 0);
+    for (Index s = 0; s < num_survivors; ++s) {
+      const Index* c = survivors + std::size_t(s) * K;
+      Index lowest = c[0];
+      for (int a = 0; a < K; ++a) {
+        used[c[a]] = 0;
+        lowest = std::min(lowest, c[a]);
       }
-      std::sort(bucket.begin(), bucket.end());  // equal tuples: first element first
-      for (std::size_t j = 1; j < bucket.size(); ++j) {
-        if (bucket[j].first == bucket[j - 1].first) keep_[bucket[j].second] = 0;
-      }
+      ++offsets[lowest + 1];
     }
+    for (Index c = 0; c < num_clusters_; ++c) offsets[c + 1] += offsets[c];
+    BucketEntry* bucket = bucket_.Resize(num_survivors);
+    Index* cursor = parent_.Resize(num_clusters_);  // parent_ is free after clustering
+    std::copy_n(offsets, num_clusters_, cursor);
+    for (Index s = 0; s < num_survivors; ++s) {
+      const std::array<Index, K> sorted = SortedSimplex<K>(survivors + std::size_t(s) * K);
+      BucketEntry& entry = bucket[cursor[sorted[0]]++];
+      entry.survivor = s;
+      for (int a = 1; a < K; ++a) entry.rest[a - 1] = sorted[a];
+    }
+    unsigned char* keep = keep_.Resize(num_survivors);
+    std::fill_n(keep, num_survivors, 1);
+    std::atomic<Index> duplicates = 0;
+    ForEachBlock(num_clusters_, kBlock, [&](std::size_t, std::size_t first, std::size_t last) {
+      Index count = 0;
+      for (std::size_t c = first; c < last; ++c) {
+        BucketEntry* begin = bucket + offsets[c];
+        BucketEntry* end = bucket + offsets[c + 1];
+        if (end - begin < 2) continue;
+        if (end - begin > 16) {
+          std::sort(begin, end, [](const BucketEntry& x, const BucketEntry& y) {
+            return Less<K - 1>(x.rest, y.rest) ||
+                   (Equal<K - 1>(x.rest, y.rest) && x.survivor < y.survivor);
+          });
+          for (BucketEntry* j = begin + 1; j < end; ++j) {
+            if (Equal<K - 1>(j->rest, (j - 1)->rest)) {
+              keep[j->survivor] = 0;
+              ++count;
+            }
+          }
+          continue;
+        }
+        for (BucketEntry* j = begin + 1; j < end; ++j) {
+          for (BucketEntry* i = begin; i < j; ++i) {
+            if (Equal<K - 1>(i->rest, j->rest)) {
+              // The first of equal entries stays (entries are in survivor order).
+              keep[j->survivor] = 0;
+              ++count;
+              break;
+            }
+          }
+        }
+      }
+      duplicates += count;
+    });
+    return num_survivors - duplicates;
   }
 
   /// Multi-source BFS in the fine vertex–edge graph from the vertices whose cluster survived to
@@ -421,31 +651,32 @@ class Builder {
   void MapToClosestSurvivor(const Mesh& fine, HierarchyLevel& level, Index unresolved) {
     const Index n = fine.num_vertices();
     const Index m = fine.num_elements();
-    const int k = k_;
     const Index* e = fine.elements.data();
     std::vector<Index>& coarse = level.coarse_vertex;
     const std::vector<unsigned char>& in_cluster = level.in_cluster;
 
     // Local ids of the unresolved vertices and their incident elements (CSR).
-    std::vector<Index> local(n, kNoVertex);
+    Index* local = parent_.Resize(n);  // free after clustering
+    std::fill_n(local, n, kNoVertex);
     std::vector<Index> vertices;
     vertices.reserve(unresolved);
     for (Index i = 0; i < n; ++i) {
-      if (!in_cluster[i] && (!level0_ || referenced_[i])) {
+      if (!in_cluster[i] && Referenced(i)) {
         local[i] = static_cast<Index>(vertices.size());
         vertices.push_back(i);
       }
     }
     std::vector<Index> offsets(vertices.size() + 1, 0);
-    for (std::size_t j = 0; j < std::size_t(m) * k; ++j) {
+    for (std::size_t j = 0; j < std::size_t(m) * K; ++j) {
       if (local[e[j]] != kNoVertex) ++offsets[local[e[j]] + 1];
     }
     for (std::size_t u = 0; u < vertices.size(); ++u) offsets[u + 1] += offsets[u];
     std::vector<Index> incident(offsets.back());
     std::vector<Index> cursor(offsets.begin(), offsets.end() - 1);
-    for (std::size_t j = 0; j < std::size_t(m) * k; ++j) {
-      if (local[e[j]] != kNoVertex) incident[cursor[local[e[j]]]++] = static_cast<Index>(j / k);
+    for (std::size_t j = 0; j < std::size_t(m) * K; ++j) {
+      if (local[e[j]] != kNoVertex) incident[cursor[local[e[j]]]++] = static_cast<Index>(j / K);
     }
+    auto element = [&](Index j) { return e + std::size_t(incident[j]) * K; };
 
     constexpr Index kUnset = -1, kPending = -2;
     std::vector<Index> distance(vertices.size(), kUnset);
@@ -454,9 +685,9 @@ class Builder {
     for (std::size_t u = 0; u < vertices.size(); ++u) {
       Index best = kNoVertex;
       for (Index j = offsets[u]; j < offsets[u + 1]; ++j) {
-        const Index* t = &e[std::size_t(incident[j]) * k];
-        for (int a = 0; a < k; ++a) {
-          if (in_cluster[t[a]] && (best == kNoVertex || coarse[t[a]] < best)) best = coarse[t[a]];
+        for (int a = 0; a < K; ++a) {
+          const Index w = element(j)[a];
+          if (in_cluster[w] && (best == kNoVertex || coarse[w] < best)) best = coarse[w];
         }
       }
       if (best != kNoVertex) {
@@ -469,9 +700,8 @@ class Builder {
       next.clear();
       for (Index u : frontier) {
         for (Index j = offsets[u]; j < offsets[u + 1]; ++j) {
-          const Index* t = &e[std::size_t(incident[j]) * k];
-          for (int a = 0; a < k; ++a) {
-            const Index w = local[t[a]];
+          for (int a = 0; a < K; ++a) {
+            const Index w = local[element(j)[a]];
             if (w != kNoVertex && distance[w] == kUnset) {
               distance[w] = kPending;
               next.push_back(w);
@@ -479,40 +709,33 @@ class Builder {
           }
         }
       }
-      for (Index w : next) {
+      for (Index u : next) {
         Index best = kNoVertex;
-        for (Index j = offsets[w]; j < offsets[w + 1]; ++j) {
-          const Index* t = &e[std::size_t(incident[j]) * k];
-          for (int a = 0; a < k; ++a) {
-            const Index x = local[t[a]];
-            if (x != kNoVertex && distance[x] == layer &&
-                (best == kNoVertex || coarse[t[a]] < best)) {
-              best = coarse[t[a]];
+        for (Index j = offsets[u]; j < offsets[u + 1]; ++j) {
+          for (int a = 0; a < K; ++a) {
+            const Index w = element(j)[a];
+            if (local[w] != kNoVertex && distance[local[w]] == layer &&
+                (best == kNoVertex || coarse[w] < best)) {
+              best = coarse[w];
             }
           }
         }
-        coarse[vertices[w]] = best;
-        distance[w] = layer + 1;
+        coarse[vertices[u]] = best;
+        distance[u] = layer + 1;
       }
       frontier.swap(next);
     }
   }
 
-  /// Cell centres at `shift`; clusters sharing a cell (a cell split by the topology check) keep
-  /// the mean position already in coarse.vertices.
-  void SetQuantizedPositions(Mesh& coarse, int shift) {
+  /// Cell centres at the current shift; clusters sharing a cell (a cell split by the topology
+  /// check) keep the mean position already in coarse.vertices.
+  void SetQuantizedPositions(Mesh& coarse) {
     const Index n = coarse.num_vertices();
-    const std::array<int, 3> b = grid_.BitsAt(shift);
     std::vector<unsigned char> split(n, 0);
     if (options_.topology_aware) {
       sorted_.resize(n);
-      for (Index c = 0; c < n; ++c) {
-        const std::uint32_t* cell = &cells_[3 * std::size_t(c)];
-        sorted_[c] = {(std::uint64_t{cell[0]} << (b[1] + b[2])) | (std::uint64_t{cell[1]} << b[2]) |
-                          std::uint64_t{cell[2]},
-                      c};
-      }
-      RadixSort(sorted_, sort_scratch_, b[0] + b[1] + b[2]);
+      for (Index c = 0; c < n; ++c) sorted_[c] = {grid_.DenseKey(cells_[c], current_shift_), c};
+      RadixSort(sorted_, sort_scratch_, grid_.DenseKeyBits(current_shift_));
       for (Index j = 1; j < n; ++j) {
         if (sorted_[j].key == sorted_[j - 1].key) {
           split[sorted_[j].index] = split[sorted_[j - 1].index] = 1;
@@ -520,31 +743,35 @@ class Builder {
       }
     }
     ParallelFor(n, [&](std::size_t c) {
-      if (!split[c]) coarse.vertices.row(c) = grid_.CellCentre(&cells_[3 * c], shift).transpose();
+      if (!split[c]) coarse.vertices.row(c) = grid_.CellCentre(cells_[c], current_shift_);
     });
   }
 
   const OctreeHierarchy::Options& options_;
   MeshHierarchy& hierarchy_;
-  int k_ = 3;
   Quantization grid_;
   bool level0_ = true;
+  int current_shift_ = 0;
+  int parts_ = 1;  ///< ranges processed in parallel (the arena's concurrency)
   std::vector<unsigned char> referenced_;  ///< level 0 only
 
-  // Per vertex of the current level: cell coordinates (w >> shift), sum and count of the
-  // finest members' positions; next_* for the level being built.
-  std::vector<std::uint32_t> cells_, next_cells_;
-  std::vector<double> sums_, next_sums_;
-  std::vector<Index> counts_, next_counts_;
+  // Per vertex of the current level: packed cell (w >> shift), and the sum (row-major) and
+  // count of the finest members' positions (on level 0 the positions; counts unused).
+  // next_cells_: the cells at the shift being tried; coarse_*: the level being built.
+  Scratch<std::uint64_t> cells_, next_cells_, coarse_cells_;
+  Scratch<double> sums_, coarse_sums_;
+  Scratch<Index> counts_, coarse_counts_;
 
   // Scratch reused by every level.
-  std::vector<std::uint64_t> keys_;
-  std::vector<Index> parent_, label_;
+  Scratch<Index> parent_, label_, survivors_, offsets_, coarse_of_;
   Index num_clusters_ = 0;
   std::vector<KeyedIndex> sorted_, sort_scratch_;
-  std::vector<Index> mapped_;
-  std::vector<unsigned char> keep_;
-  std::vector<Index> offsets_, others_, index_scratch_;
+  struct BucketEntry {
+    Index survivor;
+    std::array<Index, K - 1> rest;
+  };
+  Scratch<BucketEntry> bucket_;
+  Scratch<unsigned char> alive_, keep_;
 };
 
 }  // namespace
@@ -614,7 +841,15 @@ MeshHierarchy OctreeHierarchy::Build(const Mesh& mesh, const Context& context) c
   HARAP_CHECK(mesh.elements.minCoeff() >= 0 && mesh.elements.maxCoeff() < mesh.num_vertices(),
               "element indices must lie in [0, {})", mesh.num_vertices());
   if (mesh.num_vertices() <= options_.min_vertices || options_.max_levels == 1) return hierarchy;
-  context.Run([&] { Builder(options_, hierarchy).Run(); });
+  static_assert(sizeof(std::array<Index, 3>) == 3 * sizeof(Index) &&
+                sizeof(std::array<Index, 4>) == 4 * sizeof(Index));
+  context.Run([&] {
+    if (k == 3) {
+      Builder<3>(options_, hierarchy).Run();
+    } else {
+      Builder<4>(options_, hierarchy).Run();
+    }
+  });
   return hierarchy;
 }
 

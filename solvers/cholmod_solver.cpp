@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,16 +21,31 @@
 namespace harap {
 namespace {
 
-// CHOLMOD_AUTO picks a simplicial factorization when flops / nnz(L) < supernodal_switch. With
-// s the solve time per entry of L (3 right-hand sides) and c the factorization time per flop,
-// simplicial + k solves is cheaper than supernodal + k solves exactly when
-//   flops · (c_simplicial − c_supernodal) < k · nnz(L) · (s_supernodal − s_simplicial),
-// i.e. flops / nnz(L) < k · (s_supernodal − s_simplicial) / (c_simplicial − c_supernodal).
-// The ratio is measured, and k = 100 solves per factorization assumed (ARAP runs 20–300).
-// See kAutoSupernodalSwitch's comment for the numbers.
-constexpr double kAssumedSolvesPerFactorization = 100.0;
-constexpr double kSolveToFactorCostRatio = 0.0;  // set below from measurements
-constexpr double kAutoSupernodalSwitch = kAssumedSolvesPerFactorization * kSolveToFactorCostRatio;
+// Why mode = "auto" factors supernodally and then converts the factor to simplicial form: the
+// supernodal (BLAS) factorization is 1.5–10× faster than the simplicial one, while solves with a
+// simplicial factor are 1.3–3× faster (3 right-hand sides are too few for the dense supernodal
+// blocks to pay). ARAP factors once and solves 5–300 times, so neither pure mode is right for all
+// runs; converting (cholmod_change_factor, O(nnz(L))) gets the fast factorization and the fast
+// solves. Measured (thread CPU time, OpenBLAS 1 thread,
+// CHOLMOD 3.0.14 on a shared 2-vCPU Xeon; reduced cotangent Laplacians of jittered triangulated
+// grids with two pinned 10×10 patches, and 7-point Laplacians of cubes with one face pinned, as
+// tetrahedral meshes fill in); times are factorization / solve with 3 right-hand sides:
+//
+//   matrix           n     order  nnz(L)   f    simplicial LDLᵀ     supernodal LLᵀ      k*
+//   2D grid 100²     9.8K  amd    0.22M   60      18 ms / 1.2 ms      18 ms / 3.7 ms      0
+//   2D grid 224²     50K   amd    1.66M  144     177 ms / 10.5 ms    105 ms / 13.5 ms    24
+//   2D grid 317²     100K  amd    3.85M  201     786 ms / 22.8 ms    246 ms / 31.3 ms    64
+//   2D grid 417²     174K  amd    7.26M  251   1.3–1.9 s / 30–40 ms  0.32–0.50 s / 48–56 ms  48–111
+//   2D grid 417²     174K  metis  6.14M  173   0.8–1.2 s / 28–35 ms  0.28–0.40 s / 47–54 ms  16–73
+//   3D cube 20³      8K    metis  0.61M  234     145 ms / 2.7 ms      37 ms / 5.3 ms     41
+//   3D cube 20³      8K    amd    0.84M  366     303 ms / 3.7 ms      45 ms / 6.2 ms    107
+//   3D cube 25³      16K   metis  1.93M  442     899 ms / 8.9 ms     109 ms / 12.2 ms   245
+//   3D cube 30³      27K   metis  4.13M  631    2.25 s / 13.3 ms     191 ms / 26.9 ms   151
+//   3D cube 30³      27K   amd    5.61M  901    5.13 s / 21.1 ms     356 ms / 25.2 ms  1182
+//
+// k* = solves per factorization above which pure simplicial beats pure supernodal overall
+// (ranges: repeated runs on a loaded VM, ±30%); "auto" needs no such break-even. See
+// docs/benchmarks.md for the armadillo figures.
 
 constexpr std::array<std::pair<CholmodSolver::Mode, std::string_view>, 3> kModeNames = {{
     {CholmodSolver::Mode::kAuto, "auto"},
@@ -62,8 +76,7 @@ Enum FromName(const std::array<std::pair<Enum, std::string_view>, N>& table,
 }
 
 template <class Enum, size_t N>
-std::string_view ToName(const std::array<std::pair<Enum, std::string_view>, N>& table,
-                        Enum value) {
+std::string_view ToName(const std::array<std::pair<Enum, std::string_view>, N>& table, Enum value) {
   for (const auto& [table_value, name] : table) {
     if (table_value == value) return name;
   }
@@ -72,14 +85,22 @@ std::string_view ToName(const std::array<std::pair<Enum, std::string_view>, N>& 
 
 std::string_view OrderingName(int cholmod_ordering) {
   switch (cholmod_ordering) {
-    case CHOLMOD_NATURAL: return "natural";
-    case CHOLMOD_GIVEN: return "given";
-    case CHOLMOD_AMD: return "amd";
-    case CHOLMOD_METIS: return "metis";
-    case CHOLMOD_NESDIS: return "nesdis";
-    case CHOLMOD_COLAMD: return "colamd";
-    case CHOLMOD_POSTORDERED: return "postordered";
-    default: return "unknown";
+    case CHOLMOD_NATURAL:
+      return "natural";
+    case CHOLMOD_GIVEN:
+      return "given";
+    case CHOLMOD_AMD:
+      return "amd";
+    case CHOLMOD_METIS:
+      return "metis";
+    case CHOLMOD_NESDIS:
+      return "nesdis";
+    case CHOLMOD_COLAMD:
+      return "colamd";
+    case CHOLMOD_POSTORDERED:
+      return "postordered";
+    default:
+      return "unknown";
   }
 }
 
@@ -146,16 +167,20 @@ void RestoreSimplicialWorkspaceShape(const cholmod_factor* factor, Eigen::Index 
 
 std::string OutOfMemoryMessage(std::string_view stage, const cholmod_common& common,
                                const SparseMatrix& a, CholmodSolver::Ordering ordering) {
-  std::string lnz = common.lnz > 0 ? fmt::format(" (nnz(L) ≈ {:.3g})", common.lnz) : "";
-  std::string more_fill =
-      ordering == CholmodSolver::Ordering::kMetis
-          ? ""
-          : ", or ordering = \"metis\" (less fill than AMD on meshes)";
+  // After the analysis CHOLMOD knows nnz(L); a simplicial factor stores a value and a row index
+  // per entry (a supernodal one a little more, for its dense blocks).
+  const std::string factor_size =
+      common.lnz > 0 ? fmt::format("; its Cholesky factor has {:.3g} nonzeros (at least {:.0f} MB)",
+                                   common.lnz, common.lnz * 12.0 / 1e6)
+                     : std::string();
+  const std::string less_fill = ordering == CholmodSolver::Ordering::kMetis
+                                    ? std::string()
+                                    : ", or ordering = \"metis\" (less fill than AMD on meshes)";
   return fmt::format(
-      "cholmod: out of memory during the {} of a {}×{} matrix with {} nonzeros{} (about {:.1f} "
-      "MB were in use). {}{}, or a coarser mesh.",
-      stage, a.rows(), a.cols(), a.nonZeros(), lnz, common.memory_usage / 1e6,
-      solver_checks::kOutOfMemoryAdvice, more_fill);
+      "cholmod: out of memory during the {} of a {}×{} matrix with {} nonzeros{}. "
+      "{}{}, or a coarser mesh.",
+      stage, a.rows(), a.cols(), a.nonZeros(), factor_size, solver_checks::kOutOfMemoryAdvice,
+      less_fill);
 }
 
 }  // namespace
@@ -170,12 +195,13 @@ struct CholmodSolver::Impl {
     // pivots d_k are what the positive-definiteness check reads.
     common.final_ll = 0;
     switch (options.mode) {
-      case Mode::kAuto:
-        common.supernodal = CHOLMOD_AUTO;
-        common.supernodal_switch = kAutoSupernodalSwitch;
+      case Mode::kAuto:  // supernodal factorization, converted to simplicial in Factorize()
+      case Mode::kSupernodal:
+        common.supernodal = CHOLMOD_SUPERNODAL;
         break;
-      case Mode::kSimplicial: common.supernodal = CHOLMOD_SIMPLICIAL; break;
-      case Mode::kSupernodal: common.supernodal = CHOLMOD_SUPERNODAL; break;
+      case Mode::kSimplicial:
+        common.supernodal = CHOLMOD_SIMPLICIAL;
+        break;
     }
     switch (options.ordering) {
       case Ordering::kMetis:
@@ -186,7 +212,9 @@ struct CholmodSolver::Impl {
         common.nmethods = 1;
         common.method[0].ordering = CHOLMOD_AMD;
         break;
-      case Ordering::kBest: common.nmethods = 0; break;  // AMD, then METIS if AMD fills a lot.
+      case Ordering::kBest:
+        common.nmethods = 0;
+        break;  // AMD, then METIS if AMD fills a lot.
     }
     common.postorder = 1;
   }
@@ -209,7 +237,8 @@ struct CholmodSolver::Impl {
   void ThrowOnFailure(std::string_view stage, const SparseMatrix& a) const {
     switch (common.status) {
       case CHOLMOD_OK:
-      case CHOLMOD_DSMALL: return;
+      case CHOLMOD_DSMALL:
+        return;
       case CHOLMOD_OUT_OF_MEMORY:
         throw NumericalError(OutOfMemoryMessage(stage, common, a, options.ordering));
       case CHOLMOD_TOO_LARGE:
@@ -229,8 +258,7 @@ struct CholmodSolver::Impl {
             a.cols(), solver_checks::kNotPositiveDefiniteAdvice));
       }
       default:
-        throw InternalError(fmt::format("cholmod: {} failed with status {}", stage,
-                                        common.status));
+        throw InternalError(fmt::format("cholmod: {} failed with status {}", stage, common.status));
     }
   }
 
@@ -275,9 +303,9 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
   options.mode = FromName(
       kModeNames,
       node.GetChoice("mode", ToName(kModeNames, options.mode), Names(kModeNames),
-                     "simplicial = up-looking LDLᵀ (fastest solves), supernodal = BLAS LLᵀ "
-                     "(fastest factorization), auto = by flops / nnz(L), assuming ~100 solves "
-                     "per factorization"));
+                     "simplicial = up-looking LDLᵀ, supernodal = BLAS LLᵀ (fastest "
+                     "factorization, slower 3-column solves), auto = supernodal factorization "
+                     "converted to simplicial form for the solves (both fast)"));
   options.ordering = FromName(
       kOrderingNames,
       node.GetChoice("ordering", ToName(kOrderingNames, options.ordering), Names(kOrderingNames),
@@ -291,13 +319,7 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       node.Get("check_residual", options.check_residual,
                "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
   node.RejectUnknownKeys();
-  if (!(options.pivot_tolerance >= 0.0 && options.pivot_tolerance < 1.0)) {
-    throw ConfigError(fmt::format("{}: option '{}' is {}, which is not in [0, 1)",
-                                  node.Where("pivot_tolerance"),
-                                  node.path().empty() ? std::string("pivot_tolerance")
-                                                      : node.path() + ".pivot_tolerance",
-                                  options.pivot_tolerance));
-  }
+  solver_checks::CheckPivotTolerance(node, options.pivot_tolerance);
   return options;
 }
 
@@ -345,6 +367,12 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/)
   impl.ThrowOnFailure("factorization", a);
   impl.CheckPivots(a, diagonal);
 
+  if (impl.options.mode == Mode::kAuto && impl.factor->is_super) {
+    // Simplicial LLᵀ with the same numbers: a copy of the factor into column form.
+    cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1,
+                          /*to_monotonic=*/1, impl.factor, &impl.common);
+    impl.ThrowOnFailure("conversion of the factor", a);
+  }
   impl.info.supernodal = impl.factor->is_super != 0;
   impl.info.ordering = OrderingName(impl.factor->ordering);
   impl.info.nnz_l = impl.common.lnz;
@@ -376,10 +404,9 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   if (!cholmod_solve2(CHOLMOD_A, impl.factor, &rhs, nullptr, &impl.x, nullptr, &impl.y, &impl.e,
                       &impl.common)) {
     if (impl.common.status == CHOLMOD_OUT_OF_MEMORY) {
-      throw NumericalError(fmt::format(
-          "cholmod: out of memory allocating the {}×{} solve workspaces. Try an iterative solver "
-          "([solver] type = \"cg\" or \"gauss_seidel\", or --solver cg).",
-          b.rows(), b.cols()));
+      throw NumericalError(
+          fmt::format("cholmod: out of memory allocating the {}×{} solve workspaces. {}.", b.rows(),
+                      b.cols(), solver_checks::kOutOfMemoryAdvice));
     }
     throw InternalError(fmt::format("cholmod: solve failed with status {}", impl.common.status));
   }

@@ -20,10 +20,7 @@ EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(const ConfigNode& 
       node.Get("check_residual", options.check_residual,
                "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
   node.RejectUnknownKeys();
-  if (!(options.pivot_tolerance >= 0.0 && options.pivot_tolerance < 1.0)) {
-    throw ConfigError(fmt::format("{}: option 'pivot_tolerance' is {}, which is not in [0, 1)",
-                                  node.Where("pivot_tolerance"), options.pivot_tolerance));
-  }
+  solver_checks::CheckPivotTolerance(node, options.pivot_tolerance);
   return options;
 }
 

@@ -34,9 +34,10 @@ void ThrowBadPivot(std::string_view solver, Eigen::Index rows, Eigen::Index colu
   const std::string why =
       !(pivot > 0.0) || !std::isfinite(pivot)
           ? std::string("the matrix is not positive definite")
-          : fmt::format("the matrix is numerically singular, so not positive definite (pivot / "
-                        "diagonal = {:.3g} <= pivot_tolerance = {:.3g})",
-                        pivot / diagonal, pivot_tolerance);
+          : fmt::format(
+                "the matrix is numerically singular, so not positive definite (pivot / "
+                "diagonal = {:.3g} <= pivot_tolerance = {:.3g})",
+                pivot / diagonal, pivot_tolerance);
   throw NumericalError(fmt::format(
       "{}: {}: pivot {:.6g} at column {} of the factor (row {} of the {}×{} matrix, whose "
       "diagonal entry is {:.6g}). {}",
@@ -44,8 +45,7 @@ void ThrowBadPivot(std::string_view solver, Eigen::Index rows, Eigen::Index colu
 }
 
 double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::MatrixXd>& b,
-                           const Eigen::Ref<const Eigen::MatrixXd>& x,
-                           Eigen::MatrixXd& workspace) {
+                           const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::MatrixXd& workspace) {
   workspace.resize(b.rows(), b.cols());
   workspace.noalias() = a * x;
   workspace = b - workspace;
@@ -58,13 +58,21 @@ double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::
   return worst;
 }
 
+void CheckPivotTolerance(const ConfigNode& node, double value) {
+  if (value >= 0.0 && value < 1.0) return;
+  const std::string key =
+      node.path().empty() ? std::string("pivot_tolerance") : node.path() + ".pivot_tolerance";
+  throw ConfigError(fmt::format("{}: option '{}' is {}, which is not in [0, 1)",
+                                node.Where("pivot_tolerance"), key, value));
+}
+
 std::string NonFiniteSolutionMessage(std::string_view solver,
                                      const Eigen::Ref<const Eigen::MatrixXd>& b) {
-  return b.allFinite()
-             ? fmt::format("{}: the solution has NaN or infinite entries (the matrix is "
-                           "numerically singular)",
-                           solver)
-             : fmt::format("{}: the right-hand side has NaN or infinite entries", solver);
+  return b.allFinite() ? fmt::format(
+                             "{}: the solution has NaN or infinite entries (the matrix is "
+                             "numerically singular)",
+                             solver)
+                       : fmt::format("{}: the right-hand side has NaN or infinite entries", solver);
 }
 
 }  // namespace harap::solver_checks

@@ -4,10 +4,10 @@
 // Checks and error messages shared by the linear solvers of this module (not a component).
 
 #include <Eigen/Core>
-
 #include <string>
 #include <string_view>
 
+#include "framework/config.h"
 #include "framework/types.h"
 
 namespace harap::solver_checks {
@@ -33,8 +33,10 @@ inline bool AcceptablePivot(double pivot, double diagonal, double pivot_toleranc
 /// Max over columns of ‖b − A x‖ / ‖b‖ (‖b − A x‖ for a zero column); `workspace` is resized to
 /// n×k, so repeated calls with one k do not allocate.
 double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::MatrixXd>& b,
-                           const Eigen::Ref<const Eigen::MatrixXd>& x,
-                           Eigen::MatrixXd& workspace);
+                           const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::MatrixXd& workspace);
+
+/// Throws ConfigError (naming where `node`'s pivot_tolerance was written) unless 0 ≤ value < 1.
+void CheckPivotTolerance(const ConfigNode& node, double value);
 
 /// The message for a solution with NaN or infinite entries (a singular matrix or a bad `b`).
 std::string NonFiniteSolutionMessage(std::string_view solver,

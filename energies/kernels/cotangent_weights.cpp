@@ -13,7 +13,7 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> HalfCotangents(const Positions& vertice
                                                         Index* num_degenerate) {
   const Index num_faces = static_cast<Index>(triangles.rows());
   Eigen::Matrix<double, Eigen::Dynamic, 3> weights(num_faces, 3);
-  const Index degenerate = tbb::parallel_reduce(
+  const Index degenerate = tbb::parallel_deterministic_reduce(
       tbb::blocked_range<Index>(0, num_faces, 4096), Index{0},
       [&](const tbb::blocked_range<Index>& range, Index local) {
         for (Index f = range.begin(); f != range.end(); ++f) {

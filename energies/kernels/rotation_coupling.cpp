@@ -28,7 +28,7 @@ inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positi
 
 // tr(uᵀ A u), A symmetric in full storage.
 double QuadraticTerm(const SparseMatrix& a, const Positions& u) {
-  return tbb::parallel_reduce(
+  return tbb::parallel_deterministic_reduce(
       tbb::blocked_range<Index>(0, static_cast<Index>(a.outerSize()), kGrain), 0.0,
       [&](const tbb::blocked_range<Index>& range, double sum) {
         const Index* outer = a.outerIndexPtr();
@@ -83,7 +83,7 @@ double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix&
   HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
               coupling.num_vertices);
   return context.Run([&] {
-    const double alignment = tbb::parallel_reduce(
+    const double alignment = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
         [&](const tbb::blocked_range<Index>& range, double sum) {
           for (Index s = range.begin(); s != range.end(); ++s) {
@@ -125,7 +125,7 @@ double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatri
   HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
               "{} rotations for {} sites", rotations.size(), coupling.num_sites);
   return context.Run([&] {
-    const double alignment = tbb::parallel_reduce(
+    const double alignment = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
         [&](const tbb::blocked_range<Index>& range, double sum) {
           for (Index s = range.begin(); s != range.end(); ++s) {

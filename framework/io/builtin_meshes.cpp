@@ -245,7 +245,8 @@ Mesh MakePlane(const ConfigNode& parameters) {
                                   parameters.Where("spike_radius"), spike_radius));
   }
 
-  const int n = std::max(2, static_cast<int>(std::lround(std::sqrt(static_cast<double>(vertices)))));
+  const int n =
+      std::max(2, static_cast<int>(std::lround(std::sqrt(static_cast<double>(vertices)))));
   const double spacing = 1.0 / (n - 1);
   // Spike tips stay a radius plus one cell away from the border, so the border is flat.
   const int margin = static_cast<int>(std::ceil(spike_radius / spacing)) + 1;

@@ -12,10 +12,12 @@ namespace harap {
 /// Generates a built-in mesh from a table such as `{ builtin = "cylinder", vertices = 480000 }`,
 /// deterministic for the same parameters; unknown names or keys throw ConfigError listing the
 /// valid ones. Built-ins:
-///   - `cylinder`: a tube along z, height/diameter = `aspect` (default 4), with capped ends
-///     (`caps = true`) or open; `vertices` ≈ vertex count.
-///   - `plane`: the paper's "spike plane": a square grid in the xy-plane of about `vertices`
-///     vertices with `spikes` sharp bumps of height `spike_height` (fractions of the side).
+///   - `cylinder`: a tube along z (diameter 1, z in [0, aspect]), height/diameter = `aspect`
+///     (default 4), with capped ends (`caps = true`) or open; `vertices` ≈ vertex count.
+///     Near-equilateral triangles on the side, concentric rings on the caps.
+///   - `plane`: the paper's "spike plane": a square grid on [0,1]^2 (z = 0) of about `vertices`
+///     vertices with `spikes` (16) conical spikes of height `spike_height` (0.2) and base radius
+///     `spike_radius` (0.02), placed by `seed` (1); lengths are fractions of the side.
 Mesh MakeBuiltinMesh(const ConfigNode& parameters);
 
 std::vector<std::string> BuiltinMeshNames();

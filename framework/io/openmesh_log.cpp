@@ -4,7 +4,6 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <algorithm>
-#include <iostream>
 #include <mutex>
 #include <sstream>
 #include <utility>
@@ -23,42 +22,30 @@ std::mutex& OpenMeshMutex() {
 
 struct OpenMeshLogCapture::State {
   std::unique_lock<std::mutex> lock{OpenMeshMutex()};
-  std::ostringstream errors;
-  std::ostringstream other;  // omlog/omout: progress chatter, dropped
-  // Which default targets were connected, so that exactly those are restored.
-  bool err_to_cerr = false;
-  bool log_to_clog = false;
-  bool log_to_cerr = false;
-  bool out_to_cout = false;
+  std::stringbuf errors;
+  std::stringbuf other;  // omlog/omout: progress chatter, dropped
+  std::streambuf* old_err = nullptr;
+  std::streambuf* old_log = nullptr;
+  std::streambuf* old_out = nullptr;
 };
 
+// The log streams are std::ostreams whose buffer multiplexes to the connected targets (cerr,
+// clog, cout by default). Swapping the stream buffer, rather than disconnecting those targets and
+// connecting our own, is deliberate: OpenMesh's disconnect() never frees the target it removes,
+// so a connect/disconnect pair per call leaks memory (LeakSanitizer reports it).
 OpenMeshLogCapture::OpenMeshLogCapture() : state_(std::make_unique<State>()) {
-  // disconnect() returns whether the target was connected; OpenMesh connects omerr to cerr,
-  // omlog to clog (cerr in some builds) and omout to cout on first use.
-  state_->err_to_cerr = omerr().disconnect(std::cerr);
-  state_->log_to_clog = omlog().disconnect(std::clog);
-  state_->log_to_cerr = omlog().disconnect(std::cerr);
-  state_->out_to_cout = omout().disconnect(std::cout);
-  omerr().connect(state_->errors);
-  omlog().connect(state_->other);
-  omout().connect(state_->other);
+  state_->old_err = omerr().rdbuf(&state_->errors);
+  state_->old_log = omlog().rdbuf(&state_->other);
+  state_->old_out = omout().rdbuf(&state_->other);
 }
 
 OpenMeshLogCapture::~OpenMeshLogCapture() {
-  omerr().flush();
-  omlog().flush();
-  omout().flush();
-  omerr().disconnect(state_->errors);
-  omlog().disconnect(state_->other);
-  omout().disconnect(state_->other);
-  if (state_->err_to_cerr) omerr().connect(std::cerr);
-  if (state_->log_to_clog) omlog().connect(std::clog);
-  if (state_->log_to_cerr) omlog().connect(std::cerr);
-  if (state_->out_to_cout) omout().connect(std::cout);
+  omerr().rdbuf(state_->old_err);
+  omlog().rdbuf(state_->old_log);
+  omout().rdbuf(state_->old_out);
 }
 
 std::string OpenMeshLogCapture::Errors() {
-  omerr().flush();
   // OpenMesh repeats one line per refused face; keep each distinct line once, with its count.
   std::vector<std::pair<std::string, int>> distinct;
   std::istringstream lines(state_->errors.str());

@@ -15,7 +15,9 @@ namespace harap::io_internal {
 /// globals that print to std::cerr/std::clog/std::cout by default. Library code must not print,
 /// and two threads reading at once would corrupt the readers' state, so every use of OpenMesh
 /// in io/ happens inside one of these scopes. The diverted error text goes into our exception
-/// messages instead.
+/// messages instead. (OpenMesh users outside io/, e.g. a decimater on another thread, that write
+/// to omerr() while a capture is active write into the capture; nothing in harap relies on
+/// seeing those lines.)
 class OpenMeshLogCapture {
  public:
   OpenMeshLogCapture();

@@ -65,6 +65,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
 
   // P and C: precompute and factor every solved level (Algorithm 2, first loop).
   std::vector<LevelConstraints> constraints(hierarchy.num_levels());
+  std::vector<LevelConstraints> internal_constraints(hierarchy.num_levels());  // solver numbering
   std::vector<std::unique_ptr<LocalGlobalSolver>> solvers(hierarchy.num_levels());
   std::vector<double> level_seconds(hierarchy.num_levels(), 0.0);
   for (int l = coarsest; l >= 0; --l) {
@@ -91,6 +92,15 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
             incident[slot[level_mesh.elements(e, a)]].push_back(e);
           }
         }
+      }
+    }
+    if (l > 0) {
+      const MeshOrdering& ordering = solvers[l]->ordering();
+      LevelConstraints& internal = internal_constraints[l];
+      internal = constraints[l];
+      for (Index& v : internal.vertices) v = ordering.new_vertex[v];
+      for (auto& elements : internal.incident_elements) {
+        for (Index& e : elements) e = ordering.new_element[e];
       }
     }
     result.timings.precompute += solvers[l]->precompute_seconds();
@@ -134,7 +144,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
                                state.positions);
       if (options_.update_constraints) {
         update = [&, l, site](const Rotations& rotations, Positions& positions) {
-          PlaceConstrainedVertices(constraints[l], site, &rotations, positions);
+          PlaceConstrainedVertices(internal_constraints[l], site, &rotations, positions);
         };
       }
     }

@@ -13,12 +13,19 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
                                      const Context& context)
     : level_(level) {
   Stopwatch clock;
+  ordering_ = LocalityOrdering(mesh);
   energy_ = factory.MakeEnergy();
-  energy_->Precompute(mesh, context);
+  energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
 
   clock.Restart();
-  system_ = std::make_unique<ConstrainedSystem>(energy_->system_matrix(), constrained);
+  std::vector<Index> renumbered(constrained.size());
+  for (size_t k = 0; k < constrained.size(); ++k) {
+    HARAP_CHECK(constrained[k] >= 0 && constrained[k] < mesh.num_vertices(),
+                "constrained vertex {} out of range", constrained[k]);
+    renumbered[k] = ordering_.new_vertex[constrained[k]];
+  }
+  system_ = std::make_unique<ConstrainedSystem>(energy_->system_matrix(), renumbered);
   solver_ = factory.MakeLinearSolver(level, system_->num_free());
   if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
   constrain_seconds_ = clock.Seconds();
@@ -28,12 +35,30 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
   reduced_x_.resize(system_->num_free(), 3);
 }
 
-LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& state, bool start_with_global_step,
+LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
+                                                    bool start_with_global_step,
                                                     const LocalGlobalOptions& options,
                                                     double diagonal, const Context& context,
                                                     const FixedPositionUpdate& update_fixed) {
-  HARAP_CHECK(state.positions.rows() == system_->num_vertices(), "{} positions for {} vertices",
-              state.positions.rows(), system_->num_vertices());
+  HARAP_CHECK(caller_state.positions.rows() == system_->num_vertices(),
+              "{} positions for {} vertices", caller_state.positions.rows(),
+              system_->num_vertices());
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  LevelState& state = state_;
+  state.positions = ordering_.ToNew(caller_state.positions);
+  state.rotations = ordering_.ToNew(caller_state.rotations, per_element);
+  const RunResult result = Iterate(state, start_with_global_step, options, diagonal, context,
+                                   update_fixed);
+  caller_state.positions = ordering_.ToOld(state.positions);
+  caller_state.rotations = ordering_.ToOld(state.rotations, per_element);
+  return result;
+}
+
+LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
+                                                        bool start_with_global_step,
+                                                        const LocalGlobalOptions& options,
+                                                        double diagonal, const Context& context,
+                                                        const FixedPositionUpdate& update_fixed) {
   if (static_cast<Index>(state.rotations.size()) != energy_->num_rotations()) {
     state.rotations.assign(energy_->num_rotations(), Rotation::Identity());
   }

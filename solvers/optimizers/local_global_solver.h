@@ -7,6 +7,7 @@
 #include "framework/config.h"
 #include "framework/constrained_system.h"
 #include "framework/optimizer.h"
+#include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
 
@@ -22,6 +23,10 @@ struct LocalGlobalOptions {
 /// energy, constrained system and factored linear solver. Construction does the precomputation
 /// (energy weights, constraint elimination, factorization: the paper's P and C phases);
 /// Run() does the S phase. Per-iteration work allocates nothing.
+///
+/// Internally the level is renumbered for memory locality (vertex_ordering.h); Run() takes and
+/// returns states in the mesh's own numbering. Only `update_fixed` sees the internal numbering
+/// (translate indices with ordering()).
 class LocalGlobalSolver {
  public:
   /// `constrained`: vertex indices whose positions are prescribed (their rows of `u` at Run()).
@@ -44,24 +49,32 @@ class LocalGlobalSolver {
   /// `update_fixed`, if set, is called before every global step with the current rotations and
   /// may move constrained vertices in the positions (coarse constraint targets that follow the
   /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
+  /// Both arrays are in the internal numbering of ordering().
   using FixedPositionUpdate = std::function<void(const Rotations&, Positions&)>;
   RunResult Run(LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
                 double diagonal, const Context& context,
                 const FixedPositionUpdate& update_fixed = {});
 
   const Energy& energy() const { return *energy_; }
+  const MeshOrdering& ordering() const { return ordering_; }
   const ConstrainedSystem& system() const { return *system_; }
   double precompute_seconds() const { return precompute_seconds_; }
   double constrain_seconds() const { return constrain_seconds_; }
 
  private:
+  RunResult Iterate(LevelState& state, bool start_with_global_step,
+                    const LocalGlobalOptions& options, double diagonal, const Context& context,
+                    const FixedPositionUpdate& update_fixed);
+
   int level_;
+  MeshOrdering ordering_;
   std::unique_ptr<Energy> energy_;
   std::unique_ptr<ConstrainedSystem> system_;
   std::unique_ptr<LinearSolver> solver_;
   double precompute_seconds_ = 0.0;
   double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
+  LevelState state_;  ///< in the internal numbering
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;

@@ -107,7 +107,9 @@ TEST_CASE("ReadMesh reads ASCII PLY and big-endian binary PLY", "[io]") {
   auto put_big = [&big](auto value) {
     unsigned char bytes[sizeof(value)];
     std::memcpy(bytes, &value, sizeof(value));
-    if constexpr (std::endian::native == std::endian::little) std::reverse(bytes, bytes + sizeof(value));
+    if constexpr (std::endian::native == std::endian::little) {
+      std::reverse(bytes, bytes + sizeof(value));
+    }
     big.append(reinterpret_cast<const char*>(bytes), sizeof(value));
   };
   for (float value : {0.f, 0.f, 0.f, 1.5f, 0.f, 0.f, 0.f, 2.5f, -0.125f}) put_big(value);

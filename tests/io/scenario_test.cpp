@@ -239,7 +239,8 @@ TEST_CASE("scenario: merged constraints, first handle wins", "[io][scenario]") {
                                   "[[handle]]\nselect.slab = { axis = \"z\", from = 0, to = 0.6 }\n"
                                   "[[handle]]\nselect.slab = { axis = \"z\", from = 0.4, to = 1 }\n"
                                   "translate = [1, 0, 0]\n"
-                                  "[[handle]]\nselect.indices = [3, 2, 3]\ntranslate = [0, 9, 0]\n");
+                                  "[[handle]]\nselect.indices = [3, 2, 3]\n"
+                                  "translate = [0, 9, 0]\n");
   const Mesh& mesh = scenario.mesh;
   REQUIRE(scenario.handles[2].vertices == std::vector<Index>{2, 3});
   const Constraints constraints = scenario.MergedConstraints();

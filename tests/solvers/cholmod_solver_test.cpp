@@ -3,7 +3,6 @@
 // build has no CHOLMOD (the registry then has no "cholmod").
 
 #include <catch2/catch.hpp>
-
 #include <string>
 #include <vector>
 
@@ -34,10 +33,10 @@ namespace {
 const std::vector<std::string> kModes = {"auto", "simplicial", "supernodal"};
 const std::vector<std::string> kOrderings = {"metis", "amd", "best"};
 
-#define HARAP_REQUIRE_CHOLMOD(registry)                         \
-  if (!(registry).Contains("cholmod")) {                        \
+#define HARAP_REQUIRE_CHOLMOD(registry)                              \
+  if (!(registry).Contains("cholmod")) {                             \
     WARN("skipped: this build has no CHOLMOD (HARAP_WITH_CHOLMOD)"); \
-    return;                                                     \
+    return;                                                          \
   }
 
 std::string Options(const std::string& mode, const std::string& ordering) {
@@ -82,6 +81,18 @@ TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][
         REQUIRE(solver->Solve(b, x, context).success);
         CHECK(RelativeResidual(a, b, x) < 1e-10);
         CHECK(RelativeDifference(x, reference) < 1e-10);
+
+        // Tiny systems (METIS and supernodes degenerate there).
+        Eigen::MatrixXd tiny(2, 2);
+        tiny << 4.0, 1.0, 1.0, 3.0;
+        for (const Eigen::Index n : {1, 2}) {
+          const Eigen::MatrixXd dense = tiny.topLeftCorner(n, n);
+          solver->Factorize(FromDense(dense), context);
+          const Eigen::MatrixXd tiny_b = RandomRhs(n, 3, 26);
+          Eigen::MatrixXd tiny_x = Eigen::MatrixXd::Zero(n, 3);
+          REQUIRE(solver->Solve(tiny_b, tiny_x, context).success);
+          CHECK(RelativeDifference(tiny_x, dense.llt().solve(tiny_b)) < 1e-14);
+        }
       }
     }
   }
@@ -99,12 +110,14 @@ TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matri
     for (const auto& ordering : kOrderings) {
       DYNAMIC_SECTION("mode = " << mode << ", ordering = " << ordering) {
         auto solver = MakeSolver(registry, "cholmod", Options(mode, ordering));
-        CHECK_THROWS_WITH(solver->Factorize(indefinite, context),
-                          Catch::Contains("not positive definite") &&
-                              Catch::Contains("constrained vertex"));
+        CHECK_THROWS_WITH(
+            solver->Factorize(indefinite, context),
+            Catch::Contains("not positive definite") && Catch::Contains("constrained vertex"));
         CHECK_THROWS_WITH(solver->Factorize(singular, context),
                           Catch::Contains("positive definite"));
         CHECK_THROWS_AS(solver->Factorize(singular, context), NumericalError);
+        CHECK_THROWS_WITH(solver->Factorize(IndefiniteArrowMatrix(), context),
+                          Catch::Contains("(row 0 of the 12×12 matrix"));
       }
     }
   }
@@ -234,11 +247,10 @@ TEST_CASE("cholmod: running out of memory is a NumericalError suggesting an iter
       }
       INFO(result.message);
       CHECK(result.exit_code == 0);
-      CHECK_THAT(result.message, Catch::Contains("out of memory") &&
-                                     Catch::Contains("factorization") &&
-                                     Catch::Contains("--solver cg") &&
-                                     Catch::Contains("gauss_seidel") &&
-                                     Catch::Contains("ordering = \"metis\""));
+      CHECK_THAT(result.message,
+                 Catch::Contains("out of memory") && Catch::Contains("factorization") &&
+                     Catch::Contains("--solver cg") && Catch::Contains("gauss_seidel") &&
+                     Catch::Contains("ordering = \"metis\""));
     }
   }
 }

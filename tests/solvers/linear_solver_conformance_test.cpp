@@ -2,11 +2,9 @@
 // Conformance suite run on every name RegisterLinearSolvers() provides, so a new solver is tested
 // without new test code.
 
-#include <catch2/catch.hpp>
-
 #include <Eigen/Dense>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -53,9 +51,8 @@ std::vector<NamedMatrix> NotPositiveDefiniteMatrices() {
   Eigen::MatrixXd negative_definite = -Eigen::MatrixXd(PinnedGridLaplacian(6, 6, 5));
   matrices.push_back({"negative definite", FromDense(negative_definite)});
   SparseMatrix empty_column = PinnedGridLaplacian(10, 10, 6);
-  empty_column.prune([](Eigen::Index row, Eigen::Index col, double) {
-    return row != 5 && col != 5;
-  });
+  empty_column.prune(
+      [](Eigen::Index row, Eigen::Index col, double) { return row != 5 && col != 5; });
   matrices.push_back({"zero row and column", empty_column});
   return matrices;
 }
@@ -196,8 +193,7 @@ TEST_CASE("linear solvers: misuse is an InternalError", "[solvers]") {
       CHECK_THROWS_AS(solver->Factorize(SparseMatrix(3, 4), context), InternalError);
       solver->Factorize(a, context);
       Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(a.rows() + 1, 3);
-      CHECK_THROWS_AS(solver->Solve(RandomRhs(a.rows() + 1, 3, 2), wrong, context),
-                      InternalError);
+      CHECK_THROWS_AS(solver->Solve(RandomRhs(a.rows() + 1, 3, 2), wrong, context), InternalError);
       Eigen::MatrixXd wrong_columns = Eigen::MatrixXd::Zero(a.rows(), 2);
       CHECK_THROWS_AS(solver->Solve(RandomRhs(a.rows(), 3, 2), wrong_columns, context),
                       InternalError);
@@ -237,8 +233,22 @@ TEST_CASE("linear solvers: matrices that are not positive definite are rejected"
   }
 }
 
-TEST_CASE("linear solvers: singular PSD matrices fail loudly, never with silent NaN",
-          "[solvers]") {
+TEST_CASE("linear solvers: the not-positive-definite error names the offending row", "[solvers]") {
+  // The hub's pivot is bad: the message must name row 0 of A, not its column in the factor.
+  const SparseMatrix a = IndefiniteArrowMatrix();
+  const auto registry = LinearSolverRegistry();
+  for (const auto& name : registry.Names()) {
+    DYNAMIC_SECTION(name) {
+      auto solver = MakeSolver(registry, name);
+      if (!solver->is_direct()) continue;
+      const Context context;
+      CHECK_THROWS_WITH(solver->Factorize(a, context),
+                        Catch::Contains("column 11 of the factor (row 0 of the 12×12 matrix"));
+    }
+  }
+}
+
+TEST_CASE("linear solvers: singular PSD matrices fail loudly, never with silent NaN", "[solvers]") {
   const auto registry = LinearSolverRegistry();
   for (const auto& name : registry.Names()) {
     for (const auto& [label, a] : SingularMatrices()) {
@@ -308,7 +318,8 @@ TEST_CASE("linear solvers: check_residual reports the residual", "[solvers]") {
       Eigen::MatrixXd residual = a * x;
       residual = b - residual;
       double expected = 0.0;
-      for (int j = 0; j < 3; ++j) expected = std::max(expected, residual.col(j).norm() / b.col(j).norm());
+      for (int j = 0; j < 3; ++j)
+        expected = std::max(expected, residual.col(j).norm() / b.col(j).norm());
       CHECK(summary.relative_residual == Approx(expected).epsilon(1e-12));
       CHECK(summary.relative_residual < 1e-10);
 

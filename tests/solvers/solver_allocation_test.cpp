@@ -3,9 +3,8 @@
 // iteration). Counted by interposing malloc/calloc/realloc in this executable (glibc: forwards to
 // __libc_*), which also sees CHOLMOD's and BLAS's allocations through the dynamic linker.
 
-#include <catch2/catch.hpp>
-
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cstddef>
 #include <cstdlib>
 #include <new>

@@ -5,7 +5,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
-
 #include <memory>
 #include <random>
 #include <string>
@@ -110,6 +109,17 @@ inline SparseMatrix PinnedCubeLaplacian(int side) {
 }
 
 inline SparseMatrix FromDense(const Eigen::MatrixXd& dense) { return dense.sparseView(); }
+
+/// Indefinite 12×12 arrow matrix with a positive diagonal: vertex 0 is coupled to the 11 others
+/// (A_00 = 1, A_0j = 0.5, A_jj = 2). Every fill-reducing ordering eliminates the hub last, and
+/// its pivot 1 − 11 · 0.25 / 2 = −0.375 is the only bad one: row 0, column 11 of the factor.
+inline SparseMatrix IndefiniteArrowMatrix() {
+  Eigen::MatrixXd dense = 2.0 * Eigen::MatrixXd::Identity(12, 12);
+  dense(0, 0) = 1.0;
+  dense.row(0).tail(11).setConstant(0.5);
+  dense.col(0).tail(11).setConstant(0.5);
+  return FromDense(dense);
+}
 
 /// Max over columns of ‖b − A x‖ / ‖b‖.
 inline double RelativeResidual(const SparseMatrix& a, const Eigen::MatrixXd& b,

@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/optimizers/vertex_ordering.h"
+
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+
+namespace harap {
+
+namespace {
+
+// Spreads the low 21 bits of x so that two zero bits follow each (3D Morton interleave).
+uint64_t Spread(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+}  // namespace
+
+MeshOrdering LocalityOrdering(const Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  MeshOrdering ordering;
+  const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff();
+  const Eigen::RowVector3d extent = mesh.vertices.colwise().maxCoeff() - lo;
+  const double scale = extent.maxCoeff() > 0.0 ? ((1 << 21) - 1) / extent.maxCoeff() : 0.0;
+  std::vector<std::pair<uint64_t, Index>> keys(n);
+  for (Index v = 0; v < n; ++v) {
+    const Eigen::RowVector3d q = (mesh.vertices.row(v) - lo) * scale;
+    keys[v] = {Spread(static_cast<uint64_t>(q(0))) | Spread(static_cast<uint64_t>(q(1))) << 1 |
+                   Spread(static_cast<uint64_t>(q(2))) << 2,
+               v};
+  }
+  tbb::parallel_sort(keys.begin(), keys.end());  // ties broken by input index: deterministic
+  ordering.old_vertex.resize(n);
+  ordering.new_vertex.resize(n);
+  for (Index k = 0; k < n; ++k) {
+    ordering.old_vertex[k] = keys[k].second;
+    ordering.new_vertex[keys[k].second] = k;
+  }
+  ordering.mesh.planar = mesh.planar;
+  ordering.mesh.vertices = ordering.ToNew(mesh.vertices);
+
+  const Index m = mesh.num_elements();
+  const int size = mesh.simplex_size();
+  std::vector<std::pair<Index, Index>> element_keys(m);
+  for (Index e = 0; e < m; ++e) {
+    Index smallest = n;
+    for (int a = 0; a < size; ++a) smallest = std::min(smallest, ordering.new_vertex[mesh.elements(e, a)]);
+    element_keys[e] = {smallest, e};
+  }
+  tbb::parallel_sort(element_keys.begin(), element_keys.end());
+  ordering.old_element.resize(m);
+  ordering.new_element.resize(m);
+  ordering.mesh.elements.resize(m, size);
+  for (Index k = 0; k < m; ++k) {
+    const Index e = element_keys[k].second;
+    ordering.old_element[k] = e;
+    ordering.new_element[e] = k;
+    for (int a = 0; a < size; ++a) ordering.mesh.elements(k, a) = ordering.new_vertex[mesh.elements(e, a)];
+  }
+  return ordering;
+}
+
+Positions MeshOrdering::ToNew(const Positions& input) const {
+  Positions result(input.rows(), input.cols());
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) result.row(k) = input.row(old_vertex[k]);
+  return result;
+}
+
+Positions MeshOrdering::ToOld(const Positions& renumbered) const {
+  Positions result(renumbered.rows(), renumbered.cols());
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) result.row(old_vertex[k]) = renumbered.row(k);
+  return result;
+}
+
+Rotations MeshOrdering::ToNew(const Rotations& input, bool per_element) const {
+  const std::vector<Index>& old = per_element ? old_element : old_vertex;
+  if (input.size() != old.size()) return input;  // not set yet (e.g. empty): nothing to permute
+  Rotations result(input.size());
+  for (size_t k = 0; k < old.size(); ++k) result[k] = input[old[k]];
+  return result;
+}
+
+Rotations MeshOrdering::ToOld(const Rotations& renumbered, bool per_element) const {
+  const std::vector<Index>& old = per_element ? old_element : old_vertex;
+  Rotations result(renumbered.size());
+  for (size_t k = 0; k < old.size(); ++k) result[old[k]] = renumbered[k];
+  return result;
+}
+
+}  // namespace harap

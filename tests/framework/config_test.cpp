@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: MIT
+#include <catch2/catch.hpp>
+
+#include "framework/config.h"
+#include "framework/error.h"
+#include "framework/registries.h"
+
+using namespace harap;
+
+TEST_CASE("ConfigNode reads typed options with defaults and rejects unknown keys", "[framework]") {
+  ConfigNode root = ConfigNode::Parse(R"(
+[solver]
+type = "cg"
+sweeps = 10
+tolerance = 1   # an integer where a float is expected is fine
+flag = true
+)",
+                                      "run.toml");
+  ConfigNode solver = root.Child("solver");
+  CHECK(solver.Get("sweeps", 3, "h") == 10);
+  CHECK(solver.Get("tolerance", 0.5, "h") == 1.0);
+  CHECK(solver.Get("flag", false, "h") == true);
+  CHECK(solver.Get("absent", 2.5, "h") == 2.5);
+  CHECK(solver.Get("type", "x", "h") == "cg");
+  solver.RejectUnknownKeys();  // all keys read
+
+  ConfigNode typo = ConfigNode::Parse("[solver]\nsweps = 3\n", "run.toml").Child("solver");
+  typo.Get("sweeps", 1, "sweeps per solve");
+  CHECK_THROWS_WITH(typo.RejectUnknownKeys(),
+                    Catch::Contains("run.toml:2") && Catch::Contains("sweps") &&
+                        Catch::Contains("valid options: sweeps"));
+}
+
+TEST_CASE("ConfigNode reports type errors with file, line and key", "[framework]") {
+  ConfigNode node = ConfigNode::Parse("a = \"x\"\nb = 1.5\nc = nan\n", "bad.toml");
+  CHECK_THROWS_WITH(node.Get("a", 1.0, "h"), Catch::Contains("bad.toml:1") &&
+                                                 Catch::Contains("'a'") &&
+                                                 Catch::Contains("number"));
+  CHECK_THROWS_WITH(node.Get("b", 1, "h"), Catch::Contains("bad.toml:2") &&
+                                               Catch::Contains("integer"));
+  CHECK_THROWS_WITH(node.Get("c", 1.0, "h"), Catch::Contains("finite"));
+  CHECK_THROWS_WITH(ConfigNode::Parse("a = [1,\n", "broken.toml"),
+                    Catch::Contains("broken.toml") && Catch::Contains("syntax"));
+  CHECK_THROWS_WITH(node.GetChoice("a", "y", {"y", "z"}, "h"),
+                    Catch::Contains("\"x\"") && Catch::Contains("y, z"));
+}
+
+TEST_CASE("ConfigNode::Set parses command-line values", "[framework]") {
+  ConfigNode root;
+  root.Set("energy.lambda", "0.5");
+  root.Set("solver.type", "cholmod");  // bare word: a string
+  root.Set("solver.sweeps", "10");
+  root.Set("optimizer.update_constraints", "false");
+  CHECK(root.Child("energy").Get("lambda", 0.0, "h") == 0.5);
+  CHECK(root.Child("solver").Get("type", "x", "h") == "cholmod");
+  CHECK(root.Child("solver").Get("sweeps", 1, "h") == 10);
+  CHECK(root.Child("optimizer").Get("update_constraints", true, "h") == false);
+  CHECK_THROWS_AS(root.Set("energy..x", "1"), ConfigError);
+  root.Set("energy.lambda", "0.25");  // overrides
+  CHECK(root.Child("energy").Get("lambda", 0.0, "h") == 0.25);
+}
+
+namespace {
+
+struct Widget {
+  virtual ~Widget() = default;
+  int size = 0;
+};
+
+}  // namespace
+
+TEST_CASE("Registry creates by name and lists the valid names on errors", "[framework]") {
+  Registry<Widget> registry("widget");
+  registry.Add("small", "a small widget", [](const ConfigNode& node) {
+    auto widget = std::make_unique<Widget>();
+    widget->size = node.Get("size", 1, "the size");
+    node.RejectUnknownKeys();
+    return widget;
+  });
+  registry.Add("large", "a large widget", [](const ConfigNode&) {
+    auto widget = std::make_unique<Widget>();
+    widget->size = 100;
+    return widget;
+  });
+  CHECK(registry.Names() == std::vector<std::string>{"large", "small"});
+  CHECK(registry.Create("small", ConfigNode::Parse("size = 3", "t"))->size == 3);
+  CHECK(registry.Create(ConfigNode::Parse("type = \"large\"", "t"), "small")->size == 100);
+  CHECK(registry.Create(ConfigNode(), "small")->size == 1);
+  CHECK_THROWS_WITH(registry.Create("medium", ConfigNode()),
+                    Catch::Contains("unknown widget 'medium'") &&
+                        Catch::Contains("valid names: large, small"));
+  CHECK_THROWS_AS(registry.Add("small", "again", nullptr), InternalError);
+  const auto options = registry.DescribeOptions("small");
+  REQUIRE(options.size() == 1);
+  CHECK(options[0].key == "size");
+  CHECK(options[0].default_value == "1");
+  CHECK(options[0].help == "the size");
+}
