@@ -4,7 +4,7 @@
 #include <memory>
 #include <string_view>
 
-#include "energies/kernels/rotation_coupling.h"
+#include "energies/kernels/cotangent_arap_energy.h"
 #include "framework/config.h"
 
 namespace harap {
@@ -17,7 +17,7 @@ namespace harap {
 /// One rotation per vertex; every edge of every incident face (spokes and rims) enters the
 /// vertex's cell. A = 3·L with L the cotangent Laplacian (each face edge is seen by the three
 /// rotations of its face). Triangle meshes only. Degenerate triangles get zero weight.
-class SpokesAndRimsEnergy final : public CoupledQuadraticEnergy {
+class SpokesAndRimsEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes_and_rims";
 
@@ -27,17 +27,14 @@ class SpokesAndRimsEnergy final : public CoupledQuadraticEnergy {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit SpokesAndRimsEnergy(const Options& options);
+  explicit SpokesAndRimsEnergy(const Options& options) : CotangentArapEnergy(kName), options_(options) {}
   static std::unique_ptr<Energy> Create(const ConfigNode& node);
 
-  void Precompute(const Mesh& rest, const Context& context) override;
-
-  /// Triangles whose weights were zeroed as degenerate in the last Precompute().
-  Index num_degenerate_triangles() const { return num_degenerate_; }
-
  private:
+  void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
+               double& constant) const override;
+
   Options options_;
-  Index num_degenerate_ = 0;
 };
 
 }  // namespace harap

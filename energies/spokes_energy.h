@@ -4,7 +4,7 @@
 #include <memory>
 #include <string_view>
 
-#include "energies/kernels/rotation_coupling.h"
+#include "energies/kernels/cotangent_arap_energy.h"
 #include "framework/config.h"
 
 namespace harap {
@@ -16,7 +16,7 @@ namespace harap {
 ///
 /// One rotation per vertex over the edges of its 1-ring (the spokes). A = 2·L with L the
 /// cotangent Laplacian (each edge is seen by the rotations of both ends). Triangle meshes only.
-class SpokesEnergy final : public CoupledQuadraticEnergy {
+class SpokesEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes";
 
@@ -24,16 +24,14 @@ class SpokesEnergy final : public CoupledQuadraticEnergy {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit SpokesEnergy(const Options& options);
+  explicit SpokesEnergy(const Options& options) : CotangentArapEnergy(kName), options_(options) {}
   static std::unique_ptr<Energy> Create(const ConfigNode& node);
 
-  void Precompute(const Mesh& rest, const Context& context) override;
-
-  Index num_degenerate_triangles() const { return num_degenerate_; }
-
  private:
+  void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
+               double& constant) const override;
+
   Options options_;
-  Index num_degenerate_ = 0;
 };
 
 }  // namespace harap

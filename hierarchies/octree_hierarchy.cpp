@@ -6,17 +6,28 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
-#include <tuple>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "framework/error.h"
+
+// Cost (2-core VM, Release, min of repeated builds; the first build of a process pays ~10–40 ms
+// more for fresh pages): Armadillo Loop-refined once (173K vertices, 6 levels) 50 ms with the
+// topology check, 41 ms without, of which ~19 ms are the level-0 analysis (unique edges for Ē,
+// bounding box, Eq. 2) and ~18 ms level 1; Dragon (437K vertices, 7 levels) 115 ms / 84 ms.
+// What keeps it there: one pass per task over the elements with the per-vertex data they touch
+// prefetched; clusters by union–find (no adjacency lists; level 0 walks the unique edges it has
+// bucketed for Ē anyway); counting sorts instead of comparison sorts or hashing; scratch buffers
+// sized once on level 0 and never zero-filled when they are overwritten anyway.
 
 namespace harap {
 namespace {
@@ -106,20 +117,6 @@ void RadixSort(std::vector<KeyedIndex>& items, std::vector<KeyedIndex>& scratch,
       scratch[count[(item.key >> shift) & (kBuckets - 1)]++] = item;
     }
     items.swap(scratch);
-  }
-}
-
-/// Sorts a small range in place (insertion sort; std::sort for long ranges).
-inline void SortSmall(Index* begin, Index* end) {
-  if (end - begin > 32) {
-    std::sort(begin, end);
-    return;
-  }
-  for (Index* i = begin + 1; i < end; ++i) {
-    const Index value = *i;
-    Index* j = i;
-    for (; j > begin && *(j - 1) > value; --j) *j = *(j - 1);
-    *j = value;
   }
 }
 
@@ -298,35 +295,31 @@ class Builder {
       for (int d = 0; d < 3; ++d) xyz[3 * i + d] = mesh.vertices(i, d);
     });
 
-    // Referenced vertices, and the element edges bucketed by their smaller end: one CSR per
-    // part of the elements (counting sort). After the fill, bucket i of a part is
-    // [end[i − 1], end[i]) with end[−1] = 0.
+    // Referenced vertices, and the element edges bucketed by their smaller end (counting sort;
+    // after the fill, bucket i is [end[i − 1], end[i]) with end[−1] = 0).
     referenced_.assign(n, 0);
-    std::vector<std::vector<Index>> bucket_end(parts_), bucket_entries(parts_);
-    ForEachPart(m, parts_, [&](int part, std::size_t first, std::size_t last) {
-      std::vector<Index>& end = bucket_end[part];
-      end.assign(std::size_t(n) + 1, 0);
-      for (std::size_t t = first * K; t < last * K; t += K) {
-        for (int a = 0; a < K; ++a) {
-          std::atomic_ref<unsigned char>(referenced_[e[t + a]]).store(1, std::memory_order_relaxed);
-          for (int b = a + 1; b < K; ++b) ++end[std::min(e[t + a], e[t + b]) + 1];
+    Index* end = edge_end_.Resize(std::size_t(n) + 1);
+    std::fill_n(end, std::size_t(n) + 1, 0);
+    for (std::size_t t = 0; t < m * K; t += K) {
+      for (int a = 0; a < K; ++a) {
+        referenced_[e[t + a]] = 1;
+        for (int b = a + 1; b < K; ++b) ++end[std::min(e[t + a], e[t + b]) + 1];
+      }
+    }
+    for (Index i = 0; i < n; ++i) end[i + 1] += end[i];
+    Index* edges = edges_.Resize(end[n]);
+    for (std::size_t t = 0; t < m * K; t += K) {
+      PrefetchAhead<K>(end, e, t, m * K);
+      for (int a = 0; a < K; ++a) {
+        for (int b = a + 1; b < K; ++b) {
+          const auto [lo, hi] = std::minmax(e[t + a], e[t + b]);
+          edges[end[lo]++] = hi;
         }
       }
-      for (Index i = 0; i < n; ++i) end[i + 1] += end[i];
-      std::vector<Index>& entries = bucket_entries[part];
-      entries.resize(end[n]);
-      for (std::size_t t = first * K; t < last * K; t += K) {
-        for (int a = 0; a < K; ++a) {
-          for (int b = a + 1; b < K; ++b) {
-            const auto [lo, hi] = std::minmax(e[t + a], e[t + b]);
-            entries[end[lo]++] = hi;
-          }
-        }
-      }
-    });
+    }
 
-    // Ē over the unique edges: the sorted bucket of a vertex holds each of its edges as a run of
-    // equal entries. Also the bounding box. Fixed blocks, summed in order.
+    // Ē over the unique edges, whose ends are compacted to the front of each bucket (ending at
+    // unique_end[a]). Also the bounding box. Fixed blocks, summed in order.
     struct BlockResult {
       double length = 0.0;
       std::size_t edges = 0;
@@ -334,37 +327,38 @@ class Builder {
       Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
     };
     std::vector<BlockResult> block_results((std::size_t(n) + kBlock - 1) / kBlock);
+    Index* unique_end = unique_end_.Resize(n);
     ForEachBlock(n, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
       BlockResult r;
-      std::vector<Index> merged;
-      auto bucket = [&](int part, std::size_t a) {
-        const std::vector<Index>& end = bucket_end[part];
-        const Index* entries = bucket_entries[part].data();
-        return std::make_pair(entries + (a == 0 ? 0 : end[a - 1]), entries + end[a]);
-      };
       for (std::size_t a = first; a < last; ++a) {
+        unique_end[a] = a == 0 ? 0 : end[a - 1];
         if (!referenced_[a]) continue;
         const Eigen::Vector3d pa = Row(xyz, Index(a));
         r.lo = r.lo.cwiseMin(pa);
         r.hi = r.hi.cwiseMax(pa);
-        // The neighbours' positions are scattered: fetch the next bucket's while sorting.
+        // The neighbours' positions are scattered: fetch the next bucket's meanwhile.
         if (a + 1 < last) {
-          for (int part = 0; part < parts_; ++part) {
-            const auto [begin, end] = bucket(part, a + 1);
-            for (const Index* j = begin; j < end; ++j) __builtin_prefetch(&xyz[3 * std::size_t(*j)]);
+          for (Index j = end[a]; j < end[a + 1]; ++j) {
+            __builtin_prefetch(xyz + 3 * std::size_t(edges[j]));
           }
         }
-        merged.clear();
-        for (int part = 0; part < parts_; ++part) {
-          const auto [begin, end] = bucket(part, a);
-          merged.insert(merged.end(), begin, end);
+        // Keep the first of equal entries, compacted to the front of the bucket.
+        Index* begin = edges + (a == 0 ? 0 : end[a - 1]);
+        Index* stop = edges + end[a];
+        Index* out = begin;
+        if (stop - begin > 64) {
+          std::sort(begin, stop);
+          out = std::unique(begin, stop);
+        } else {
+          for (Index* j = begin; j < stop; ++j) {
+            bool seen = false;
+            for (Index* i = begin; i < out; ++i) seen |= *i == *j;
+            if (!seen) *out++ = *j;
+          }
         }
-        SortSmall(merged.data(), merged.data() + merged.size());
-        for (std::size_t j = 0; j < merged.size(); ++j) {
-          if (j > 0 && merged[j] == merged[j - 1]) continue;
-          r.length += (pa - Row(xyz, merged[j])).norm();
-          ++r.edges;
-        }
+        unique_end[a] = Index(out - edges);
+        for (Index* j = begin; j < out; ++j) r.length += (pa - Row(xyz, *j)).norm();
+        r.edges += std::size_t(out - begin);
       }
       block_results[block] = r;
     });
@@ -427,17 +421,38 @@ class Builder {
       cell[i] = ShiftCell(cells[i], delta);
       parent[i] = Index(i);
     });
-    if (options_.topology_aware) {
-      // Connected components of the element edges inside a cell (Algorithm 1).
+    if (options_.topology_aware && level0_) {
+      // Connected components of the edges inside a cell (Algorithm 1), over the unique edges
+      // of SetUpFinestLevel.
+      const Index* end = edge_end_.data();
+      const Index* unique_end = unique_end_.data();
+      const Index* edges = edges_.data();
+      ForEachPart(n, parts_, [&](int, std::size_t first, std::size_t last) {
+        for (std::size_t a = first; a < last; ++a) {
+          if (a + 1 < last) {
+            for (Index j = end[a]; j < unique_end[a + 1]; ++j) __builtin_prefetch(cell + edges[j]);
+          }
+          const std::uint64_t key = cell[a];
+          for (Index j = a == 0 ? 0 : end[a - 1]; j < unique_end[a]; ++j) {
+            if (cell[edges[j]] == key) Union(parent, Index(a), edges[j]);
+          }
+        }
+      });
+    } else if (options_.topology_aware) {
+      // The same over the element edges: per element, each vertex joins the first earlier
+      // vertex of its cell (a spanning forest of the element's edges inside cells).
       const Index* e = mesh.elements.data();
       ForEachPart(mesh.num_elements(), parts_, [&](int, std::size_t first, std::size_t last) {
         for (std::size_t t = first * K; t < last * K; t += K) {
           PrefetchAhead<K>(cell, e, t, last * K);
           std::array<std::uint64_t, K> key;
           for (int a = 0; a < K; ++a) key[a] = cell[e[t + a]];
-          for (int a = 0; a < K; ++a) {
-            for (int b = a + 1; b < K; ++b) {
-              if (key[a] == key[b]) Union(parent, e[t + a], e[t + b]);
+          for (int a = 1; a < K; ++a) {
+            for (int b = 0; b < a; ++b) {
+              if (key[b] == key[a]) {
+                Union(parent, e[t + b], e[t + a]);
+                break;
+              }
             }
           }
         }
@@ -478,41 +493,35 @@ class Builder {
     const Index* label = label_.data();
 
     // Eq. (5)/(10): an element survives iff its vertices lie in K different clusters. The
-    // survivors' clusters, in element order (two passes over fixed blocks: count, write).
-    auto survives = [&](std::size_t t, std::array<Index, K>& c) {
-      for (int a = 0; a < K; ++a) c[a] = label[e[t * K + a]];
-      bool distinct = true;
-      for (int a = 0; a < K; ++a) {
-        for (int b = a + 1; b < K; ++b) distinct = distinct && c[a] != c[b];
-      }
-      return distinct;
-    };
+    // survivors' clusters, in element order: each block writes its survivors where its elements
+    // start, then the blocks are moved together.
+    if (level0_) survivors_.swap(edges_);  // the level-0 edge buckets are no longer needed
+    Index* survivors = survivors_.Resize(m * K);
     const std::size_t blocks = (m + kBlock - 1) / kBlock;
-    std::vector<Index> block_start(blocks + 1, 0);
-    unsigned char* alive = alive_.Resize(m);
+    std::vector<Index> block_count(blocks, 0);
     ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
-      Index count = 0;
-      std::array<Index, K> c;
-      for (std::size_t t = first; t < last; ++t) {
-        PrefetchAhead<K>(label, e, t * K, last * K);
-        alive[t] = survives(t, c) ? 1 : 0;
-        count += alive[t];
+      Index* out = survivors + first * K;
+      for (std::size_t t = first * K; t < last * K; t += K) {
+        PrefetchAhead<K>(label, e, t, last * K);
+        std::array<Index, K> c;
+        for (int a = 0; a < K; ++a) c[a] = label[e[t + a]];
+        bool distinct = true;
+        for (int a = 0; a < K; ++a) {
+          for (int b = a + 1; b < K; ++b) distinct = distinct && c[a] != c[b];
+        }
+        for (int a = 0; a < K; ++a) out[a] = c[a];
+        out += distinct ? K : 0;
       }
-      block_start[block + 1] = count;
+      block_count[block] = Index((out - survivors - first * K) / K);
     });
-    for (std::size_t b = 0; b < blocks; ++b) block_start[b + 1] += block_start[b];
-    const Index num_survivors = block_start[blocks];
+    Index num_survivors = 0;
+    for (std::size_t block = 0; block < blocks; ++block) {
+      // Moving down, in block order, never overwrites a block not yet moved.
+      std::memmove(survivors + std::size_t(num_survivors) * K, survivors + block * kBlock * K,
+                   std::size_t(block_count[block]) * K * sizeof(Index));
+      num_survivors += block_count[block];
+    }
     if (num_survivors == 0) return false;
-    Index* survivors = survivors_.Resize(std::size_t(num_survivors) * K);
-    ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
-      Index* out = survivors + std::size_t(block_start[block]) * K;
-      std::array<Index, K> c;
-      for (std::size_t t = first; t < last; ++t) {
-        if (!alive[t]) continue;
-        survives(t, c);
-        for (int a = 0; a < K; ++a) *out++ = c[a];
-      }
-    });
 
     // Duplicates out; the used clusters (marked 0) compacted into coarse indices.
     Index* coarse_of = coarse_of_.Resize(num_clusters_);
@@ -558,7 +567,8 @@ class Builder {
       if (!fine_level.in_cluster[i]) continue;
       const Index c = fine_level.coarse_vertex[i];
       coarse_cells[c] = next_cells_[i];
-      for (int d = 0; d < 3; ++d) coarse_sums[3 * std::size_t(c) + d] += sums_[3 * std::size_t(i) + d];
+      for (int d = 0; d < 3; ++d)
+        coarse_sums[3 * std::size_t(c) + d] += sums_[3 * std::size_t(i) + d];
       coarse_counts[c] += level0_ ? 1 : counts_[i];
     }
     cells_.swap(coarse_cells_);
@@ -655,27 +665,30 @@ class Builder {
     std::vector<Index>& coarse = level.coarse_vertex;
     const std::vector<unsigned char>& in_cluster = level.in_cluster;
 
-    // Local ids of the unresolved vertices and their incident elements (CSR).
-    Index* local = parent_.Resize(n);  // free after clustering
-    std::fill_n(local, n, kNoVertex);
+    // The unresolved vertices (ascending; local ids are positions in this list), flagged, and
+    // their incident elements (CSR). They are few: flag lookups keep the element scan cheap.
+    unsigned char* flag = flag_.Resize(n);
     std::vector<Index> vertices;
     vertices.reserve(unresolved);
     for (Index i = 0; i < n; ++i) {
-      if (!in_cluster[i] && Referenced(i)) {
-        local[i] = static_cast<Index>(vertices.size());
-        vertices.push_back(i);
-      }
+      flag[i] = !in_cluster[i] && Referenced(i) ? 1 : 0;
+      if (flag[i]) vertices.push_back(i);
+    }
+    auto local = [&](Index v) {
+      return flag[v]
+                 ? Index(std::lower_bound(vertices.begin(), vertices.end(), v) - vertices.begin())
+                 : kNoVertex;
+    };
+    std::vector<std::pair<Index, Index>> touching;  // (local id, element)
+    for (std::size_t j = 0; j < std::size_t(m) * K; ++j) {
+      if (flag[e[j]]) touching.emplace_back(local(e[j]), Index(j / K));
     }
     std::vector<Index> offsets(vertices.size() + 1, 0);
-    for (std::size_t j = 0; j < std::size_t(m) * K; ++j) {
-      if (local[e[j]] != kNoVertex) ++offsets[local[e[j]] + 1];
-    }
+    for (const auto& [u, t] : touching) ++offsets[u + 1];
     for (std::size_t u = 0; u < vertices.size(); ++u) offsets[u + 1] += offsets[u];
-    std::vector<Index> incident(offsets.back());
+    std::vector<Index> incident(touching.size());
     std::vector<Index> cursor(offsets.begin(), offsets.end() - 1);
-    for (std::size_t j = 0; j < std::size_t(m) * K; ++j) {
-      if (local[e[j]] != kNoVertex) incident[cursor[local[e[j]]]++] = static_cast<Index>(j / K);
-    }
+    for (const auto& [u, t] : touching) incident[cursor[u]++] = t;
     auto element = [&](Index j) { return e + std::size_t(incident[j]) * K; };
 
     constexpr Index kUnset = -1, kPending = -2;
@@ -701,7 +714,7 @@ class Builder {
       for (Index u : frontier) {
         for (Index j = offsets[u]; j < offsets[u + 1]; ++j) {
           for (int a = 0; a < K; ++a) {
-            const Index w = local[element(j)[a]];
+            const Index w = local(element(j)[a]);
             if (w != kNoVertex && distance[w] == kUnset) {
               distance[w] = kPending;
               next.push_back(w);
@@ -714,7 +727,8 @@ class Builder {
         for (Index j = offsets[u]; j < offsets[u + 1]; ++j) {
           for (int a = 0; a < K; ++a) {
             const Index w = element(j)[a];
-            if (local[w] != kNoVertex && distance[local[w]] == layer &&
+            const Index local_w = local(w);
+            if (local_w != kNoVertex && distance[local_w] == layer &&
                 (best == kNoVertex || coarse[w] < best)) {
               best = coarse[w];
             }
@@ -764,6 +778,9 @@ class Builder {
 
   // Scratch reused by every level.
   Scratch<Index> parent_, label_, survivors_, offsets_, coarse_of_;
+  // Level 0: the element edges bucketed by their smaller end; bucket a is
+  // [edge_end_[a − 1], edge_end_[a]), its unique entries end at unique_end_[a].
+  Scratch<Index> edge_end_, unique_end_, edges_;
   Index num_clusters_ = 0;
   std::vector<KeyedIndex> sorted_, sort_scratch_;
   struct BucketEntry {
@@ -771,7 +788,7 @@ class Builder {
     std::array<Index, K - 1> rest;
   };
   Scratch<BucketEntry> bucket_;
-  Scratch<unsigned char> alive_, keep_;
+  Scratch<unsigned char> keep_, flag_;
 };
 
 }  // namespace
@@ -816,10 +833,12 @@ OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& 
 
 void OctreeHierarchy::Options::Validate() const {
   std::vector<std::string> problems;
-  if (min_vertices < 0) problems.push_back(fmt::format("min_vertices is {}, must be >= 0", min_vertices));
+  if (min_vertices < 0)
+    problems.push_back(fmt::format("min_vertices is {}, must be >= 0", min_vertices));
   if (max_levels < 0) problems.push_back(fmt::format("max_levels is {}, must be >= 0", max_levels));
   if (!problems.empty()) {
-    throw ConfigError(fmt::format("invalid {} hierarchy options: {}", kName, fmt::join(problems, "; ")));
+    throw ConfigError(
+        fmt::format("invalid {} hierarchy options: {}", kName, fmt::join(problems, "; ")));
   }
 }
 
@@ -836,8 +855,10 @@ MeshHierarchy OctreeHierarchy::Build(const Mesh& mesh, const Context& context) c
   hierarchy.levels.push_back(HierarchyLevel{mesh, {}, {}});
   if (mesh.num_elements() == 0) return hierarchy;
   const int k = mesh.simplex_size();
-  HARAP_CHECK(k == 3 || k == 4, "elements have {} vertices; the octree hierarchy needs "
-              "triangles (3) or tetrahedra (4)", k);
+  HARAP_CHECK(k == 3 || k == 4,
+              "elements have {} vertices; the octree hierarchy needs "
+              "triangles (3) or tetrahedra (4)",
+              k);
   HARAP_CHECK(mesh.elements.minCoeff() >= 0 && mesh.elements.maxCoeff() < mesh.num_vertices(),
               "element indices must lie in [0, {})", mesh.num_vertices());
   if (mesh.num_vertices() <= options_.min_vertices || options_.max_levels == 1) return hierarchy;

@@ -195,7 +195,18 @@ struct CholmodSolver::Impl {
     // pivots d_k are what the positive-definiteness check reads.
     common.final_ll = 0;
     switch (options.mode) {
-      case Mode::kAuto:  // supernodal factorization, converted to simplicial in Factorize()
+      case Mode::kAuto:
+        // Supernodal factorization, then converted by cholmod_factorize itself to a packed
+        // simplicial LDLᵀ, re-symbolled so the explicit zeros of relaxed supernodes are dropped
+        // (without final_resymbol the converted factor keeps them and solves ~35% slower).
+        common.supernodal = CHOLMOD_SUPERNODAL;
+        common.final_asis = 0;
+        common.final_super = 0;
+        common.final_ll = 0;
+        common.final_pack = 1;
+        common.final_monotonic = 1;
+        common.final_resymbol = 1;
+        break;
       case Mode::kSupernodal:
         common.supernodal = CHOLMOD_SUPERNODAL;
         break;
@@ -367,12 +378,6 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/)
   impl.ThrowOnFailure("factorization", a);
   impl.CheckPivots(a, diagonal);
 
-  if (impl.options.mode == Mode::kAuto && impl.factor->is_super) {
-    // Simplicial LLᵀ with the same numbers: a copy of the factor into column form.
-    cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/0, /*to_packed=*/1,
-                          /*to_monotonic=*/1, impl.factor, &impl.common);
-    impl.ThrowOnFailure("conversion of the factor", a);
-  }
   impl.info.supernodal = impl.factor->is_super != 0;
   impl.info.ordering = OrderingName(impl.factor->ordering);
   impl.info.nnz_l = impl.common.lnz;

@@ -51,6 +51,7 @@ struct Fixture {
     system->SetFixedPositions(u);
     rotations.assign(energy->num_rotations(), Rotation::Identity());
     rhs.resize(u.rows(), 3);
+    system->GatherFree(u, reduced_x);
     // A few iterations so the state (and the rotation warm starts) look like mid-solve.
     for (int i = 0; i < 3; ++i) Iterate();
   }
@@ -59,7 +60,7 @@ struct Fixture {
     energy->FitRotations(u, rotations, context);
     energy->AssembleRhs(rotations, rhs, context);
     system->ReducedRhs(rhs, reduced_rhs);
-    system->GatherFree(u, reduced_x);
+    if (!solver->is_direct()) system->GatherFree(u, reduced_x);
     solver->Solve(reduced_rhs, reduced_x, context);
     system->ScatterFree(reduced_x, u);
   }
@@ -93,10 +94,17 @@ void RightHandSide(benchmark::State& state, std::string key) {
   SetCounters(state, f);
 }
 
-void Factorization(benchmark::State& state, std::string key, std::string mode) {
-  Fixture& f = Get(key);
+ConfigNode SolverOptions(const std::string& mode, const std::string& ordering) {
   ConfigNode options;
   options.Set("mode", fmt::format("\"{}\"", mode));
+  options.Set("ordering", fmt::format("\"{}\"", ordering));
+  return options;
+}
+
+void Factorization(benchmark::State& state, std::string key, std::string mode,
+                   std::string ordering) {
+  Fixture& f = Get(key);
+  const ConfigNode options = SolverOptions(mode, ordering);
   for (auto _ : state) {
     auto solver = f.registries.linear_solvers.Create("cholmod", options);
     solver->Factorize(f.system->reduced_matrix(), f.context);
@@ -105,10 +113,9 @@ void Factorization(benchmark::State& state, std::string key, std::string mode) {
   SetCounters(state, f);
 }
 
-void Solve(benchmark::State& state, std::string key, std::string mode) {
+void Solve(benchmark::State& state, std::string key, std::string mode, std::string ordering) {
   Fixture& f = Get(key);
-  ConfigNode options;
-  options.Set("mode", fmt::format("\"{}\"", mode));
+  const ConfigNode options = SolverOptions(mode, ordering);
   auto solver = f.registries.linear_solvers.Create("cholmod", options);
   solver->Factorize(f.system->reduced_matrix(), f.context);
   Eigen::MatrixXd x = f.reduced_x;
@@ -136,9 +143,12 @@ void RegisterAll(const std::string& key) {
   };
   add("LocalStep", LocalStep, key);
   add("RightHandSide", RightHandSide, key);
-  for (const char* mode : {"auto", "simplicial", "supernodal"}) {
-    add(std::string("Factorization_") + mode, Factorization, key, std::string(mode));
-    add(std::string("Solve3_") + mode, Solve, key, std::string(mode));
+  for (const char* ordering : {"amd", "metis"}) {
+    for (const char* mode : {"auto", "simplicial", "supernodal"}) {
+      const std::string suffix = std::string(mode) + "_" + ordering;
+      add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering));
+      add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering));
+    }
   }
   add("FullIteration", FullIteration, key);
 }

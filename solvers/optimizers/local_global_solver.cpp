@@ -83,7 +83,8 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     // Global step: A_ff U_f = B_f(R) − A_fc U_c, all three coordinates at once.
     energy_->AssembleRhs(state.rotations, rhs_, context);
     system_->ReducedRhs(rhs_, reduced_rhs_);
-    system_->GatherFree(state.positions, reduced_x_);
+    // Iterative solvers start from the current positions; direct ones ignore the warm start.
+    if (!solver_->is_direct()) system_->GatherFree(state.positions, reduced_x_);
     const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
     if (!summary.success) {
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,

@@ -84,7 +84,7 @@ TEST_CASE("RunDeform: report has every documented key, trace times increase", "[
   }
 }
 
-TEST_CASE("harap deform: writes an exact PLY and a report; errors exit non-zero",
+TEST_CASE("harap deform: writes an exact PLY and a report, errors exit non-zero",
           "[experiments]") {
   const fs::path dir = TempDir();
   const fs::path scenario = dir / "scenario.toml";

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 // OctreeHierarchy: structure of the levels (Section 4 of the paper, Eqs. 2–5 and 10), the
 // topology check, the fine → coarse maps, options and determinism.
-#include <catch2/catch.hpp>
+#include "hierarchies/octree_hierarchy.h"
 
 #include <algorithm>
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -15,7 +16,6 @@
 #include "experiments/builtins.h"
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
-#include "hierarchies/octree_hierarchy.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
 
@@ -24,8 +24,7 @@ using namespace harap::testing;
 
 namespace {
 
-MeshHierarchy BuildOctree(const Mesh& mesh, OctreeHierarchy::Options options,
-                          int threads = 0) {
+MeshHierarchy BuildOctree(const Mesh& mesh, OctreeHierarchy::Options options, int threads = 0) {
   return OctreeHierarchy(options).Build(mesh, Context::WithThreads(threads));
 }
 
@@ -346,8 +345,8 @@ TEST_CASE("octree: parallel sheets merge only without the topology check",
   };
 
   SECTION("topology-aware: no coarse vertex takes vertices of both sheets") {
-    for (auto positions : {OctreeHierarchy::CoarsePositions::kMean,
-                           OctreeHierarchy::CoarsePositions::kQuantized}) {
+    for (auto positions :
+         {OctreeHierarchy::CoarsePositions::kMean, OctreeHierarchy::CoarsePositions::kQuantized}) {
       OctreeHierarchy::Options options = WithMinVertices(20, true);
       options.coarse_positions = positions;
       const MeshHierarchy h = BuildOctree(sheets, options);
@@ -442,13 +441,12 @@ TEST_CASE("octree: vertices of vanished clusters map to the closest survivor",
   }
 }
 
-TEST_CASE("octree: unreferenced input vertices map to no coarse vertex",
-          "[hierarchies][octree]") {
+TEST_CASE("octree: unreferenced input vertices map to no coarse vertex", "[hierarchies][octree]") {
   Mesh mesh = Icosphere(4);
   const Index n = mesh.num_vertices();
   mesh.vertices.conservativeResize(n + 3, 3);
-  mesh.vertices.row(n) << 0.0, 0.0, 0.0;      // inside the sphere, in a cell of its own
-  mesh.vertices.row(n + 1) << 1.0, 0.0, 0.0;  // on the sphere: shares a cell with it
+  mesh.vertices.row(n) << 0.0, 0.0, 0.0;            // inside the sphere, in a cell of its own
+  mesh.vertices.row(n + 1) << 1.0, 0.0, 0.0;        // on the sphere: shares a cell with it
   mesh.vertices.row(n + 2) = mesh.vertices.row(5);  // coincides with a referenced vertex
   for (bool aware : {true, false}) {
     DYNAMIC_SECTION((aware ? "topology-aware" : "plain")) {
@@ -513,8 +511,8 @@ TEST_CASE("octree: min_vertices and max_levels stop the hierarchy", "[hierarchie
 TEST_CASE("octree: tetrahedral meshes (Eq. 10)", "[hierarchies][octree]") {
   const Mesh mesh = TetGrid(14);
   for (bool aware : {true, false}) {
-    for (auto positions : {OctreeHierarchy::CoarsePositions::kMean,
-                           OctreeHierarchy::CoarsePositions::kQuantized}) {
+    for (auto positions :
+         {OctreeHierarchy::CoarsePositions::kMean, OctreeHierarchy::CoarsePositions::kQuantized}) {
       DYNAMIC_SECTION((aware ? "topology-aware " : "plain ")
                       << OctreeHierarchy::ToString(positions)) {
         OctreeHierarchy::Options options = WithMinVertices(20, aware);
@@ -532,8 +530,8 @@ TEST_CASE("octree: tetrahedral meshes (Eq. 10)", "[hierarchies][octree]") {
 TEST_CASE("octree: planar meshes stay in the plane", "[hierarchies][octree]") {
   Mesh mesh = Grid(64, 40);
   mesh.planar = true;
-  for (auto positions : {OctreeHierarchy::CoarsePositions::kMean,
-                         OctreeHierarchy::CoarsePositions::kQuantized}) {
+  for (auto positions :
+       {OctreeHierarchy::CoarsePositions::kMean, OctreeHierarchy::CoarsePositions::kQuantized}) {
     OctreeHierarchy::Options options = WithMinVertices(20);
     options.coarse_positions = positions;
     const MeshHierarchy h = BuildOctree(mesh, options);
@@ -582,10 +580,8 @@ TEST_CASE("octree: options from config", "[hierarchies][octree]") {
     const std::string table =
         "topology_aware = false\ncoarse_positions = \"quantized\"\nmin_vertices = 100\n"
         "max_levels = 4\n";
-    const auto options =
-        OctreeHierarchy::Options::FromConfig(ConfigNode::Parse(table, "test"));
-    const ConfigNode config =
-        ConfigNode::Parse("[hierarchy]\ntype = \"octree\"\n" + table, "test");
+    const auto options = OctreeHierarchy::Options::FromConfig(ConfigNode::Parse(table, "test"));
+    const ConfigNode config = ConfigNode::Parse("[hierarchy]\ntype = \"octree\"\n" + table, "test");
     CHECK_FALSE(options.topology_aware);
     CHECK(options.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized);
     CHECK(options.min_vertices == 100);
@@ -637,5 +633,36 @@ TEST_CASE("octree: Armadillo", "[hierarchies][octree][shared]") {
       CheckAllMapped(h);
       CHECK(h.levels.back().mesh.num_vertices() <= 750);
     }
+  }
+}
+
+TEST_CASE("octree: degenerate inputs give a single level", "[hierarchies][octree]") {
+  OctreeHierarchy::Options options = WithMinVertices(0);
+  SECTION("no elements") {
+    Mesh mesh = Icosphere(2);
+    mesh.elements.resize(0, 3);
+    const MeshHierarchy h = BuildOctree(mesh, options);
+    REQUIRE(h.num_levels() == 1);
+    CHECK(h.levels[0].mesh.vertices == mesh.vertices);
+    CHECK(h.levels[0].coarse_vertex.empty());
+  }
+  SECTION("all vertices in one point") {
+    Mesh mesh = Icosphere(2);
+    mesh.vertices.setConstant(0.5);
+    CHECK(BuildOctree(mesh, options).num_levels() == 1);
+  }
+  SECTION("a single triangle") {
+    Mesh mesh;
+    mesh.vertices.resize(3, 3);
+    mesh.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+    mesh.elements.resize(1, 3);
+    mesh.elements << 0, 1, 2;
+    const MeshHierarchy h = BuildOctree(mesh, options);
+    CHECK(h.num_levels() == 1);
+  }
+  SECTION("bad element indices are an internal error") {
+    Mesh mesh = Icosphere(1);
+    mesh.elements(3, 1) = mesh.num_vertices();
+    CHECK_THROWS_AS(BuildOctree(mesh, options), InternalError);
   }
 }

@@ -46,7 +46,7 @@ TEST_CASE("every upsampler carries a rigid coarse state to the rigid fine state"
   }
 }
 
-TEST_CASE("rotations upsampler copies each cell's rotation (Eq. 7); smoothing averages",
+TEST_CASE("rotations upsampler copies each cell rotation (Eq. 7) and smoothing averages",
           "[upsamplers]") {
   const Registries registries = MakeBuiltinRegistries();
   const MeshHierarchy hierarchy = TwoLevels();

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <array>
+#include <string_view>
+
+#include "energies/kernels/rotation_coupling.h"
+
+namespace harap {
+
+/// Shared precomputation of the per-vertex cotangent ARAP energies on triangle meshes (spokes,
+/// spokes-and-rims): ½cot weights with degenerate triangles zeroed, the adjacency pattern, and a
+/// loop over faces in which the concrete energy adds its face's contributions to A, to the
+/// coupling coefficients and to the constant.
+class CotangentArapEnergy : public CoupledQuadraticEnergy {
+ public:
+  void Precompute(const Mesh& rest, const Context& context) final;
+
+  /// Triangles whose weights were zeroed as degenerate in the last Precompute().
+  Index num_degenerate_triangles() const { return num_degenerate_; }
+
+ protected:
+  explicit CotangentArapEnergy(std::string_view name)
+      : CoupledQuadraticEnergy(RotationSite::kVertex), name_(name) {}
+
+  /// One face's data for AddFace: its vertices' rest positions, the ½cot weight of the edge
+  /// opposite each corner, and where its 3×3 vertex pairs live in A's value array (entry
+  /// (row v_a, column v_b) at positions[3a + b]).
+  struct Face {
+    std::array<Eigen::Vector3d, 3> rest;
+    std::array<double, 3> half_cot;
+    const std::array<Index, 9>& positions;
+  };
+  /// Adds the face's terms: to A's values (`a_values`), to the coupling coefficients c_sx at the
+  /// entry (row x, column s) (`coefficients`), and to the constant.
+  virtual void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
+                       double& constant) const = 0;
+
+ private:
+  std::string_view name_;
+  Index num_degenerate_ = 0;
+};
+
+}  // namespace harap
