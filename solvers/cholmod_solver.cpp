@@ -322,15 +322,8 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       node.GetChoice("ordering", ToName(kOrderingNames, options.ordering), Names(kOrderingNames),
                      "fill-reducing ordering; best = CHOLMOD's default (AMD, then METIS if AMD "
                      "fills a lot)"));
-  options.pivot_tolerance =
-      node.Get("pivot_tolerance", options.pivot_tolerance,
-               "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
-               "error); in [0, 1)");
-  options.check_residual =
-      node.Get("check_residual", options.check_residual,
-               "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
+  solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
   node.RejectUnknownKeys();
-  solver_checks::CheckPivotTolerance(node, options.pivot_tolerance);
   return options;
 }
 

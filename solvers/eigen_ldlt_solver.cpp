@@ -12,15 +12,8 @@ namespace harap {
 
 EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;
-  options.pivot_tolerance =
-      node.Get("pivot_tolerance", options.pivot_tolerance,
-               "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
-               "error); in [0, 1)");
-  options.check_residual =
-      node.Get("check_residual", options.check_residual,
-               "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
+  solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
   node.RejectUnknownKeys();
-  solver_checks::CheckPivotTolerance(node, options.pivot_tolerance);
   return options;
 }
 

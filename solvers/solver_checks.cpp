@@ -76,3 +76,18 @@ std::string NonFiniteSolutionMessage(std::string_view solver,
 }
 
 }  // namespace harap::solver_checks
+
+namespace harap::solver_checks {
+
+void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
+                              bool& check_residual) {
+  pivot_tolerance =
+      node.Get("pivot_tolerance", pivot_tolerance,
+               "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
+               "error); in [0, 1)");
+  check_residual = node.Get("check_residual", check_residual,
+                            "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
+  CheckPivotTolerance(node, pivot_tolerance);
+}
+
+}  // namespace harap::solver_checks

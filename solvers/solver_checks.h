@@ -38,6 +38,11 @@ double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::
 /// Throws ConfigError (naming where `node`'s pivot_tolerance was written) unless 0 ≤ value < 1.
 void CheckPivotTolerance(const ConfigNode& node, double value);
 
+/// Reads the options every factorization-based solver shares — `pivot_tolerance` (validated)
+/// and `check_residual` — with their help texts, into the given fields (defaults on input).
+void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
+                              bool& check_residual);
+
 /// The message for a solution with NaN or infinite entries (a singular matrix or a bad `b`).
 std::string NonFiniteSolutionMessage(std::string_view solver,
                                      const Eigen::Ref<const Eigen::MatrixXd>& b);

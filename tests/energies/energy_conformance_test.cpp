@@ -28,118 +28,106 @@ Rotations Identities(const Energy& energy) {
   return Rotations(energy.num_rotations(), Rotation::Identity());
 }
 
-}  // namespace
-
-TEST_CASE("every energy: rest pose and rigid motions have zero energy", "[energies]") {
+// Runs `check(energy, mesh)` in one section per registered energy × conformance mesh, with the
+// energy precomputed on the mesh.
+template <class Check>
+void ForEachEnergyAndMesh(Check&& check) {
   const Registries registries = MakeBuiltinRegistries();
-  const Context context;
   for (const auto& name : registries.energies.Names()) {
     for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
       DYNAMIC_SECTION(name << " on " << mesh_name) {
         auto energy = registries.energies.Create(name, ConfigNode());
-        energy->Precompute(mesh, context);
-        Rotations rotations = Identities(*energy);
-        const double scale = energy->system_matrix().diagonal().sum();
-        CHECK(std::abs(energy->FitRotations(mesh.vertices, rotations, context)) < 1e-12 * scale);
-
-        const Eigen::Matrix3d r = RandomRotation(7);
-        Positions moved = (mesh.vertices * r.transpose()).rowwise() +
-                          Eigen::RowVector3d(0.3, -1.0, 2.0);
-        const double e = energy->FitRotations(moved, rotations, context);
-        CHECK(std::abs(e) < 1e-10 * scale);
-        for (const auto& fitted : rotations) CHECK((fitted - r).norm() < 1e-8);
-        CHECK(std::abs(energy->Evaluate(moved, rotations, context)) < 1e-10 * scale);
+        energy->Precompute(mesh, Context());
+        check(*energy, mesh);
       }
     }
   }
+}
+
+}  // namespace
+
+TEST_CASE("every energy: rest pose and rigid motions have zero energy", "[energies]") {
+  const Context context;
+  ForEachEnergyAndMesh([&](Energy& energy, const Mesh& mesh) {
+    Rotations rotations = Identities(energy);
+    const double scale = energy.system_matrix().diagonal().sum();
+    CHECK(std::abs(energy.FitRotations(mesh.vertices, rotations, context)) < 1e-12 * scale);
+
+    const Eigen::Matrix3d r = RandomRotation(7);
+    Positions moved = (mesh.vertices * r.transpose()).rowwise() +
+                      Eigen::RowVector3d(0.3, -1.0, 2.0);
+    const double e = energy.FitRotations(moved, rotations, context);
+    CHECK(std::abs(e) < 1e-10 * scale);
+    for (const auto& fitted : rotations) CHECK((fitted - r).norm() < 1e-8);
+    CHECK(std::abs(energy.Evaluate(moved, rotations, context)) < 1e-10 * scale);
+  });
 }
 
 TEST_CASE("every energy: system matrix is symmetric PSD and annihilates translations",
           "[energies]") {
-  const Registries registries = MakeBuiltinRegistries();
   const Context context;
-  for (const auto& name : registries.energies.Names()) {
-    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
-      DYNAMIC_SECTION(name << " on " << mesh_name) {
-        auto energy = registries.energies.Create(name, ConfigNode());
-        energy->Precompute(mesh, context);
-        const Eigen::MatrixXd a = Eigen::MatrixXd(energy->system_matrix());
-        REQUIRE(a.rows() == mesh.num_vertices());
-        CHECK((a - a.transpose()).norm() < 1e-12 * a.norm());
-        CHECK((a * Eigen::VectorXd::Ones(a.rows())).norm() < 1e-10 * a.norm());
-        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
-        CHECK(eigen.eigenvalues().minCoeff() > -1e-10 * eigen.eigenvalues().maxCoeff());
-      }
-    }
-  }
+  ForEachEnergyAndMesh([&](Energy& energy, const Mesh& mesh) {
+    const Eigen::MatrixXd a = Eigen::MatrixXd(energy.system_matrix());
+    REQUIRE(a.rows() == mesh.num_vertices());
+    CHECK((a - a.transpose()).norm() < 1e-12 * a.norm());
+    CHECK((a * Eigen::VectorXd::Ones(a.rows())).norm() < 1e-10 * a.norm());
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+    CHECK(eigen.eigenvalues().minCoeff() > -1e-10 * eigen.eigenvalues().maxCoeff());
+  });
 }
 
 TEST_CASE("every energy: gradient matches finite differences", "[energies]") {
-  const Registries registries = MakeBuiltinRegistries();
   const Context context;
   std::mt19937 rng(3);
   std::normal_distribution<double> normal;
-  for (const auto& name : registries.energies.Names()) {
-    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
-      DYNAMIC_SECTION(name << " on " << mesh_name) {
-        auto energy = registries.energies.Create(name, ConfigNode());
-        energy->Precompute(mesh, context);
-        const Positions u = SmoothlyDeformed(mesh.vertices, 0.7);
-        Rotations rotations = Identities(*energy);
-        energy->FitRotations(u, rotations, context);
-        // Perturb the rotations away from the optimum so the gradient is not tiny.
-        for (size_t s = 0; s < rotations.size(); ++s) {
-          rotations[s] = rotations[s] * RandomRotation(static_cast<unsigned>(s) + 11);
-        }
-        // ∂E/∂U = 2 (A U − B(R)) by the Energy contract.
-        Positions rhs(mesh.num_vertices(), 3);
-        energy->AssembleRhs(rotations, rhs, context);
-        const Positions gradient = 2.0 * (energy->system_matrix() * u - rhs);
-        for (int trial = 0; trial < 5; ++trial) {
-          Positions direction(u.rows(), 3);
-          for (Eigen::Index i = 0; i < direction.size(); ++i) direction.data()[i] = normal(rng);
-          const double h = 1e-6;
-          const Positions plus = u + h * direction;
-          const Positions minus = u - h * direction;
-          const double numeric = (energy->Evaluate(plus, rotations, context) -
-                                  energy->Evaluate(minus, rotations, context)) /
-                                 (2.0 * h);
-          const double analytic = gradient.cwiseProduct(direction).sum();
-          CHECK(numeric == Approx(analytic).epsilon(1e-6).margin(1e-8));
-        }
-      }
+  ForEachEnergyAndMesh([&](Energy& energy, const Mesh& mesh) {
+    const Positions u = SmoothlyDeformed(mesh.vertices, 0.7);
+    Rotations rotations = Identities(energy);
+    energy.FitRotations(u, rotations, context);
+    // Perturb the rotations away from the optimum so the gradient is not tiny.
+    for (size_t s = 0; s < rotations.size(); ++s) {
+      rotations[s] = rotations[s] * RandomRotation(static_cast<unsigned>(s) + 11);
     }
-  }
+    // ∂E/∂U = 2 (A U − B(R)) by the Energy contract.
+    Positions rhs(mesh.num_vertices(), 3);
+    energy.AssembleRhs(rotations, rhs, context);
+    const Positions gradient = 2.0 * (energy.system_matrix() * u - rhs);
+    for (int trial = 0; trial < 5; ++trial) {
+      Positions direction(u.rows(), 3);
+      for (Eigen::Index i = 0; i < direction.size(); ++i) direction.data()[i] = normal(rng);
+      const double h = 1e-6;
+      const Positions plus = u + h * direction;
+      const Positions minus = u - h * direction;
+      const double numeric = (energy.Evaluate(plus, rotations, context) -
+                              energy.Evaluate(minus, rotations, context)) /
+                             (2.0 * h);
+      const double analytic = gradient.cwiseProduct(direction).sum();
+      CHECK(numeric == Approx(analytic).epsilon(1e-6).margin(1e-8));
+    }
+  });
 }
 
 TEST_CASE("every energy: the local step never increases the energy", "[energies]") {
-  const Registries registries = MakeBuiltinRegistries();
   const Context context;
-  for (const auto& name : registries.energies.Names()) {
-    for (const auto& [mesh_name, mesh] : ConformanceMeshes()) {
-      DYNAMIC_SECTION(name << " on " << mesh_name) {
-        auto energy = registries.energies.Create(name, ConfigNode());
-        energy->Precompute(mesh, context);
-        const Positions u = SmoothlyDeformed(mesh.vertices, 1.5);
-        Rotations rotations = Identities(*energy);
-        for (size_t s = 0; s < rotations.size(); ++s) {
-          rotations[s] = RandomRotation(static_cast<unsigned>(s));
-        }
-        const double before = energy->Evaluate(u, rotations, context);
-        const double after = energy->FitRotations(u, rotations, context);
-        CHECK(after <= before);
-        CHECK(after == Approx(energy->Evaluate(u, rotations, context)).epsilon(1e-12));
-        // Optimality: no random perturbation of a fitted rotation lowers the energy.
-        Rotations perturbed = rotations;
-        for (size_t s = 0; s < perturbed.size(); s += 3) {
-          Eigen::Matrix3d small = Eigen::AngleAxisd(1e-3, Eigen::Vector3d(1, 2, 3).normalized())
-                                      .toRotationMatrix();
-          perturbed[s] = perturbed[s] * small;
-        }
-        CHECK(energy->Evaluate(u, perturbed, context) >= after);
-      }
+  ForEachEnergyAndMesh([&](Energy& energy, const Mesh& mesh) {
+    const Positions u = SmoothlyDeformed(mesh.vertices, 1.5);
+    Rotations rotations = Identities(energy);
+    for (size_t s = 0; s < rotations.size(); ++s) {
+      rotations[s] = RandomRotation(static_cast<unsigned>(s));
     }
-  }
+    const double before = energy.Evaluate(u, rotations, context);
+    const double after = energy.FitRotations(u, rotations, context);
+    CHECK(after <= before);
+    CHECK(after == Approx(energy.Evaluate(u, rotations, context)).epsilon(1e-12));
+    // Optimality: no random perturbation of a fitted rotation lowers the energy.
+    Rotations perturbed = rotations;
+    for (size_t s = 0; s < perturbed.size(); s += 3) {
+      Eigen::Matrix3d small = Eigen::AngleAxisd(1e-3, Eigen::Vector3d(1, 2, 3).normalized())
+                                  .toRotationMatrix();
+      perturbed[s] = perturbed[s] * small;
+    }
+    CHECK(energy.Evaluate(u, perturbed, context) >= after);
+  });
 }
 
 TEST_CASE("surface energies reject tetrahedral meshes with a clear error", "[energies]") {
