@@ -108,8 +108,8 @@ void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
 
 // The run config: --config file, then the shortcut flags, then --set KEY=VALUE.
 ConfigNode BuildRunConfig(const DeformArguments& args) {
-  ConfigNode config =
-      args.config_file.empty() ? ConfigNode() : ConfigNode::ParseFile(args.config_file);
+  ConfigNode config = args.config_file.empty() ? ConfigNode::Parse("", "<command line>")
+                                               : ConfigNode::ParseFile(args.config_file);
   auto set_type = [&](const char* table, const std::string& name) {
     if (!name.empty()) config.Set(fmt::format("{}.type", table), fmt::format("\"{}\"", name));
   };
