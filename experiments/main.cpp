@@ -11,6 +11,7 @@
 #include <new>
 
 #include "experiments/builtins.h"
+#include "experiments/component_factory.h"
 #include "experiments/deform.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
@@ -159,10 +160,7 @@ int Deform(const DeformArguments& args) {
 int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = BuildRunConfig(args);
-  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
-    config.Child(table);
-  }
-  config.RejectUnknownKeys();
+  ValidateRunConfig(config);
   const Scenario scenario = LoadScenario(args.scenario);
   auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
   Context context = Context::WithThreads(args.threads);

@@ -115,16 +115,17 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
   a_fc_.resize(num_free, static_cast<Index>(fixed_vertices_.size()));
   a_fc_.setFromTriplets(fc.begin(), fc.end());
   fixed_coupling_ = Eigen::MatrixXd::Zero(num_free, 3);
+  fixed_positions_.resize(fixed_vertices_.size(), 3);
 }
 
 void ConstrainedSystem::SetFixedPositions(const Positions& u) {
   HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(),
               num_vertices());
-  Eigen::MatrixXd fixed_positions(fixed_vertices_.size(), 3);
+  // Called before every global step when coarse targets follow the rotations: reuse the buffer.
   for (size_t k = 0; k < fixed_vertices_.size(); ++k) {
-    fixed_positions.row(k) = u.row(fixed_vertices_[k]);
+    fixed_positions_.row(k) = u.row(fixed_vertices_[k]);
   }
-  fixed_coupling_.noalias() = a_fc_ * fixed_positions;
+  fixed_coupling_.noalias() = a_fc_ * fixed_positions_;
 }
 
 void ConstrainedSystem::ReducedRhs(const Positions& b, Eigen::MatrixXd& rhs_f) const {

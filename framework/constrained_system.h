@@ -54,6 +54,7 @@ class ConstrainedSystem {
   SparseMatrix a_ff_;
   SparseMatrix a_fc_;               ///< #free × #fixed
   Eigen::MatrixXd fixed_coupling_;  ///< A_fc U_c
+  Eigen::MatrixXd fixed_positions_;  ///< U_c (scratch for SetFixedPositions)
   ConstraintReport report_;
 };
 

@@ -202,7 +202,6 @@ struct CholmodSolver::Impl {
         common.supernodal = CHOLMOD_SUPERNODAL;
         common.final_asis = 0;
         common.final_super = 0;
-        common.final_ll = 0;
         common.final_pack = 1;
         common.final_monotonic = 1;
         common.final_resymbol = 1;

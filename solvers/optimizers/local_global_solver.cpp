@@ -44,7 +44,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
               "{} positions for {} vertices", caller_state.positions.rows(),
               system_->num_vertices());
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
-  LevelState& state = state_;
+  LevelState state;
   state.positions = ordering_.ToNew(caller_state.positions);
   state.rotations = ordering_.ToNew(caller_state.rotations, per_element);
   const RunResult result = Iterate(state, start_with_global_step, options, diagonal, context,

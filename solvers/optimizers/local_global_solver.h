@@ -74,7 +74,6 @@ class LocalGlobalSolver {
   double precompute_seconds_ = 0.0;
   double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
-  LevelState state_;  ///< in the internal numbering
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;
