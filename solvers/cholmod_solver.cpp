@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "framework/error.h"
+#include "solvers/elimination_tree_solve.h"
 #include "solvers/solver_checks.h"
 
 namespace harap {
@@ -293,6 +294,21 @@ struct CholmodSolver::Impl {
                                  options.pivot_tolerance);
   }
 
+  // Checks a solution and measures its residual if asked to.
+  SolveSummary FinishSolve(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                           const Eigen::Ref<Eigen::MatrixXd>& x) {
+    SolveSummary summary;
+    if (!x.allFinite()) {
+      summary.success = false;
+      summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
+      return summary;
+    }
+    if (options.check_residual) {
+      summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy, b, x, residual);
+    }
+    return summary;
+  }
+
   Options options;
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
@@ -300,6 +316,10 @@ struct CholmodSolver::Impl {
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
+  // With parallel_solve and a simplicial factor: the factor's copy that Solve() uses (CHOLMOD's
+  // own factor is then freed).
+  EliminationTreeSolve tree_solve;
+  bool use_tree_solve = false;
   int rows = 0;
   bool factorized = false;
   FactorInfo info;
@@ -321,6 +341,10 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       node.GetChoice("ordering", ToName(kOrderingNames, options.ordering), Names(kOrderingNames),
                      "fill-reducing ordering; best = CHOLMOD's default (AMD, then METIS if AMD "
                      "fills a lot)"));
+  options.parallel_solve = node.Get(
+      "parallel_solve", options.parallel_solve,
+      "solve with a simplicial factor by substitution over independent subtrees of the "
+      "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
   node.RejectUnknownKeys();
   return options;
@@ -344,10 +368,11 @@ std::string_view CholmodSolver::ToString(Ordering ordering) {
   return ToName(kOrderingNames, ordering);
 }
 
-void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/) {
+void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
   Impl& impl = *impl_;
   impl.factorized = false;
+  impl.use_tree_solve = false;
   impl.FreeFactor();
   impl.info = FactorInfo{};
   impl.a_copy = SparseMatrix();
@@ -375,11 +400,26 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/)
   impl.info.nnz_l = impl.common.lnz;
   impl.info.flops = impl.common.fl;
   if (impl.options.check_residual) impl.a_copy = a;
+  if (impl.options.parallel_solve && !impl.factor->is_super && !impl.factor->is_ll) {
+    const cholmod_factor& f = *impl.factor;
+    LdltFactorView view;
+    view.n = static_cast<Index>(f.n);
+    view.column_start = static_cast<const int*>(f.p);
+    view.column_count = static_cast<const int*>(f.nz);
+    view.row = static_cast<const int*>(f.i);
+    view.value = static_cast<const double*>(f.x);
+    view.permutation = static_cast<const int*>(f.Perm);
+    impl.tree_solve.Setup(view, context.arena->max_concurrency());
+    impl.use_tree_solve = true;
+    impl.info.solve_subtrees = impl.tree_solve.num_subtrees();
+    impl.info.solve_sequential_fraction = impl.tree_solve.sequential_fraction();
+    impl.FreeFactor();  // Solve() needs only the copy.
+  }
   impl.factorized = true;
 }
 
 SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                  Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+                                  Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   Impl& impl = *impl_;
   HARAP_CHECK(impl.factorized, "Solve() needs a successful Factorize() first");
   HARAP_CHECK(b.rows() == impl.rows && x.rows() == impl.rows && x.cols() == b.cols(),
@@ -387,6 +427,10 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
               x.cols(), impl.rows);
   SolveSummary summary;
   if (impl.rows == 0 || b.cols() == 0) return summary;
+  if (impl.use_tree_solve) {
+    impl.tree_solve.Solve(b, x, context);
+    return impl.FinishSolve(b, x);
+  }
 
   // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
   cholmod_dense rhs{};
@@ -410,17 +454,7 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   x = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
       static_cast<const double*>(impl.x->x), b.rows(), b.cols(),
       Eigen::OuterStride<>(static_cast<Eigen::Index>(impl.x->d)));
-
-  if (!x.allFinite()) {
-    summary.success = false;
-    summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
-    return summary;
-  }
-  if (impl.options.check_residual) {
-    summary.relative_residual =
-        solver_checks::MaxRelativeResidual(impl.a_copy, b, x, impl.residual);
-  }
-  return summary;
+  return impl.FinishSolve(b, x);
 }
 
 }  // namespace harap

@@ -56,6 +56,11 @@ class CholmodSolver final : public LinearSolver {
     /// 0 rejects only non-positive pivots. Measured: |d| / A_kk ≤ 1.5e-12 for singular grid
     /// Laplacians up to 90K unknowns, ≥ 0.15 for pinned ones; SPD needs 0 < d_k ≤ A_kk.
     double pivot_tolerance = 1e-10;
+    /// Solve with a simplicial factor (modes auto and simplicial) by substitution over
+    /// independent subtrees of the elimination tree on all the context's threads
+    /// (EliminationTreeSolve), instead of CHOLMOD's sequential cholmod_solve2. Same result up to
+    /// rounding; see docs/benchmarks.md for the speed-up.
+    bool parallel_solve = true;
     /// Compute max over columns of ‖b − A x‖ / ‖b‖ in every Solve() (keeps a copy of A; slow).
     bool check_residual = false;
 
@@ -81,6 +86,10 @@ class CholmodSolver final : public LinearSolver {
     std::string_view ordering;  ///< The ordering used: "amd" or "metis" (either for kBest).
     double nnz_l = 0.0;         ///< Nonzeros of L without supernodal padding.
     double flops = 0.0;         ///< Flop count of the (simplicial LLᵀ) factorization.
+    /// With parallel_solve: the independent subtrees the solve runs on (0 = CHOLMOD's solve) and
+    /// the fraction of the factor's entries that stay sequential.
+    int solve_subtrees = 0;
+    double solve_sequential_fraction = 0.0;
   };
   const FactorInfo& factor_info() const;
 

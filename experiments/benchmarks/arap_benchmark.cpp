@@ -14,6 +14,7 @@
 #include "framework/constrained_system.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/scenario.h"
+#include "solvers/cholmod_solver.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
 namespace {
@@ -94,10 +95,12 @@ void RightHandSide(benchmark::State& state, std::string key) {
   SetCounters(state, f);
 }
 
-ConfigNode SolverOptions(const std::string& mode, const std::string& ordering) {
+ConfigNode SolverOptions(const std::string& mode, const std::string& ordering,
+                         bool parallel_solve = true) {
   ConfigNode options;
   options.Set("mode", fmt::format("\"{}\"", mode));
   options.Set("ordering", fmt::format("\"{}\"", ordering));
+  options.Set("parallel_solve", parallel_solve ? "true" : "false");
   return options;
 }
 
@@ -113,11 +116,19 @@ void Factorization(benchmark::State& state, std::string key, std::string mode,
   SetCounters(state, f);
 }
 
-void Solve(benchmark::State& state, std::string key, std::string mode, std::string ordering) {
+void Solve(benchmark::State& state, std::string key, std::string mode, std::string ordering,
+           bool parallel_solve) {
   Fixture& f = Get(key);
-  const ConfigNode options = SolverOptions(mode, ordering);
+  const ConfigNode options = SolverOptions(mode, ordering, parallel_solve);
   auto solver = f.registries.linear_solvers.Create("cholmod", options);
   solver->Factorize(f.system->reduced_matrix(), f.context);
+#ifdef HARAP_HAVE_CHOLMOD
+  if (const auto* cholmod = dynamic_cast<const CholmodSolver*>(solver.get())) {
+    state.counters["subtrees"] = cholmod->factor_info().solve_subtrees;
+    state.counters["sequential"] = cholmod->factor_info().solve_sequential_fraction;
+    state.counters["nnz_L"] = cholmod->factor_info().nnz_l;
+  }
+#endif
   Eigen::MatrixXd x = f.reduced_x;
   for (auto _ : state) {
     solver->Solve(f.reduced_rhs, x, f.context);
@@ -147,7 +158,12 @@ void RegisterAll(const std::string& key) {
     for (const char* mode : {"auto", "simplicial", "supernodal"}) {
       const std::string suffix = std::string(mode) + "_" + ordering;
       add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering));
-      add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering));
+      add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering), true);
+      if (std::string_view(mode) != "supernodal") {
+        // CHOLMOD's own sequential solve with the same factor, for the side-by-side ratio.
+        add("Solve3_" + suffix + "_sequential", Solve, key, std::string(mode),
+            std::string(ordering), false);
+      }
     }
   }
   add("FullIteration", FullIteration, key);
