@@ -73,6 +73,8 @@ RotationCoupling MakeVertexSiteCoupling(const SparseMatrix& pattern,
                       }
                     });
   coupling.site_coefficients = std::move(coefficient_by_entry);
+  coupling.layout_outer = pattern.outerIndexPtr();
+  coupling.layout_inner = pattern.innerIndexPtr();
   return coupling;
 }
 
@@ -82,15 +84,41 @@ double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix&
               "{} rotations for {} sites", rotations.size(), coupling.num_sites);
   HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
               coupling.num_vertices);
+  const auto fit = [&](Index s, const Eigen::Matrix3d& m) {
+    rotations[s] = coupling.planar ? ClosestPlanarRotation(m) : ClosestRotation(m, rotations[s]);
+    return rotations[s].cwiseProduct(m).sum();
+  };
   return context.Run([&] {
+    if (a.outerIndexPtr() == coupling.layout_outer && a.innerIndexPtr() == coupling.layout_inner &&
+        a.isCompressed() && a.outerSize() == coupling.num_sites &&
+        a.nonZeros() == static_cast<Eigen::Index>(coupling.site_vertices.size())) {
+      // One pass: M_s(u) and (A u)_s read the same entries, so tr(UᵀAU) = Σ_s u_s·(A u)_s comes
+      // almost for free (the local step is memory-bound).
+      const double* value = a.valuePtr();
+      const double energy_without_constant = tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
+          [&](const tbb::blocked_range<Index>& range, double sum) {
+            for (Index s = range.begin(); s != range.end(); ++s) {
+              Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+              Eigen::Vector3d au = Eigen::Vector3d::Zero();
+              for (Index p = coupling.site_offsets[s]; p < coupling.site_offsets[s + 1]; ++p) {
+                const Index j = coupling.site_vertices[p];
+                const Eigen::Vector3d uj(u(j, 0), u(j, 1), u(j, 2));
+                m.noalias() += uj * coupling.site_coefficients[p].transpose();
+                au += value[p] * uj;
+              }
+              sum += au.dot(Eigen::Vector3d(u(s, 0), u(s, 1), u(s, 2))) - 2.0 * fit(s, m);
+            }
+            return sum;
+          },
+          std::plus<double>());
+      return energy_without_constant + coupling.constant;
+    }
     const double alignment = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
         [&](const tbb::blocked_range<Index>& range, double sum) {
           for (Index s = range.begin(); s != range.end(); ++s) {
-            const Eigen::Matrix3d m = Covariance(coupling, u, s);
-            rotations[s] = coupling.planar ? ClosestPlanarRotation(m)
-                                           : ClosestRotation(m, rotations[s]);
-            sum += rotations[s].cwiseProduct(m).sum();
+            sum += fit(s, Covariance(coupling, u, s));
           }
           return sum;
         },

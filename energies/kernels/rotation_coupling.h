@@ -33,6 +33,13 @@ struct RotationCoupling {
   std::vector<Index> vertex_offsets;                 ///< num_vertices + 1
   std::vector<Index> vertex_sites;                   ///< s of each (s, j)
   std::vector<Eigen::Vector3d> vertex_coefficients;  ///< c_sj, vertex-major
+
+  /// Set by MakeVertexSiteCoupling: the index arrays of the pattern the by-site CSR copies. When
+  /// the local step is handed a matrix A with these very arrays (same layout), it reads A's
+  /// values alongside c_sj and gets tr(UᵀAU) from the same pass over memory instead of a second
+  /// sweep. A matrix rebuilt or reassigned afterwards has other arrays and takes the general path.
+  const Index* layout_outer = nullptr;
+  const Index* layout_inner = nullptr;
 };
 
 /// The coupling of a per-vertex energy whose c_sj live on the symmetric pattern `pattern` (the
