@@ -316,8 +316,7 @@ struct CholmodSolver::Impl {
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
-  // With parallel_solve and a simplicial factor: the factor's copy that Solve() uses (CHOLMOD's
-  // own factor is then freed).
+  // With parallel_solve and a simplicial factor: solves with `factor` in place.
   EliminationTreeSolve tree_solve;
   bool use_tree_solve = false;
   int rows = 0;
@@ -411,9 +410,8 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
     view.permutation = static_cast<const int*>(f.Perm);
     impl.tree_solve.Setup(view, context.arena->max_concurrency());
     impl.use_tree_solve = true;
-    impl.info.solve_subtrees = impl.tree_solve.num_subtrees();
-    impl.info.solve_sequential_fraction = impl.tree_solve.sequential_fraction();
-    impl.FreeFactor();  // Solve() needs only the copy.
+    impl.info.solve_blocks = impl.tree_solve.num_blocks();
+    impl.info.solve_critical_path = impl.tree_solve.critical_path_fraction();
   }
   impl.factorized = true;
 }

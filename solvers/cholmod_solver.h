@@ -86,10 +86,11 @@ class CholmodSolver final : public LinearSolver {
     std::string_view ordering;  ///< The ordering used: "amd" or "metis" (either for kBest).
     double nnz_l = 0.0;         ///< Nonzeros of L without supernodal padding.
     double flops = 0.0;         ///< Flop count of the (simplicial LLᵀ) factorization.
-    /// With parallel_solve: the independent subtrees the solve runs on (0 = CHOLMOD's solve) and
-    /// the fraction of the factor's entries that stay sequential.
-    int solve_subtrees = 0;
-    double solve_sequential_fraction = 0.0;
+    /// With parallel_solve: the blocks of the elimination tree the solve runs on (0 = CHOLMOD's
+    /// solve) and the heaviest root-to-leaf path of blocks as a fraction of the work (the part
+    /// that stays sequential).
+    int solve_blocks = 0;
+    double solve_critical_path = 0.0;
   };
   const FactorInfo& factor_info() const;
 

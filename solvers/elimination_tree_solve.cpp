@@ -15,15 +15,12 @@
 namespace harap {
 namespace {
 
-// Subtrees are split until none holds more than 1/max(kMinTasks, kTasksPerThread · threads) of
-// the work, so that dynamic scheduling balances the threads; splitting stops early once the
-// sequential top would exceed kMaxSequentialFraction of the work (a chain-like tree has little to
-// gain). The split, and so the summation order, is the same for every thread count up to
-// kMinTasks / kTasksPerThread: results are bit-identical for 1 to 8 threads.
+// Leaf subtrees are cut until none holds more than 1/max(kMinTasks, kTasksPerThread · threads)
+// of the work, so that dynamic scheduling balances the threads. The cut, and so the summation
+// order, is the same for every thread count up to kMinTasks / kTasksPerThread.
 constexpr double kMinTasks = 32.0;
 constexpr double kTasksPerThread = 4.0;
-constexpr double kMaxSequentialFraction = 0.25;
-// Below this many operations a subtree is not worth a task of its own.
+// Below this many factor entries a subtree is not worth a task of its own.
 constexpr double kMinTaskWork = 2000.0;
 // Largest block of right-hand-side columns solved in one sweep over the factor.
 constexpr int kMaxBlockColumns = 4;
@@ -32,70 +29,55 @@ constexpr int kMaxBlockColumns = 4;
 
 void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) {
   const Index n = factor.n;
-  n_ = n;
   HARAP_CHECK(n >= 0 && factor.column_start && factor.column_count && factor.row && factor.value,
               "incomplete factor view");
+  n_ = n;
+  factor_ = factor;
+  const int* start = factor.column_start;
+  const int* count = factor.column_count;
 
-  // Strictly lower L by column, pivots apart.
-  column_start_.assign(n + 1, 0);
+  // Pivots and the elimination tree (parent = first row below the diagonal).
   inverse_pivot_.resize(n);
-  for (Index j = 0; j < n; ++j) {
-    HARAP_CHECK(factor.column_count[j] >= 1, "column {} of the factor is empty", j);
-    column_start_[j + 1] = column_start_[j] + factor.column_count[j] - 1;
-  }
-  column_row_.resize(column_start_[n]);
-  column_value_.resize(column_start_[n]);
   std::vector<Index> parent(n, -1);
+  std::vector<double> subtree_work(n);
+  double total_work = 0.0;
   for (Index j = 0; j < n; ++j) {
-    const int source = factor.column_start[j];
-    const double pivot = factor.value[source];
-    HARAP_CHECK(factor.row[source] == j && pivot > 0.0 && std::isfinite(pivot),
+    HARAP_CHECK(count[j] >= 1, "column {} of the factor is empty", j);
+    const double pivot = factor.value[start[j]];
+    HARAP_CHECK(factor.row[start[j]] == j && pivot > 0.0 && std::isfinite(pivot),
                 "column {} of the factor does not start with a positive pivot", j);
     inverse_pivot_[j] = 1.0 / pivot;
     Index first_row = n;
-    for (int e = 1; e < factor.column_count[j]; ++e) {
-      const int i = factor.row[source + e];
+    for (int e = start[j] + 1; e < start[j] + count[j]; ++e) {
+      const int i = factor.row[e];
       HARAP_CHECK(i > j && i < n, "entry ({}, {}) of the factor is not below the diagonal", i, j);
-      column_row_[column_start_[j] + e - 1] = i;
-      column_value_[column_start_[j] + e - 1] = factor.value[source + e];
       first_row = std::min(first_row, i);
     }
-    parent[j] = first_row < n ? first_row : -1;  // the elimination tree
+    parent[j] = first_row < n ? first_row : -1;
+    subtree_work[j] = count[j];  // one pass each way over the column
+    total_work += count[j];
   }
   permutation_.assign(n, 0);
   for (Index k = 0; k < n; ++k) permutation_[k] = factor.permutation ? factor.permutation[k] : k;
 
-  // Rows of L: the forward pass's work per column j is its row, the backward pass's its column.
-  std::vector<int> row_count(n, 0);
-  for (int i : column_row_) ++row_count[i];
-  std::vector<double> subtree_work(n);
-  std::vector<Index> first_descendant(n);
-  std::vector<Index> subtree_size(n, 1);
-  for (Index j = 0; j < n; ++j) {
-    subtree_work[j] = 1.0 + row_count[j] + (column_start_[j + 1] - column_start_[j]);
-    first_descendant[j] = j;
-  }
-  const double total_work = [&] {
-    double sum = 0.0;
-    for (double w : subtree_work) sum += w;
-    return sum;
-  }();
+  std::vector<Index> first_descendant(n), subtree_size(n, 1), num_children(n, 0);
+  for (Index j = 0; j < n; ++j) first_descendant[j] = j;
   // Children have smaller indices than their parents, so one ascending sweep accumulates.
   for (Index j = 0; j < n; ++j) {
     if (parent[j] < 0) continue;
     subtree_work[parent[j]] += subtree_work[j];
     subtree_size[parent[j]] += subtree_size[j];
+    ++num_children[parent[j]];
     first_descendant[parent[j]] = std::min(first_descendant[parent[j]], first_descendant[j]);
   }
-  // A post-ordered tree numbers every subtree contiguously; without that, solve sequentially.
+  // A post-ordered tree numbers every subtree contiguously; without that, one sequential block.
   bool postordered = true;
   for (Index j = 0; j < n && postordered; ++j) {
     postordered = j - first_descendant[j] + 1 == subtree_size[j];
   }
 
-  // Split from the roots down, always the heaviest subtree, moving its root to the top.
-  std::vector<Index> child_head(n, -1), next_sibling(n, -1);
-  std::vector<Index> roots;
+  // Cut from the roots down, always the heaviest subtree, moving its root above the cut.
+  std::vector<Index> child_head(n, -1), next_sibling(n, -1), roots;
   for (Index j = n - 1; j >= 0; --j) {
     if (parent[j] < 0) {
       roots.push_back(j);
@@ -104,69 +86,123 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
       child_head[parent[j]] = j;
     }
   }
-  std::vector<unsigned char> in_top(n, postordered ? 0 : 1);
-  subtrees_.clear();
-  double top_work = 0.0;
+  std::vector<unsigned char> above_cut(n, 0);
+  std::vector<Index> leaf_roots;
   if (postordered) {
     using Entry = std::pair<double, Index>;  // (subtree work, root)
     std::priority_queue<Entry> heaviest;
     for (Index root : roots) heaviest.emplace(subtree_work[root], root);
     const double task_limit = std::max(
         kMinTaskWork, total_work / std::max(kMinTasks, kTasksPerThread * std::max(1, num_threads)));
-    while (!heaviest.empty() && heaviest.top().first > task_limit &&
-           top_work < kMaxSequentialFraction * total_work) {
+    while (!heaviest.empty() && heaviest.top().first > task_limit) {
       const Index root = heaviest.top().second;
       heaviest.pop();
-      in_top[root] = 1;
-      top_work += 1.0 + row_count[root] + (column_start_[root + 1] - column_start_[root]);
+      above_cut[root] = 1;
       for (Index child = child_head[root]; child >= 0; child = next_sibling[child]) {
         heaviest.emplace(subtree_work[child], child);
       }
     }
-    for (; !heaviest.empty(); heaviest.pop()) {
-      const Index root = heaviest.top().second;
-      subtrees_.push_back({first_descendant[root], root + 1});
-    }
-  }
-  top_.clear();
-  for (Index j = 0; j < n; ++j) {
-    if (in_top[j]) top_.push_back(j);
+    for (; !heaviest.empty(); heaviest.pop()) leaf_roots.push_back(heaviest.top().second);
   }
 
-  // Rows of L, entries in ascending column order; for top rows, subtree columns first.
-  row_start_.assign(n + 1, 0);
-  for (Index i = 0; i < n; ++i) row_start_[i + 1] = row_start_[i] + row_count[i];
-  row_column_.resize(column_row_.size());
-  row_value_.resize(column_row_.size());
-  std::vector<int> fill(row_start_.begin(), row_start_.end() - 1);
-  for (Index j = 0; j < n; ++j) {
-    for (int e = column_start_[j]; e < column_start_[j + 1]; ++e) {
-      const int slot = fill[column_row_[e]]++;
-      row_column_[slot] = j;
-      row_value_[slot] = column_value_[e];
+  // Blocks: leaf subtrees, and the chains above the cut; all contiguous column ranges.
+  blocks_.clear();
+  std::vector<int> block_of(n, -1);
+  const auto add_block = [&](Index begin, Index end) {
+    for (Index j = begin; j < end; ++j) block_of[j] = static_cast<int>(blocks_.size());
+    blocks_.push_back({begin, end});
+  };
+  if (!postordered) {
+    if (n > 0) add_block(0, n);
+  } else {
+    std::sort(leaf_roots.begin(), leaf_roots.end());
+    for (Index root : leaf_roots) add_block(first_descendant[root], root + 1);
+    for (Index j = 0; j < n; ++j) {
+      if (!above_cut[j]) continue;
+      // j continues the chain of its only child j − 1 (post-order puts it right after).
+      if (j > 0 && above_cut[j - 1] && parent[j - 1] == j && num_children[j] == 1) {
+        blocks_[block_of[j - 1]].end = j + 1;
+        block_of[j] = block_of[j - 1];
+      } else {
+        add_block(j, j + 1);
+      }
     }
   }
-  row_top_begin_.resize(top_.size());
-  double sequential_entries = 0.0;
-  for (size_t t = 0; t < top_.size(); ++t) {
-    const Index i = top_[t];
-    std::vector<std::pair<int, double>> entries;
-    entries.reserve(row_count[i]);
-    for (int e = row_start_[i]; e < row_start_[i + 1]; ++e) {
-      entries.emplace_back(row_column_[e], row_value_[e]);
+  // The block tree.
+  const int num_blocks = static_cast<int>(blocks_.size());
+  std::vector<int> block_parent(num_blocks, -1);
+  std::vector<std::vector<int>> children(num_blocks);
+  root_blocks_.clear();
+  for (int b = 0; b < num_blocks; ++b) {
+    const Index p = parent[blocks_[b].end - 1];
+    block_parent[b] = p < 0 ? -1 : block_of[p];
+    if (block_parent[b] < 0) {
+      root_blocks_.push_back(b);
+    } else {
+      children[block_parent[b]].push_back(b);
     }
-    const auto boundary = std::stable_partition(
-        entries.begin(), entries.end(), [&](const auto& entry) { return !in_top[entry.first]; });
-    row_top_begin_[t] = row_start_[i] + static_cast<int>(boundary - entries.begin());
-    for (size_t k = 0; k < entries.size(); ++k) {
-      row_column_[row_start_[i] + k] = entries[k].first;
-      row_value_[row_start_[i] + k] = entries[k].second;
-    }
-    sequential_entries += (row_start_[i + 1] - row_top_begin_[t]) +
-                          (column_start_[i + 1] - column_start_[i]);
   }
-  sequential_fraction_ =
-      column_row_.empty() ? 0.0 : sequential_entries / (2.0 * static_cast<double>(column_row_.size()));
+  block_children_.clear();
+  for (int b = 0; b < num_blocks; ++b) {
+    blocks_[b].children_begin = static_cast<int>(block_children_.size());
+    block_children_.insert(block_children_.end(), children[b].begin(), children[b].end());
+    blocks_[b].children_end = static_cast<int>(block_children_.size());
+  }
+  // Critical path, accumulated children first: a child block ends before its parent does.
+  std::vector<int> by_end(num_blocks);
+  for (int b = 0; b < num_blocks; ++b) by_end[b] = b;
+  std::sort(by_end.begin(), by_end.end(),
+            [&](int x, int y) { return blocks_[x].end < blocks_[y].end; });
+  std::vector<double> path(num_blocks, 0.0);
+  double critical = 0.0;
+  for (int b : by_end) {
+    for (Index j = blocks_[b].begin; j < blocks_[b].end; ++j) path[b] += count[j];
+    double heaviest_child = 0.0;
+    for (int c : children[b]) heaviest_child = std::max(heaviest_child, path[c]);
+    path[b] += heaviest_child;
+    critical = std::max(critical, path[b]);
+  }
+  critical_path_fraction_ = total_work > 0.0 ? critical / total_work : 0.0;
+
+  // Slots: a block's entries in rows above it get slots of the block's own.
+  row_.assign(factor.row, factor.row + (n > 0 ? start[n] : 0));
+  slot_row_.clear();
+  std::vector<int> slot_of_row(n, -1);
+  std::vector<Index> touched;
+  for (int b = 0; b < num_blocks; ++b) {
+    Block& block = blocks_[b];
+    block.slots_begin = static_cast<int>(slot_row_.size());
+    for (Index j = block.begin; j < block.end; ++j) {
+      for (int e = start[j] + 1; e < start[j] + count[j]; ++e) {
+        const int i = row_[e];
+        if (i < block.end) continue;  // inside the block
+        if (slot_of_row[i] < 0) {
+          slot_of_row[i] = static_cast<int>(slot_row_.size());
+          slot_row_.push_back(i);
+          touched.push_back(i);
+        }
+        row_[e] = n + slot_of_row[i];
+      }
+    }
+    block.slots_end = static_cast<int>(slot_row_.size());
+    for (Index i : touched) slot_of_row[i] = -1;
+    touched.clear();
+  }
+  // Each block gathers the slots aimed at its rows, sorted by (row, slot): a fixed order.
+  std::vector<std::vector<int>> gathered(num_blocks);
+  for (int slot = 0; slot < static_cast<int>(slot_row_.size()); ++slot) {
+    gathered[block_of[slot_row_[slot]]].push_back(slot);
+  }
+  gather_slot_.clear();
+  for (int b = 0; b < num_blocks; ++b) {
+    auto& list = gathered[b];
+    std::sort(list.begin(), list.end(), [&](int x, int y) {
+      return slot_row_[x] != slot_row_[y] ? slot_row_[x] < slot_row_[y] : x < y;
+    });
+    blocks_[b].gather_begin = static_cast<int>(gather_slot_.size());
+    gather_slot_.insert(gather_slot_.end(), list.begin(), list.end());
+    blocks_[b].gather_end = static_cast<int>(gather_slot_.size());
+  }
   work_.clear();
 }
 
@@ -175,64 +211,79 @@ void EliminationTreeSolve::SolveInPlace(int columns, const Context& context) {
   // kColumns > 0 fixes the block width at compile time; 0 reads it from `columns`.
   const int width = kColumns > 0 ? kColumns : columns;
   double* y = work_.data();
-  const auto forward_row = [&](Index i, int begin, int end) {
-    double acc[kMaxBlockColumns];
-    for (int c = 0; c < width; ++c) acc[c] = y[i * width + c];
-    for (int e = begin; e < end; ++e) {
-      const double l = row_value_[e];
-      const double* yj = y + static_cast<size_t>(row_column_[e]) * width;
-      for (int c = 0; c < width; ++c) acc[c] -= l * yj[c];
-    }
-    for (int c = 0; c < width; ++c) y[i * width + c] = acc[c];
-  };
-  const auto backward_column = [&](Index j) {
-    double acc[kMaxBlockColumns];
-    const double inverse_pivot = inverse_pivot_[j];
-    for (int c = 0; c < width; ++c) acc[c] = y[j * width + c] * inverse_pivot;
-    for (int e = column_start_[j]; e < column_start_[j + 1]; ++e) {
-      const double l = column_value_[e];
-      const double* yi = y + static_cast<size_t>(column_row_[e]) * width;
-      for (int c = 0; c < width; ++c) acc[c] -= l * yi[c];
-    }
-    for (int c = 0; c < width; ++c) y[j * width + c] = acc[c];
-  };
-  const tbb::blocked_range<size_t> subtree_range(0, subtrees_.size(), 1);
+  double* slots = y + static_cast<size_t>(n_) * width;
+  const int* start = factor_.column_start;
+  const int* count = factor_.column_count;
+  const double* value = factor_.value;
+  const int* row = row_.data();
 
-  context.Run([&] {
-    // L z = P b, inside the subtrees (each row reads only its own descendants).
-    tbb::parallel_for(
-        subtree_range,
-        [&](const tbb::blocked_range<size_t>& range) {
-          for (size_t s = range.begin(); s != range.end(); ++s) {
-            for (Index i = subtrees_[s].begin; i < subtrees_[s].end; ++i) {
-              forward_row(i, row_start_[i], row_start_[i + 1]);
-            }
-          }
-        },
-        tbb::simple_partitioner());
-    // Top rows: the parts of their sums over (finished) subtree columns are independent...
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, top_.size(), 64),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t t = range.begin(); t != range.end(); ++t) {
-                          const Index i = top_[t];
-                          forward_row(i, row_start_[i], row_top_begin_[t]);
-                        }
-                      });
-    // ...the top-to-top parts go in order.
-    for (size_t t = 0; t < top_.size(); ++t) {
-      const Index i = top_[t];
-      forward_row(i, row_top_begin_[t], row_start_[i + 1]);
+  const auto forward_block = [&](const Block& block) {
+    for (int k = block.gather_begin; k < block.gather_end; ++k) {
+      const int slot = gather_slot_[k];
+      double* yi = y + static_cast<size_t>(slot_row_[slot]) * width;
+      const double* from = slots + static_cast<size_t>(slot) * width;
+      for (int c = 0; c < width; ++c) yi[c] += from[c];
     }
-    // Lᵀ w = D⁻¹ z: top columns first (their ancestors are top columns), then the subtrees.
-    for (size_t t = top_.size(); t-- > 0;) backward_column(top_[t]);
+    for (Index j = block.begin; j < block.end; ++j) {
+      double yj[kMaxBlockColumns];
+      for (int c = 0; c < width; ++c) yj[c] = y[j * width + c];
+      for (int e = start[j] + 1; e < start[j] + count[j]; ++e) {
+        const double l = value[e];
+        double* yi = y + static_cast<size_t>(row[e]) * width;
+        for (int c = 0; c < width; ++c) yi[c] -= l * yj[c];
+      }
+    }
+  };
+  const auto backward_block = [&](const Block& block) {
+    for (int slot = block.slots_begin; slot < block.slots_end; ++slot) {
+      const double* from = y + static_cast<size_t>(slot_row_[slot]) * width;
+      double* to = slots + static_cast<size_t>(slot) * width;
+      for (int c = 0; c < width; ++c) to[c] = from[c];
+    }
+    for (Index j = block.end; j-- > block.begin;) {
+      double acc[kMaxBlockColumns];
+      const double inverse_pivot = inverse_pivot_[j];
+      for (int c = 0; c < width; ++c) acc[c] = y[j * width + c] * inverse_pivot;
+      for (int e = start[j] + 1; e < start[j] + count[j]; ++e) {
+        const double l = value[e];
+        const double* yi = y + static_cast<size_t>(row[e]) * width;
+        for (int c = 0; c < width; ++c) acc[c] -= l * yi[c];
+      }
+      for (int c = 0; c < width; ++c) y[j * width + c] = acc[c];
+    }
+  };
+  // Runs `visit` on each of `list`'s blocks in parallel.
+  const auto for_each_block = [&](const int* list, int size, auto&& visit) {
+    if (size == 1) {
+      visit(list[0]);
+      return;
+    }
     tbb::parallel_for(
-        subtree_range,
-        [&](const tbb::blocked_range<size_t>& range) {
-          for (size_t s = range.begin(); s != range.end(); ++s) {
-            for (Index j = subtrees_[s].end; j-- > subtrees_[s].begin;) backward_column(j);
-          }
+        tbb::blocked_range<int>(0, size, 1),
+        [&](const tbb::blocked_range<int>& range) {
+          for (int k = range.begin(); k != range.end(); ++k) visit(list[k]);
         },
         tbb::simple_partitioner());
+  };
+  // L z = P b bottom-up: children first, then the block. (Recursive lambdas take themselves as
+  // an argument: a std::function would allocate on every solve.)
+  const auto forward = [&](const auto& self, int b) -> void {
+    const Block& block = blocks_[b];
+    for_each_block(block_children_.data() + block.children_begin,
+                   block.children_end - block.children_begin, [&](int c) { self(self, c); });
+    forward_block(block);
+  };
+  // Lᵀ w = D⁻¹ z top-down: the block, then its children.
+  const auto backward = [&](const auto& self, int b) -> void {
+    const Block& block = blocks_[b];
+    backward_block(block);
+    for_each_block(block_children_.data() + block.children_begin,
+                   block.children_end - block.children_begin, [&](int c) { self(self, c); });
+  };
+  const int num_roots = static_cast<int>(root_blocks_.size());
+  context.Run([&] {
+    for_each_block(root_blocks_.data(), num_roots, [&](int b) { forward(forward, b); });
+    for_each_block(root_blocks_.data(), num_roots, [&](int b) { backward(backward, b); });
   });
 }
 
@@ -244,8 +295,12 @@ void EliminationTreeSolve::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   constexpr Index kGrain = 4096;
   for (Eigen::Index first = 0; first < b.cols(); first += kMaxBlockColumns) {
     const int width = static_cast<int>(std::min<Eigen::Index>(kMaxBlockColumns, b.cols() - first));
-    if (work_.size() < static_cast<size_t>(n_) * width) work_.resize(static_cast<size_t>(n_) * width);
+    const size_t rows_with_slots = static_cast<size_t>(n_) + slot_row_.size();
+    if (work_.size() < rows_with_slots * width) work_.resize(rows_with_slots * width);
     double* y = work_.data();
+    // The forward pass accumulates into the slots.
+    std::fill(work_.begin() + static_cast<std::ptrdiff_t>(n_) * width,
+              work_.begin() + static_cast<std::ptrdiff_t>(rows_with_slots) * width, 0.0);
     context.Run([&] {
       tbb::parallel_for(tbb::blocked_range<Index>(0, n_, kGrain),
                         [&](const tbb::blocked_range<Index>& range) {

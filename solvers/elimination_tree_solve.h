@@ -28,58 +28,67 @@ struct LdltFactorView {
 /// Why: the global step solves with the same factor hundreds of times, three columns at once, and
 /// a single-threaded triangular solve is the largest part of an iteration on large meshes
 /// (armadillo, 173K vertices: 31 ms of ~65 ms). Columns in disjoint subtrees of the elimination
-/// tree never touch each other's unknowns, so after a fill-reducing, post-ordered analysis
-/// (CHOLMOD's default) each subtree is a contiguous index range that one thread can solve alone;
-/// only the columns above the chosen subtrees (the top separators) remain sequential.
+/// tree never touch each other's unknowns. After a post-ordered analysis (CHOLMOD's default)
+/// every subtree is a contiguous column range, and so is every chain of the tree (a column whose
+/// parent has no other child). Setup() cuts the tree into blocks: leaf subtrees small enough to
+/// balance the threads, and the chains above them (the separators of a nested dissection). Blocks
+/// form a tree; sibling blocks run in parallel, recursively, so only the root chain is
+/// inherently sequential (each level of a nested dissection holds a similar share of the factor,
+/// so a fixed "sequential top" would cost a lot).
 ///
-///   forward  L z = P b:  row-oriented inside each subtree (a row reads only its descendants),
-///                        then the top rows: their sums over subtree columns in parallel, the
-///                        top-to-top part in order;
-///   backward Lᵀ w = D⁻¹ z: the top columns in reverse order (they read only top ancestors), then
-///                        each subtree in parallel;   x = Pᵀ w.
+/// Both passes are column-oriented and read the factor in place (no transposed copy). Updates of
+/// a block's columns to rows above the block go to slots owned by the block (Setup() renumbers
+/// those row indices once), so sibling blocks never write to the same place:
 ///
-/// The result does not depend on the scheduling, nor on the thread count up to 8 threads: every
-/// entry is summed by one thread in an order fixed by the factor. Setup() copies the factor (a transposed copy for the forward pass);
-/// Solve() is allocation-free after its first call with a given column count.
+///   forward  L z = P b:  a block, after its children: its rows += the slots aimed at them (fixed
+///                        order), then its columns in ascending order;
+///   backward Lᵀ w = D⁻¹ z: a block, before its children: its slots := the finished rows they
+///                        stand for, then its columns in descending order;   x = Pᵀ w.
+///
+/// The result does not depend on the scheduling, nor on the thread count up to 8 threads (the cut
+/// is the same): every entry is summed in an order fixed by the factor. Solve() is
+/// allocation-free after its first call with a given column count.
 class EliminationTreeSolve {
  public:
-  /// Copies the factor and splits its elimination tree into independent subtrees for
-  /// `num_threads` threads. Throws InternalError if the factor is not a valid unit-lower LDLᵀ
-  /// with positive pivots.
+  /// Cuts the factor's elimination tree into blocks for `num_threads` threads and renumbers the
+  /// rows the blocks update outside themselves. The factor's values and offsets are used in place
+  /// and must outlive this object (or the next Setup()). Throws InternalError if the factor is not
+  /// a unit-lower LDLᵀ with positive pivots and the diagonal first in each column.
   void Setup(const LdltFactorView& factor, int num_threads);
 
   void Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
              const Context& context);
 
   Index rows() const { return n_; }
-  /// Fraction of the factor's entries solved sequentially (top of the tree), for benchmarks.
-  double sequential_fraction() const { return sequential_fraction_; }
-  int num_subtrees() const { return static_cast<int>(subtrees_.size()); }
+  int num_blocks() const { return static_cast<int>(blocks_.size()); }
+  /// The heaviest root-to-leaf path of the block tree as a fraction of all work: the part no
+  /// number of threads can shorten (for benchmarks and tests).
+  double critical_path_fraction() const { return critical_path_fraction_; }
 
  private:
-  struct ColumnRange {
-    Index begin = 0;  ///< first column of the subtree (its first descendant)
-    Index end = 0;    ///< one past its root
+  struct Block {
+    Index begin = 0, end = 0;        ///< its columns
+    int children_begin = 0, children_end = 0;  ///< into block_children_
+    int slots_begin = 0, slots_end = 0;        ///< its slots (they stand for rows ≥ end)
+    int gather_begin = 0, gather_end = 0;      ///< into gather_slot_: slots aimed at its rows
   };
 
   template <int kColumns>
   void SolveInPlace(int columns, const Context& context);
 
   Index n_ = 0;
-  // Strictly lower L, by column (backward pass) and by row (forward pass).
-  std::vector<int> column_start_, column_row_;
-  std::vector<double> column_value_;
-  std::vector<int> row_start_, row_column_;
-  std::vector<double> row_value_;
-  // For top rows, row entries from subtree columns come first and end at row_top_begin_[k] (k =
-  // position of the row in top_); the rest are top columns.
-  std::vector<int> row_top_begin_;
+  LdltFactorView factor_;
+  // Row index of each factor entry (same positions as factor_.value); entries in rows outside
+  // their column's block hold n_ + the block's slot for that row.
+  std::vector<int> row_;
   std::vector<double> inverse_pivot_;
   std::vector<int> permutation_;
-  std::vector<ColumnRange> subtrees_;  ///< independent, largest first
-  std::vector<Index> top_;             ///< columns outside all subtrees, ascending
-  double sequential_fraction_ = 0.0;
-  // Solve workspace: the permuted right-hand side, row-major (the columns of a row together).
+  std::vector<Block> blocks_;
+  std::vector<int> block_children_, root_blocks_;
+  std::vector<int> slot_row_;     ///< the row each slot stands for
+  std::vector<int> gather_slot_;  ///< per block, sorted by (row, slot)
+  double critical_path_fraction_ = 0.0;
+  // Solve workspace: the permuted right-hand side (n_ rows) and the slots, row-major.
   std::vector<double> work_;
 };
 

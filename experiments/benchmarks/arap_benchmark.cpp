@@ -105,9 +105,9 @@ ConfigNode SolverOptions(const std::string& mode, const std::string& ordering,
 }
 
 void Factorization(benchmark::State& state, std::string key, std::string mode,
-                   std::string ordering) {
+                   std::string ordering, bool parallel_solve) {
   Fixture& f = Get(key);
-  const ConfigNode options = SolverOptions(mode, ordering);
+  const ConfigNode options = SolverOptions(mode, ordering, parallel_solve);
   for (auto _ : state) {
     auto solver = f.registries.linear_solvers.Create("cholmod", options);
     solver->Factorize(f.system->reduced_matrix(), f.context);
@@ -124,8 +124,8 @@ void Solve(benchmark::State& state, std::string key, std::string mode, std::stri
   solver->Factorize(f.system->reduced_matrix(), f.context);
 #ifdef HARAP_HAVE_CHOLMOD
   if (const auto* cholmod = dynamic_cast<const CholmodSolver*>(solver.get())) {
-    state.counters["subtrees"] = cholmod->factor_info().solve_subtrees;
-    state.counters["sequential"] = cholmod->factor_info().solve_sequential_fraction;
+    state.counters["blocks"] = cholmod->factor_info().solve_blocks;
+    state.counters["critical_path"] = cholmod->factor_info().solve_critical_path;
     state.counters["nnz_L"] = cholmod->factor_info().nnz_l;
   }
 #endif
@@ -157,10 +157,13 @@ void RegisterAll(const std::string& key) {
   for (const char* ordering : {"amd", "metis"}) {
     for (const char* mode : {"auto", "simplicial", "supernodal"}) {
       const std::string suffix = std::string(mode) + "_" + ordering;
-      add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering));
+      add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering),
+          true);
       add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering), true);
       if (std::string_view(mode) != "supernodal") {
         // CHOLMOD's own sequential solve with the same factor, for the side-by-side ratio.
+        add("Factorization_" + suffix + "_sequential", Factorization, key, std::string(mode),
+            std::string(ordering), false);
         add("Solve3_" + suffix + "_sequential", Solve, key, std::string(mode),
             std::string(ordering), false);
       }

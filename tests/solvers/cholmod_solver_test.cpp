@@ -141,8 +141,8 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
             const auto& info = dynamic_cast<const CholmodSolver&>(*parallel).factor_info();
             if (name != "path") {
               // The grid and the forest must really be split (else this test proves nothing).
-              CHECK(info.solve_subtrees >= 4);
-              CHECK(info.solve_sequential_fraction < 0.3);
+              CHECK(info.solve_blocks >= 8);
+              CHECK(info.solve_critical_path < 0.5);
             }
 #endif
             Eigen::MatrixXd x = Eigen::MatrixXd::Constant(a->rows(), columns, 7.0);
