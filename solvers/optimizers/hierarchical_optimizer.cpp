@@ -8,6 +8,7 @@
 #include "framework/error.h"
 #include "solvers/optimizers/classic_optimizer.h"
 #include "solvers/optimizers/coarse_constraints.h"
+#include "solvers/optimizers/level_setup_pipeline.h"
 
 namespace harap {
 
@@ -29,6 +30,10 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(const 
   options.update_constraints =
       node.Get("update_constraints", options.update_constraints,
                "re-evaluate coarse constraint targets with the current rotations (Fig. 16)");
+  options.overlap_setup =
+      node.Get("overlap_setup", options.overlap_setup,
+               "set up (precompute, factor) finer levels on another thread while coarser levels "
+               "are solved; phase times then overlap");
   node.RejectUnknownKeys();
   if (options.level_step < 1) {
     throw ConfigError(fmt::format("{}: level_step must be >= 1, got {}", node.Where("level_step"),
@@ -68,8 +73,11 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   std::vector<LevelConstraints> internal_constraints(hierarchy.num_levels());  // solver numbering
   std::vector<std::unique_ptr<LocalGlobalSolver>> solvers(hierarchy.num_levels());
   std::vector<double> level_seconds(hierarchy.num_levels(), 0.0);
-  for (int l = coarsest; l >= 0; --l) {
-    if (!solved[l]) continue;
+  std::vector<double> precompute_seconds(hierarchy.num_levels(), 0.0);
+  std::vector<double> constrain_seconds(hierarchy.num_levels(), 0.0);
+  // Levels may be set up from two threads at once (see the pipeline below).
+  const SerializedFactory serialized_factory(factory);
+  const auto setup_level = [&](int l) {
     Stopwatch level_clock;
     const Mesh& level_mesh = hierarchy.levels[l].mesh;
     if (l == 0) {
@@ -77,8 +85,8 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     } else {
       constraints[l] = MapConstraints(hierarchy, l, problem.constraints);
     }
-    solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices, factory,
-                                                     l, context);
+    solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices,
+                                                     serialized_factory, l, context);
     if (l > 0 && solvers[l]->energy().rotation_site() == RotationSite::kElement) {
       auto& incident = constraints[l].incident_elements;
       incident.assign(constraints[l].vertices.size(), {});
@@ -103,14 +111,33 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
         for (Index& e : elements) e = ordering.new_element[e];
       }
     }
-    result.timings.precompute += solvers[l]->precompute_seconds();
-    result.timings.constrain += solvers[l]->constrain_seconds();
+    precompute_seconds[l] = solvers[l]->precompute_seconds();
+    constrain_seconds[l] = solvers[l]->constrain_seconds();
     level_seconds[l] = level_clock.Seconds();
+  };
+  // With overlap_setup, one thread sets the levels up from coarse to fine while the caller's
+  // thread solves each level as soon as it is ready: the finer levels' precomputation and
+  // factorization (mostly sequential: orderings, symbolic analysis) hide the coarse solves.
+  std::vector<int> solved_levels;
+  for (int l = coarsest; l >= 0; --l) {
+    if (solved[l]) solved_levels.push_back(l);
   }
+  LevelSetupPipeline setup(solved_levels, setup_level,
+                           options_.overlap_setup && context.arena->max_concurrency() >= 2,
+                           context);
 
   // S: solve from the coarsest level down.
   Stopwatch solve_clock;
   const double diagonal = BoundingBoxDiagonal(mesh);
+  // Time spent waiting for a level's setup belongs to P and C, not to S.
+  double waiting_seconds = 0.0;
+  const auto wait_for = [&](int l) {
+    Stopwatch wait_clock;
+    setup.WaitFor(l);
+    waiting_seconds += wait_clock.Seconds();
+  };
+  wait_for(coarsest);
+  const RotationSite site = solvers[coarsest]->energy().rotation_site();
   LevelState state;
   bool start_with_global_step = false;
   for (int l = coarsest; l >= 0; --l) {
@@ -118,7 +145,6 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     if (l < coarsest) {
       LevelState coarse_state = std::move(state);
       state = LevelState();
-      const RotationSite site = solvers[0]->energy().rotation_site();
       upsampler->Upsample(level, hierarchy.levels[l + 1], site, coarse_state, state, context);
       start_with_global_step = upsampler->output() == UpsampleOutput::kRotations;
     } else {
@@ -126,9 +152,9 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     }
     if (!solved[l]) continue;
 
+    wait_for(l);
     Stopwatch level_clock;
     LocalGlobalSolver& solver = *solvers[l];
-    const RotationSite site = solver.energy().rotation_site();
     LocalGlobalOptions options = options_.iterations;
     if (l > 0 && options_.coarse_tolerance >= 0.0) options.tolerance = options_.coarse_tolerance;
     if (l == 0 && options_.coarse_approximation && coarsest > 0) options.max_iterations = 1;
@@ -143,12 +169,14 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
       PlaceConstrainedVertices(constraints[l], site, have_rotations ? &state.rotations : nullptr,
                                state.positions);
       if (options_.update_constraints) {
-        update = [&, l, site](const Rotations& rotations, Positions& positions) {
+        update = [&, l](const Rotations& rotations, Positions& positions) {
           PlaceConstrainedVertices(internal_constraints[l], site, &rotations, positions);
         };
       }
     }
-    const auto run = solver.Run(state, start_with_global_step, options, diagonal, context, update);
+    const auto run = setup.Isolated(context, [&] {
+      return solver.Run(state, start_with_global_step, options, diagonal, context, update);
+    });
     level_seconds[l] += level_clock.Seconds();
     result.total_iterations += run.iterations;
     result.levels.push_back(LevelResult{l, level.mesh.num_vertices(), level.mesh.num_elements(),
@@ -169,6 +197,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
           upsampler->Upsample(hierarchy.levels[f], hierarchy.levels[f + 1], site, coarse_state,
                               state, context);
         }
+        wait_for(0);
         result.energy = solvers[0]->energy().FitRotations(state.positions, state.rotations,
                                                           context);
       }
@@ -176,7 +205,12 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     }
     if (l > 0) solvers[l].reset();  // the level's factor is no longer needed
   }
-  result.timings.solve = solve_clock.Seconds();
+  for (int l : solved_levels) wait_for(l);
+  for (int l : solved_levels) {
+    result.timings.precompute += precompute_seconds[l];
+    result.timings.constrain += constrain_seconds[l];
+  }
+  result.timings.solve = solve_clock.Seconds() - waiting_seconds;
   std::reverse(result.levels.begin(), result.levels.end());
 
   result.positions = std::move(state.positions);

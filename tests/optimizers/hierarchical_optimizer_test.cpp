@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <map>
+#include <string>
 
 #include "solvers/optimizers/coarse_constraints.h"
 #include "tests/support/test_factory.h"
@@ -49,6 +51,50 @@ TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", 
   CHECK(a.iterations == b.iterations);
   CHECK(a.energy == b.energy);
   CHECK((a.positions - b.positions).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("hierarchical: setting finer levels up in the background changes no result",
+          "[optimizers]") {
+  BentTube tube;
+  const auto run = [&](bool overlap, int threads) {
+    TestSetup setup(std::string("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n"
+                                "overlap_setup = ") +
+                    (overlap ? "true" : "false") + "\n[hierarchy]\nmin_vertices = 200\n");
+    return setup.MakeOptimizer()->Optimize(tube.problem, setup.factory,
+                                           Context::WithThreads(threads));
+  };
+  const OptimizeResult reference = run(false, 2);
+  REQUIRE(reference.levels.size() >= 3);
+  for (const int threads : {1, 2, 4}) {
+    DYNAMIC_SECTION(threads << " threads") {
+      const OptimizeResult overlapped = run(true, threads);
+      REQUIRE(overlapped.levels.size() == reference.levels.size());
+      for (size_t l = 0; l < reference.levels.size(); ++l) {
+        CHECK(overlapped.levels[l].iterations == reference.levels[l].iterations);
+        CHECK(overlapped.levels[l].energy == reference.levels[l].energy);
+      }
+      CHECK(overlapped.energy == reference.energy);
+      CHECK((overlapped.positions - reference.positions).cwiseAbs().maxCoeff() == 0.0);
+      CHECK(overlapped.timings.constrain > 0.0);
+    }
+  }
+}
+
+TEST_CASE("hierarchical: a stop requested on a coarse level still finishes the finest level",
+          "[optimizers]") {
+  BentTube tube;
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmin_vertices = 200\n");
+  Context context = Context::WithThreads(2);
+  context.iteration_callback = [](const IterationSummary& summary) {
+    return summary.level > 0 && summary.iteration == 2 ? CallbackAction::kStop
+                                                       : CallbackAction::kContinue;
+  };
+  const OptimizeResult result = setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+  CHECK(result.stopped_by_callback);
+  CHECK(result.positions.rows() == tube.mesh.num_vertices());
+  CHECK(std::isfinite(result.energy));
+  CHECK(result.constraints.constrained_vertices == 80);
 }
 
 TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints exact, levels "

@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/optimizers/level_setup_pipeline.h"
+
+#include <condition_variable>
+#include <exception>
+#include <map>
+#include <mutex>
+
+#include "framework/error.h"
+
+namespace harap {
+
+struct SerializedFactory::Lock {
+  std::mutex mutex;
+};
+
+SerializedFactory::SerializedFactory(const ComponentFactory& factory)
+    : factory_(factory), lock_(std::make_unique<Lock>()) {}
+
+SerializedFactory::~SerializedFactory() = default;
+
+std::unique_ptr<Energy> SerializedFactory::MakeEnergy() const {
+  const std::lock_guard guard(lock_->mutex);
+  return factory_.MakeEnergy();
+}
+
+std::unique_ptr<LinearSolver> SerializedFactory::MakeLinearSolver(int level,
+                                                                  Index num_unknowns) const {
+  const std::lock_guard guard(lock_->mutex);
+  return factory_.MakeLinearSolver(level, num_unknowns);
+}
+
+std::unique_ptr<Hierarchy> SerializedFactory::MakeHierarchy() const {
+  const std::lock_guard guard(lock_->mutex);
+  return factory_.MakeHierarchy();
+}
+
+std::unique_ptr<Upsampler> SerializedFactory::MakeUpsampler() const {
+  const std::lock_guard guard(lock_->mutex);
+  return factory_.MakeUpsampler();
+}
+
+// Shared with the background task, which may start after the pipeline is gone (then it finds
+// `cancelled` and returns without touching anything else).
+struct LevelSetupPipeline::State {
+  enum class Phase { kPending, kRunning, kDone };
+  struct Level {
+    Phase phase = Phase::kPending;
+    std::exception_ptr error;
+  };
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::map<int, Level> levels;
+  std::function<void(int)> setup;
+  bool cancelled = false;
+  bool background_running = false;
+
+  // Claims `level` if nobody has; then runs it. Called with `lock` held; returns with it held.
+  bool TryRun(int level, std::unique_lock<std::mutex>& lock) {
+    Level& entry = levels.at(level);
+    if (entry.phase != Phase::kPending) return false;
+    entry.phase = Phase::kRunning;
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      setup(level);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    lock.lock();
+    entry.phase = Phase::kDone;
+    entry.error = error;
+    changed.notify_all();
+    return true;
+  }
+};
+
+LevelSetupPipeline::LevelSetupPipeline(std::vector<int> levels, std::function<void(int)> setup,
+                                       bool overlap, const Context& context)
+    : state_(std::make_shared<State>()), levels_(std::move(levels)) {
+  for (int level : levels_) state_->levels[level];
+  state_->setup = std::move(setup);
+  if (!overlap) return;
+  std::shared_ptr<State> state = state_;
+  std::vector<int> order = levels_;
+  context.arena->enqueue([state, order] {
+    std::unique_lock lock(state->mutex);
+    if (state->cancelled) return;
+    state->background_running = true;
+    for (int level : order) {
+      if (state->cancelled) break;
+      state->TryRun(level, lock);
+    }
+    state->background_running = false;
+    state->changed.notify_all();
+  });
+}
+
+LevelSetupPipeline::~LevelSetupPipeline() {
+  std::unique_lock lock(state_->mutex);
+  state_->cancelled = true;
+  state_->changed.wait(lock, [&] { return !state_->background_running; });
+}
+
+void LevelSetupPipeline::WaitFor(int level) {
+  std::unique_lock lock(state_->mutex);
+  HARAP_CHECK(state_->levels.count(level) == 1, "level {} is not set up by this pipeline", level);
+  state_->TryRun(level, lock);
+  State::Level& entry = state_->levels.at(level);
+  state_->changed.wait(lock, [&] { return entry.phase == State::Phase::kDone; });
+  if (entry.error) std::rethrow_exception(entry.error);
+}
+
+}  // namespace harap

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "framework/context.h"
+#include "framework/optimizer.h"
+
+namespace harap {
+
+/// A ComponentFactory that forwards to another one, one call at a time: creating a component
+/// reads config tables that record which keys were used, so creations from two threads take
+/// turns.
+class SerializedFactory final : public ComponentFactory {
+ public:
+  explicit SerializedFactory(const ComponentFactory& factory);
+  ~SerializedFactory() override;
+  std::unique_ptr<Energy> MakeEnergy() const override;
+  std::unique_ptr<LinearSolver> MakeLinearSolver(int level, Index num_unknowns) const override;
+  std::unique_ptr<Hierarchy> MakeHierarchy() const override;
+  std::unique_ptr<Upsampler> MakeUpsampler() const override;
+
+ private:
+  struct Lock;
+  const ComponentFactory& factory_;
+  std::unique_ptr<Lock> lock_;
+};
+
+/// Sets up the levels of a hierarchy (precomputation and factorization, via `setup(level)`) while
+/// the caller solves the levels that are ready: the hierarchical optimizer's P and C phases of
+/// finer levels overlap the S phase of coarser ones.
+///
+/// With `overlap`, a task in the context's arena sets the levels up from coarse to fine; a caller
+/// that needs a level nobody has started yet sets it up itself (so nothing waits for a thread that
+/// may never come, e.g. under a global TBB thread limit). Without it, WaitFor() sets levels up on
+/// demand, in the caller's thread. Levels must be independent of each other's setup.
+class LevelSetupPipeline {
+ public:
+  /// `levels` in the order the background task should take them.
+  LevelSetupPipeline(std::vector<int> levels, std::function<void(int)> setup, bool overlap,
+                     const Context& context);
+  /// Stops the background task after its current level and waits for it.
+  ~LevelSetupPipeline();
+  LevelSetupPipeline(const LevelSetupPipeline&) = delete;
+  LevelSetupPipeline& operator=(const LevelSetupPipeline&) = delete;
+
+  /// Returns once `level` is set up; rethrows what its setup threw.
+  void WaitFor(int level);
+
+  /// Runs `f` in the context's arena such that, while it waits for its own parallel work, the
+  /// caller's thread never picks up the background setup (which would stall the solve).
+  template <class F>
+  decltype(auto) Isolated(const Context& context, F&& f) {
+    return context.Run([&]() -> decltype(auto) { return tbb::this_task_arena::isolate(f); });
+  }
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+  std::vector<int> levels_;
+};
+
+}  // namespace harap
