@@ -520,9 +520,9 @@ Shard ParseShard(std::string_view text) {
 
 std::string TemplateScenarioToml(const ExperimentScenario& scenario, const double extent[3]) {
   const HandleTemplate& t = scenario.handles;
+  auto by_extent = [&](int a, int b) { return extent[a] < extent[b]; };
   auto longest_of = [&](std::vector<int> axes) {
-    return *std::max_element(axes.begin(), axes.end(),
-                             [&](int a, int b) { return extent[a] < extent[b]; });
+    return *std::max_element(axes.begin(), axes.end(), by_extent);
   };
   const int axis = t.axis == "longest" ? longest_of({0, 1, 2}) : t.axis[0] - 'x';
   int bend = 0;
@@ -531,7 +531,9 @@ std::string TemplateScenarioToml(const ExperimentScenario& scenario, const doubl
     for (int d = 0; d < 3; ++d) {
       if (d != axis) others.push_back(d);
     }
-    bend = longest_of(others);
+    // About the shorter of the other two axes: the moved end swings in the plane of the two
+    // longest extents (an in-plane bend of a flat shape, visible from its thin side).
+    bend = *std::min_element(others.begin(), others.end(), by_extent);
   } else {
     bend = t.bend_axis[0] - 'x';
   }

@@ -19,7 +19,7 @@ struct HandleTemplate {
   double fixed = 0.1;               ///< fraction of the extent held fixed, from the minimum
   double moved = 0.1;               ///< fraction of the extent moved, up to the maximum
   double degrees = 45.0;            ///< rotation of the moved part
-  std::string bend_axis = "auto";   ///< "x", "y", "z" or "auto": the longer of the other two
+  std::string bend_axis = "auto";   ///< "x", "y", "z" or "auto": the shorter of the other two
   double translate[3] = {0.0, 0.0, 0.0};  ///< shift of the moved part, in box diagonals
 };
 

@@ -258,6 +258,7 @@ int Report(const ReportArguments& args) {
     const char* env = std::getenv("HARAP_PYTHON");
     python = env ? env : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
   }
+  std::fflush(stdout);
   std::vector<std::string> command = {python, script, args.dir};
   if (args.no_render) command.push_back("--no-render");
   const ProcessResult result = RunProcess(command, {});
