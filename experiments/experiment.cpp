@@ -235,7 +235,8 @@ class ExperimentParser {
     }
   }
 
-  // Leaves of `table` as (dotted key, node), depth first in file order.
+  // Leaves of `table` as (dotted key, node), in the order written in the file (toml++ iterates
+  // tables in key order).
   static void Flatten(const toml::table& table, const std::string& prefix,
                       std::vector<std::pair<std::string, const toml::node*>>& out) {
     for (const auto& [key, value] : table) {
@@ -247,9 +248,22 @@ class ExperimentParser {
         out.emplace_back(dotted, &value);
       }
     }
+    if (!prefix.empty()) return;
+    std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+      const auto& x = a.second->source().begin;
+      const auto& y = b.second->source().begin;
+      return std::pair(x.line, x.column) < std::pair(y.line, y.column);
+    });
   }
 
   static std::string Literal(const toml::node& node) {
+    // Floating-point numbers in their shortest form (1e-06, not 9.9999999999999995e-07), kept
+    // floating-point for TOML (2.0, not 2).
+    if (const auto* floating = node.as_floating_point()) {
+      std::string text = fmt::format("{}", floating->get());
+      if (text.find_first_of(".eEn") == std::string::npos) text += ".0";
+      return text;
+    }
     std::ostringstream text;
     node.visit([&](const auto& value) { text << value; });
     return text.str();

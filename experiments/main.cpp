@@ -204,6 +204,7 @@ struct RunArguments {
   std::string shard = "0/1";
   int jobs = 1;
   int threads = 0;
+  std::vector<std::string> filter;
   bool retry_failed = false;
   bool quiet = false;
 };
@@ -220,6 +221,7 @@ int RunSweep(const RunArguments& args) {
   options.threads = args.threads;
   options.executable = std::filesystem::read_symlink("/proc/self/exe");
   options.retry_failed = args.retry_failed;
+  options.scenario_filter = args.filter;
   options.quiet = args.quiet;
   const SweepSummary summary = RunExperiment(experiment, options);
   if (!args.quiet) {
@@ -322,6 +324,8 @@ int main(int argc, char** argv) {
   run->add_option("--jobs,-j", run_args.jobs, "runs at once, each its own process (default 1)");
   run->add_option("--threads", run_args.threads,
                   "threads per run (default: [run] threads, else cores / jobs)");
+  run->add_option("--filter", run_args.filter,
+                  "only scenarios whose name matches this shell pattern (repeatable)");
   run->add_flag("--retry-failed", run_args.retry_failed, "run failed runs again");
   run->add_flag("--quiet,-q", run_args.quiet, "no progress output");
 

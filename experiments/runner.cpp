@@ -13,8 +13,10 @@
 //     may share DIR (one file system) or be copied together afterwards.
 #include "experiments/runner.h"
 
+#include <fnmatch.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -323,7 +325,7 @@ class Sweep {
     summary.planned = static_cast<int>(experiment_.runs.size());
     std::vector<const ExperimentRun*> pending;
     for (const ExperimentRun& run : experiment_.runs) {
-      if (!options_.shard.Contains(run.index)) continue;
+      if (!options_.shard.Contains(run.index) || !Selected(run)) continue;
       ++summary.in_shard;
       const fs::path report = dir_ / "runs" / (run.id + ".json");
       if (fs::exists(report)) {
@@ -374,6 +376,14 @@ class Sweep {
   }
 
  private:
+  bool Selected(const ExperimentRun& run) const {
+    const std::string& name = experiment_.scenarios[run.scenario].name;
+    const auto& patterns = options_.scenario_filter;
+    return patterns.empty() || std::any_of(patterns.begin(), patterns.end(), [&](const auto& p) {
+             return fnmatch(p.c_str(), name.c_str(), 0) == 0;
+           });
+  }
+
   void WriteCsv() { WriteFileAtomically(csv_file_, CsvText(experiment_.grid_keys, rows_)); }
 
   // The scenario file of a run (generated from the template on first use).

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "experiments/experiment.h"
 
@@ -18,6 +19,8 @@ struct RunnerOptions {
   int threads = 0;
   /// The harap executable each run is started with (`harap deform ...`).
   std::filesystem::path executable;
+  /// Only scenarios whose name matches one of these shell patterns (all when empty).
+  std::vector<std::string> scenario_filter;
   /// Also re-run runs recorded as failed (finished runs are always skipped).
   bool retry_failed = false;
   /// Progress: a bar on a terminal, else one line per finished run; nothing when quiet.
@@ -26,7 +29,7 @@ struct RunnerOptions {
 
 struct SweepSummary {
   int planned = 0;    ///< runs in the whole plan
-  int in_shard = 0;   ///< runs of this shard
+  int in_shard = 0;   ///< runs of this shard (and of the scenarios --filter selects)
   int skipped = 0;    ///< already finished (resume)
   int succeeded = 0;  ///< run now, successfully
   int failed = 0;     ///< run now, failed (error recorded)
