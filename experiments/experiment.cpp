@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <charconv>
 #include <fstream>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -412,7 +411,7 @@ class ExperimentParser {
 
     // Expand: scenarios × variants × grid (first grid key slowest).
     const Registries registries = MakeBuiltinRegistries();
-    std::map<std::string, std::string> validated;  // config text -> "" (ok)
+    std::set<std::string> validated;  // run configs already checked
     size_t combinations = 1;
     for (const auto& axis : axes) combinations *= axis.second.size();
     std::set<std::string> ids;
@@ -446,10 +445,7 @@ class ExperimentParser {
           ConfigNode config = ConfigNode::Parse(base_text.str(), source_);
           for (const auto& [key, literal] : run.parameters) config.Set(key, literal);
           run.config_toml = config.ToToml();
-          if (!validated.count(run.config_toml)) {
-            Validate(registries, run);
-            validated[run.config_toml] = "";
-          }
+          if (validated.insert(run.config_toml).second) Validate(registries, run);
           const uint64_t hash = Fnv1a(identities_[s] + "\n" + run.config_toml);
           run.id = fmt::format("{}-{:08x}", experiment_.scenarios[s].name,
                                static_cast<uint32_t>(hash ^ (hash >> 32)));
@@ -467,7 +463,8 @@ class ExperimentParser {
 
  private:
   void Validate(const Registries& registries, const ExperimentRun& run) const {
-    const ConfigNode config = ConfigNode::Parse(run.config_toml, source_);
+    // Line numbers in the messages would refer to the generated run config, not to the file.
+    const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
       ValidateRunConfig(config);
       MakeOptimizer(registries, config);

@@ -154,7 +154,7 @@ def figure_phases(directory, runs):
     ax.invert_yaxis()
     ax.set_xlabel("seconds")
     ax.legend(["hierarchy (H)", "precompute (P)", "constrain (C)", "solve (S)"],
-              loc="lower right", fontsize=8)
+              loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
     ax.set_title("Time per phase (the paper's Fig. 8)")
     return save(fig, directory, "phases"), (
         "Stacked time per phase: hierarchy (blue), precompute (orange), constrain (green), "
@@ -184,8 +184,11 @@ def figure_energy_vs_time(directory, runs):
             e = np.array([p[1] for p in trace])
             setup = sum(run["timings"][key] for key in ("hierarchy", "precompute", "constrain"))
             color = colors[k % len(colors)]
-            ax.plot(np.maximum(t - setup, 1e-4), e, "-", color=color, label=run_name(run))
-            ax.plot(t, e, "--", color=color, linewidth=0.9)
+            # A marker on the last point: a run with one finest-level iteration is one point.
+            ax.plot(np.maximum(t - setup, 1e-4), e, "-", color=color, label=run_name(run),
+                    marker="o", markersize=3, markevery=[len(t) - 1])
+            ax.plot(t, e, "--", color=color, linewidth=0.9, marker="o", markersize=3,
+                    markevery=[len(t) - 1])
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_title(scenario, fontsize=10)
@@ -291,14 +294,15 @@ def figure_levels(directory, runs):
         ax.invert_yaxis()
     ax_time.set_yticklabels(labels, fontsize=8)
     ax_iterations.set_yticklabels([])
-    ax_time.set_xlabel("seconds per level (solve phase)")
+    ax_time.set_xlabel("seconds per level (precompute, factorization and iterations)")
     ax_iterations.set_xlabel("iterations per level")
     handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(level)) for level in range(depth)]
     ax_iterations.legend(handles, [f"level {level}" for level in range(depth)], fontsize=7,
-                         loc="lower right")
+                         loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     return save(fig, directory, "levels"), (
-        "Seconds and iterations per hierarchy level (level 0 is the input mesh).")
+        "Seconds (precomputation, factorization and iterations) and iterations per hierarchy "
+        "level (level 0 is the input mesh).")
 
 
 def figure_energy_bars(directory, runs):
@@ -308,8 +312,8 @@ def figure_energy_bars(directory, runs):
     if not done:
         return None
     fig, axes = plt.subplots(1, 2, figsize=(11, 0.9 + 0.35 * len(scenarios) * len(names) / 2))
-    for ax, metric, title in ((axes[0], "energy", "final energy relative to the best run of "
-                               "the scenario"), (axes[1], "total", "total seconds")):
+    for ax, metric, title in ((axes[0], "energy", "final energy above the scenario's best run, %"),
+                              (axes[1], "total", "total seconds")):
         for s, scenario in enumerate(scenarios):
             group = [r for r in done if r["_plan"]["scenario"] == scenario]
             best = min(r["energy"] for r in group) or 1.0
@@ -318,7 +322,8 @@ def figure_energy_bars(directory, runs):
                 if not match:
                     continue
                 r = match[0]
-                value = r["energy"] / best if metric == "energy" else r["timings"]["total"]
+                value = (100.0 * (r["energy"] / best - 1.0) if metric == "energy"
+                         else r["timings"]["total"])
                 y = s * (len(names) + 1) + k
                 ax.barh(y, value, color=plt.rcParams["axes.prop_cycle"].by_key()["color"][
                     k % 10], label=name if s == 0 else None)
@@ -326,11 +331,11 @@ def figure_energy_bars(directory, runs):
         ax.set_yticklabels(scenarios, fontsize=8)
         ax.invert_yaxis()
         ax.set_title(title, fontsize=10)
-    axes[1].legend(fontsize=7, loc="lower right")
+    axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     return save(fig, directory, "energy_bars"), (
-        "Final energy (relative to the lowest energy among the runs of the same scenario) and "
-        "total time per run.")
+        "Final energy above the lowest energy among the runs of the same scenario (in percent; "
+        "0 for the best run) and total time per run.")
 
 
 # ------------------------------------------------------------------------------------------
@@ -378,8 +383,12 @@ HANDLE_COLORS = np.array([[0.80, 0.80, 0.78], [0.20, 0.40, 0.85], [0.85, 0.25, 0
                           [0.20, 0.70, 0.30], [0.85, 0.60, 0.10]])
 
 
+VIEW_TILT_DEGREES = 25.0
+
+
 def view_frame(rest, deformed_list):
-    """Camera axes: look along the axis where rest and deformed meshes are thinnest."""
+    """Camera axes: look along the axis where rest and deformed meshes are thinnest (so the
+    deformation lies mostly in the picture), tilted about the up axis for depth."""
     stacked = np.vstack([rest] + deformed_list)
     extent = stacked.max(axis=0) - stacked.min(axis=0)
     view = int(np.argmin(extent))
@@ -389,6 +398,15 @@ def view_frame(rest, deformed_list):
     center = (stacked.max(axis=0) + stacked.min(axis=0)) / 2
     radius = np.linalg.norm(extent) / 2
     return view, up, center, radius
+
+
+def view_direction(view, up):
+    right = [d for d in range(3) if d not in (view, up)][0]
+    tilt = math.radians(VIEW_TILT_DEGREES)
+    direction = np.zeros(3)
+    direction[view] = math.cos(tilt)
+    direction[right] = math.sin(tilt)
+    return direction
 
 
 def render_vtk(panels, size):
@@ -431,8 +449,7 @@ def render_vtk(panels, size):
         window.AddRenderer(renderer)
         window.SetSize(size, size)
         camera = renderer.GetActiveCamera()
-        direction = np.zeros(3)
-        direction[view] = 1.0
+        direction = view_direction(view, up)
         up_vector = np.zeros(3)
         up_vector[up] = 1.0
         camera.SetFocalPoint(*center)
@@ -476,7 +493,7 @@ def render_matplotlib(panels, size):
         c = center[[right, view, up]]
         for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
             setter(c[k] - radius, c[k] + radius)
-        ax.view_init(elev=0, azim=-90)
+        ax.view_init(elev=0, azim=-90 + VIEW_TILT_DEGREES)
         ax.set_axis_off()
         fig.canvas.draw()
         images.append(np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy())
@@ -520,7 +537,7 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
         fig.suptitle(scenario, fontsize=9)
         fig.tight_layout()
         path = os.path.join("pictures", f"{scenario}.png")
-        fig.savefig(os.path.join(directory, path), dpi=80, bbox_inches="tight")
+        fig.savefig(os.path.join(directory, path), dpi=100, bbox_inches="tight")
         plt.close(fig)
         results.append((scenario, path))
     return results
@@ -546,11 +563,11 @@ def measured_summary(runs, compare, baseline):
         faster = sum(1 for r, b in group if r["timings"]["total"] < b["timings"]["total"])
         both = sum(1 for r, b in group if r["energy"] < b["energy"]
                    and r["timings"]["total"] < b["timings"]["total"])
-        text = (f"**{value}** vs **{baseline}** ({n} pairs): lower energy in {lower}/{n}, "
+        text = (f"**{value}** vs **{baseline}** ({n} {'pair' if n == 1 else 'pairs'}): lower energy in {lower}/{n}, "
                 f"faster in total in {faster}/{n}, both in {both}/{n}")
         if e_ratio:
-            text += (f"; median energy ratio {statistics.median(e_ratio):.3g} "
-                     f"(range {min(e_ratio):.3g}–{max(e_ratio):.3g})")
+            text += (f"; median energy ratio {statistics.median(e_ratio):.4g} "
+                     f"(range {min(e_ratio):.4g}–{max(e_ratio):.4g})")
         if t_ratio:
             text += f", median total-time ratio {statistics.median(t_ratio):.3g}"
         if s_ratio:
@@ -664,7 +681,7 @@ def main():
         out.append(
             f"| {plan_entry['scenario']} | {run['mesh']['vertices']:,} | "
             f"{markdown_escape(run_name(run))} | "
-            f"{fmt_seconds(t['hierarchy']) if run.get('hierarchy') else '–'} | "
+            f"{fmt_seconds(t['hierarchy']) if len(run.get('levels', [])) > 1 else '–'} | "
             f"{fmt_seconds(t['precompute'])} | {fmt_seconds(t['constrain'])} | "
             f"{fmt_seconds(t['solve'])} | {fmt_seconds(t['total'])} | "
             f"{fmt_number(run['energy'], 5)} | {run['peak_memory_bytes'] / 2**20:.0f} | "
