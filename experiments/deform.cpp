@@ -107,4 +107,12 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   return report.dump(2);
 }
 
+std::string HandlesJson(const Scenario& scenario) {
+  nlohmann::json handles = nlohmann::json::array();
+  for (const auto& handle : scenario.handles) {
+    handles.push_back({{"name", handle.name}, {"vertices", handle.vertices}});
+  }
+  return nlohmann::json{{"handles", handles}}.dump();
+}
+
 }  // namespace harap

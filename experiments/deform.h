@@ -47,6 +47,10 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
 std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outcome,
                              bool include_trace);
 
+/// The scenario's handles as JSON: {"handles": [{"name": ..., "vertices": [indices]}]} (for
+/// pictures that mark the handles).
+std::string HandlesJson(const Scenario& scenario);
+
 /// Peak resident memory of this process so far, in bytes.
 long long PeakMemoryBytes();
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// The `harap` command line: `harap deform SCENARIO.toml ...` and `harap list`.
+// The `harap` command line: `harap deform SCENARIO.toml ...`, `harap list`, `harap hierarchy`,
+// `harap run CONFIG.toml` (experiment sweeps) and `harap report DIR`.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,9 @@
 #include "experiments/builtins.h"
 #include "experiments/component_factory.h"
 #include "experiments/deform.h"
+#include "experiments/experiment.h"
+#include "experiments/process.h"
+#include "experiments/runner.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
@@ -56,6 +60,7 @@ struct DeformArguments {
   std::optional<int> max_iterations;
   std::vector<std::string> settings;
   std::string out, report;
+  std::string out_rest, out_handles;
   bool trace = false;
   bool quiet = false;
   int threads = 0;
@@ -146,6 +151,12 @@ int Deform(const DeformArguments& args) {
   progress.Finish();
 
   if (!args.out.empty()) WritePly(args.out, outcome.result.positions, scenario.mesh.elements);
+  if (!args.out_rest.empty()) WritePly(args.out_rest, scenario.mesh.vertices, scenario.mesh.elements);
+  if (!args.out_handles.empty()) {
+    std::ofstream file(args.out_handles);
+    file << HandlesJson(scenario) << "\n";
+    if (!file) throw InputError(fmt::format("{}: cannot write the handles", args.out_handles));
+  }
   if (!args.report.empty()) {
     std::ofstream file(args.report);
     file << DeformReportJson(scenario, outcome, args.trace) << "\n";
@@ -187,6 +198,79 @@ int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   return 0;
 }
 
+struct RunArguments {
+  std::string config;
+  std::string out;
+  std::string shard = "0/1";
+  int jobs = 1;
+  int threads = 0;
+  std::vector<std::string> filter;
+  bool retry_failed = false;
+  bool quiet = false;
+};
+
+// `harap run CONFIG.toml`: the experiment sweep (docs/experiments.md).
+int RunSweep(const RunArguments& args) {
+  const Experiment experiment = LoadExperiment(args.config);
+  RunnerOptions options;
+  options.out_dir = args.out.empty() ? std::filesystem::path("results") / experiment.name
+                                     : std::filesystem::path(args.out);
+  options.shard = ParseShard(args.shard);
+  if (args.jobs < 1) throw ConfigError("--jobs must be at least 1");
+  options.jobs = args.jobs;
+  options.threads = args.threads;
+  options.executable = std::filesystem::read_symlink("/proc/self/exe");
+  options.retry_failed = args.retry_failed;
+  options.scenario_filter = args.filter;
+  options.quiet = args.quiet;
+  const SweepSummary summary = RunExperiment(experiment, options);
+  if (!args.quiet) {
+    fmt::print("{}: {} runs planned, {} in this shard: {} done before, {} ran now, {} failed\n",
+               experiment.name, summary.planned, summary.in_shard, summary.skipped,
+               summary.succeeded + summary.failed, summary.failed);
+    fmt::print("results in {} (harap report {} makes the report)\n", options.out_dir.string(),
+               options.out_dir.string());
+  }
+  return 0;
+}
+
+struct ReportArguments {
+  std::string dir;
+  std::string script;
+  std::string python;
+  bool no_render = false;
+};
+
+// `harap report DIR`: merges the shards' results and runs experiments/scripts/report.py.
+int Report(const ReportArguments& args) {
+  const MergeSummary merged = MergeResults(args.dir);
+  fmt::print("{}: {} runs planned: {} finished, {} failed, {} missing\n", args.dir,
+             merged.planned, merged.succeeded, merged.failed, merged.missing);
+  std::string script = args.script;
+  if (script.empty()) {
+    const char* env = std::getenv("HARAP_REPORT_SCRIPT");
+    script = env ? env : HARAP_SCRIPTS_DIR "/report.py";
+  }
+  if (!std::filesystem::exists(script)) {
+    throw InputError(fmt::format("report script {} not found (give --script)", script));
+  }
+  std::string python = args.python;
+  if (python.empty()) {
+    // Debian's python3-matplotlib and python3-vtk9 live in the system interpreter.
+    const char* env = std::getenv("HARAP_PYTHON");
+    python = env ? env : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+  }
+  std::fflush(stdout);
+  std::vector<std::string> command = {python, script, args.dir};
+  if (args.no_render) command.push_back("--no-render");
+  const ProcessResult result = RunProcess(command, {});
+  if (!result.started) throw InputError(fmt::format("cannot run {}", python));
+  if (!result.ok()) {
+    throw InputError(fmt::format("{} {} failed (exit code {})", python, script, result.exit_code));
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -212,6 +296,9 @@ int main(int argc, char** argv) {
                      "set any option by its config key, e.g. --set energy.lambda=0.5");
   deform->add_option("--out", args.out, "write the deformed mesh (binary PLY, double precision)");
   deform->add_option("--report", args.report, "write a JSON report");
+  deform->add_option("--out-rest", args.out_rest, "write the rest mesh (after refine) as PLY");
+  deform->add_option("--out-handles", args.out_handles,
+                     "write the handles' vertex indices as JSON (for pictures)");
   deform->add_flag("--trace", args.trace, "include the per-iteration energy trace in the report");
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
@@ -226,6 +313,30 @@ int main(int argc, char** argv) {
   hierarchy->add_option("--set", args.settings, "set an option, e.g. hierarchy.min_vertices=500");
   hierarchy->add_option("--threads", args.threads, "worker threads (default: all cores)");
 
+  RunArguments run_args;
+  auto* run = app.add_subcommand("run", "run an experiment config: every scenario x variant x grid "
+                                        "combination, with resume (docs/experiments.md)");
+  run->add_option("config", run_args.config, "experiment config (experiments/configs/*.toml)")
+      ->required();
+  run->add_option("--out", run_args.out, "output folder (default results/<experiment name>)");
+  run->add_option("--shard", run_args.shard,
+                  "I/N: run only the runs with index % N == I (0 <= I < N), e.g. for Slurm arrays");
+  run->add_option("--jobs,-j", run_args.jobs, "runs at once, each its own process (default 1)");
+  run->add_option("--threads", run_args.threads,
+                  "threads per run (default: [run] threads, else cores / jobs)");
+  run->add_option("--filter", run_args.filter,
+                  "only scenarios whose name matches this shell pattern (repeatable)");
+  run->add_flag("--retry-failed", run_args.retry_failed, "run failed runs again");
+  run->add_flag("--quiet,-q", run_args.quiet, "no progress output");
+
+  ReportArguments report_args;
+  auto* report = app.add_subcommand("report", "merge the shards of a run folder into results.csv "
+                                              "and write report.md with figures and pictures");
+  report->add_option("dir", report_args.dir, "output folder of harap run")->required();
+  report->add_option("--script", report_args.script, "report script (default experiments/scripts/report.py)");
+  report->add_option("--python", report_args.python, "Python interpreter (default /usr/bin/python3)");
+  report->add_flag("--no-render", report_args.no_render, "skip the mesh pictures");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -234,6 +345,8 @@ int main(int argc, char** argv) {
   try {
     if (*list) return List();
     if (*hierarchy) return WriteHierarchy(args, hierarchy_out);
+    if (*run) return RunSweep(run_args);
+    if (*report) return Report(report_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

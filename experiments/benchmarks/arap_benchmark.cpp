@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: MIT
 // Micro-benchmarks of the classic ARAP kernels: local step, right-hand side, factorization,
-// one solve, one full iteration — on a generated cylinder and, when ../shared is present, on the
-// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices).
+// one solve, one full iteration; and of the hierarchical pieces: building each registered
+// hierarchy, and each registered up-sampler from level 1 to the input mesh — on a generated
+// cylinder and, when ../shared is present, on the armadillo-bend scenario (armadillo-43k refined
+// once: ~173K vertices).
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
 #include <benchmark/benchmark.h>
 
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -146,6 +149,62 @@ void FullIteration(benchmark::State& state, std::string key) {
   SetCounters(state, f);
 }
 
+/// A scenario's mesh with its hierarchy (default options) and a coarse state to up-sample.
+struct HierarchyFixture {
+  Mesh mesh;
+  Registries registries = MakeBuiltinRegistries();
+  Context context;
+  MeshHierarchy hierarchy;
+  LevelState coarse_state;
+
+  explicit HierarchyFixture(const Mesh& input) : mesh(input) {
+    hierarchy = registries.hierarchies.Create("octree", ConfigNode())->Build(mesh, context);
+    // A smooth rotation field on level 1 (a twist about z growing with height), as a solve
+    // would leave it, and the positions it implies.
+    const Mesh& coarse = hierarchy.levels.at(1).mesh;
+    const double z0 = coarse.vertices.col(2).minCoeff();
+    const double height = std::max(coarse.vertices.col(2).maxCoeff() - z0, 1e-12);
+    coarse_state.positions = coarse.vertices;
+    coarse_state.rotations.resize(coarse.num_vertices());
+    for (Index v = 0; v < coarse.num_vertices(); ++v) {
+      const double angle = 1.2 * (coarse.vertices(v, 2) - z0) / height;
+      coarse_state.rotations[v] = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      coarse_state.positions.row(v) = (coarse_state.rotations[v] * coarse.vertices.row(v).transpose()).transpose();
+    }
+  }
+};
+
+std::map<std::string, std::unique_ptr<HierarchyFixture>>& HierarchyFixtures() {
+  static std::map<std::string, std::unique_ptr<HierarchyFixture>> fixtures;
+  return fixtures;
+}
+
+void HierarchyBuild(benchmark::State& state, std::string key, std::string name) {
+  HierarchyFixture& f = *HierarchyFixtures().at(key);
+  auto hierarchy = f.registries.hierarchies.Create(name, ConfigNode());
+  int levels = 0;
+  for (auto _ : state) {
+    const MeshHierarchy built = hierarchy->Build(f.mesh, f.context);
+    levels = built.num_levels();
+    benchmark::DoNotOptimize(built.levels.data());
+  }
+  state.counters["vertices"] = f.mesh.num_vertices();
+  state.counters["levels"] = levels;
+}
+
+void Upsample(benchmark::State& state, std::string key, std::string name) {
+  HierarchyFixture& f = *HierarchyFixtures().at(key);
+  auto upsampler = f.registries.upsamplers.Create(name, ConfigNode());
+  LevelState fine_state;
+  for (auto _ : state) {
+    upsampler->Upsample(f.hierarchy.levels[0], f.hierarchy.levels[1], RotationSite::kVertex,
+                        f.coarse_state, fine_state, f.context);
+    benchmark::ClobberMemory();
+  }
+  state.counters["vertices"] = f.mesh.num_vertices();
+  state.counters["coarse_vertices"] = f.hierarchy.levels[1].mesh.num_vertices();
+}
+
 void RegisterAll(const std::string& key) {
   auto add = [&](const std::string& name, auto&&... args) {
     benchmark::RegisterBenchmark((name + "/" + key).c_str(), args...)
@@ -170,6 +229,15 @@ void RegisterAll(const std::string& key) {
     }
   }
   add("FullIteration", FullIteration, key);
+
+  HierarchyFixtures()[key] = std::make_unique<HierarchyFixture>(Get(key).scenario.mesh);
+  const Registries& registries = HierarchyFixtures()[key]->registries;
+  for (const std::string& name : registries.hierarchies.Names()) {
+    add("HierarchyBuild_" + name, HierarchyBuild, key, name);
+  }
+  for (const std::string& name : registries.upsamplers.Names()) {
+    add("Upsample_" + name, Upsample, key, name);
+  }
 }
 
 }  // namespace

@@ -1,0 +1,770 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Writes DIR/report.md for a `harap run` folder: tables, figures (PNG + SVG) and pictures.
+
+Called by `harap report DIR` after it merged the shards into DIR/results.csv; reads
+DIR/experiment.json (the plan, with the config's [experiment] and [report] tables) and
+DIR/runs/*.json (one `harap deform --report --trace` report per run, plus its `run` entry).
+
+    /usr/bin/python3 experiments/scripts/report.py DIR [--no-render]
+
+[report] keys (all optional; docs/experiments.md):
+    claim      what the paper claims (printed beside what we measured)
+    notes      remarks, e.g. which shared scenarios stand in for the paper's meshes
+    figures    any of "phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars"
+    compare    what is compared: "variant" (default when [[variant]]s exist) or a [grid] key
+    baseline   the value of `compare` the others are measured against (default: the first)
+    panel      a [grid] key: one panel per value in "relative_scatter" (e.g. the tolerance)
+    render     true/false or a list of scenario names: pictures of rest and deformed meshes
+               (runs need [run] save_mesh = true); default true
+    render_runs  at most this many deformed meshes per scenario picture (default 6)
+
+Pictures are rendered with VTK (Debian python3-vtk9) under xvfb-run; without VTK or Xvfb they
+fall back to matplotlib's 3D plots (say so in the report).
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+from collections import OrderedDict, defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+PHASES = [("hierarchy", "H", "#1f77b4"), ("precompute", "P", "#ff7f0e"),
+          ("constrain", "C", "#2ca02c"), ("solve", "S", "#d62728")]
+KNOWN_FIGURES = {"phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars"}
+KNOWN_REPORT_KEYS = {"claim", "notes", "figures", "compare", "baseline", "panel", "render",
+                     "render_runs"}
+
+
+# ------------------------------------------------------------------------------------------
+# Loading
+
+def load(directory):
+    with open(os.path.join(directory, "experiment.json"), encoding="utf-8") as file:
+        plan = json.load(file)
+    runs = []
+    for entry in plan["runs"]:
+        path = os.path.join(directory, "runs", entry["id"] + ".json")
+        if not os.path.exists(path):
+            runs.append({"run": dict(entry, status="missing"), "_plan": entry})
+            continue
+        with open(path, encoding="utf-8") as file:
+            report = json.load(file)
+        report["_plan"] = entry
+        runs.append(report)
+    return plan, runs
+
+
+def ok(run):
+    return run["run"]["status"] == "ok"
+
+
+def compare_value(run, compare):
+    if compare == "variant":
+        return run["_plan"]["variant"]
+    return run["run"].get("parameters", {}).get(compare, strip(run["_plan"]["parameters"].get(compare, "")))
+
+
+def strip(literal):
+    if len(literal) >= 2 and literal[0] == literal[-1] and literal[0] in "'\"":
+        return literal[1:-1]
+    return literal
+
+
+def context_key(run, compare):
+    """Everything that identifies a run except the compared value: scenario + other settings."""
+    plan = run["_plan"]
+    parts = [plan["scenario"]]
+    if compare != "variant":
+        parts.append(plan["variant"])
+    for key, value in plan["parameters"].items():
+        if key != compare and not key_of_variant(plan, key):
+            parts.append(f"{key}={strip(value)}")
+    return tuple(parts)
+
+
+def key_of_variant(plan, key):
+    # Variant settings come first in `parameters`; grid keys are listed in the plan's grid_keys.
+    return key not in GRID_KEYS
+
+
+GRID_KEYS = []
+
+
+def fmt_number(value, digits=4):
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "–"
+    if isinstance(value, int):
+        return f"{value:,}"
+    if value == 0:
+        return "0"
+    if abs(value) >= 1e4 or abs(value) < 1e-3:
+        return f"{value:.{digits - 1}e}"
+    return f"{value:.{digits}g}"
+
+
+def fmt_seconds(value):
+    return "–" if value is None else f"{value:.2f}"
+
+
+# ------------------------------------------------------------------------------------------
+# Figures
+
+def save(fig, directory, name):
+    os.makedirs(os.path.join(directory, "figures"), exist_ok=True)
+    png = os.path.join("figures", name + ".png")
+    svg = os.path.join("figures", name + ".svg")
+    fig.savefig(os.path.join(directory, png), dpi=90, bbox_inches="tight")
+    fig.savefig(os.path.join(directory, svg), bbox_inches="tight")
+    plt.close(fig)
+    return png, svg
+
+
+def run_name(run):
+    plan = run["_plan"]
+    return plan["label"] or plan["variant"] or "run"
+
+
+def figure_phases(directory, runs):
+    done = [r for r in runs if ok(r)]
+    if not done:
+        return None
+    fig, ax = plt.subplots(figsize=(8, 0.35 * len(done) + 1.2))
+    labels = []
+    for y, run in enumerate(done):
+        left = 0.0
+        for key, short, color in PHASES:
+            width = run["timings"][key]
+            ax.barh(y, width, left=left, color=color, label=short if y == 0 else None)
+            left += width
+        labels.append(f"{run['_plan']['scenario']}: {run_name(run)}")
+    ax.set_yticks(range(len(done)))
+    ax.set_yticklabels(labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("seconds")
+    ax.legend(["hierarchy (H)", "precompute (P)", "constrain (C)", "solve (S)"],
+              loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+    ax.set_title("Time per phase (the paper's Fig. 8)")
+    return save(fig, directory, "phases"), (
+        "Stacked time per phase: hierarchy (blue), precompute (orange), constrain (green), "
+        "solve (red).")
+
+
+def finest_trace(run):
+    return [(e["t"], e["energy"]) for e in run.get("trace", []) if e["level"] == 0]
+
+
+def figure_energy_vs_time(directory, runs):
+    by_scenario = OrderedDict()
+    for run in runs:
+        if ok(run) and finest_trace(run):
+            by_scenario.setdefault(run["_plan"]["scenario"], []).append(run)
+    if not by_scenario:
+        return None
+    count = len(by_scenario)
+    columns = min(count, 3)
+    rows = math.ceil(count / columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(5.2 * columns, 3.8 * rows), squeeze=False)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (scenario, group) in zip(axes.flat, by_scenario.items()):
+        for k, run in enumerate(group):
+            trace = finest_trace(run)
+            t = np.array([p[0] for p in trace])
+            e = np.array([p[1] for p in trace])
+            setup = sum(run["timings"][key] for key in ("hierarchy", "precompute", "constrain"))
+            color = colors[k % len(colors)]
+            # A marker on the last point: a run with one finest-level iteration is one point.
+            ax.plot(np.maximum(t - setup, 1e-4), e, "-", color=color, label=run_name(run),
+                    marker="o", markersize=3, markevery=[len(t) - 1])
+            ax.plot(t, e, "--", color=color, linewidth=0.9, marker="o", markersize=3,
+                    markevery=[len(t) - 1])
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(scenario, fontsize=10)
+        ax.set_xlabel("seconds (solid: solve only, dashed: with precomputation)", fontsize=8)
+        ax.set_ylabel("energy (finest level)", fontsize=8)
+        ax.legend(fontsize=7)
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in list(axes.flat)[count:]:
+        ax.axis("off")
+    fig.tight_layout()
+    return save(fig, directory, "energy_vs_time"), (
+        "Energy of the finest level over time (the paper's Fig. 1): solid without, dashed with "
+        "the precomputation (hierarchy, precompute, constrain). Hierarchical runs enter the plot "
+        "when they reach the finest level.")
+
+
+def pairs_against_baseline(runs, compare, baseline):
+    """(run, baseline run) for every successful non-baseline run with a successful baseline."""
+    base = {}
+    for run in runs:
+        if ok(run) and compare_value(run, compare) == baseline:
+            base[context_key(run, compare)] = run
+    pairs = []
+    for run in runs:
+        if ok(run) and compare_value(run, compare) != baseline:
+            match = base.get(context_key(run, compare))
+            if match is not None:
+                pairs.append((run, match))
+    return pairs
+
+
+def quadrant_color(x, y):
+    if x < 1 and y < 1:
+        return "#2ca02c"  # faster and lower: the ideal
+    if x >= 1 and y < 1:
+        return "#1f77b4"  # slower, lower energy
+    if x < 1 and y >= 1:
+        return "#ff7f0e"  # faster, higher energy
+    return "#d62728"      # slower and higher
+
+
+def figure_relative_scatter(directory, runs, compare, baseline, panel):
+    pairs = pairs_against_baseline(runs, compare, baseline)
+    pairs = [(r, b) for r, b in pairs if b["energy"] > 0 and b["timings"]["total"] > 0]
+    if not pairs:
+        return None
+    if panel:
+        values = []
+        for run, _ in pairs:
+            value = run["run"]["parameters"].get(panel, "")
+            if value not in values:
+                values.append(value)
+    else:
+        values = [""]
+    fig, axes = plt.subplots(1, len(values), figsize=(4.2 * len(values), 4), squeeze=False)
+    for ax, value in zip(axes.flat, values):
+        points = [(r["timings"]["total"] / b["timings"]["total"], r["energy"] / b["energy"], r)
+                  for r, b in pairs if not panel or r["run"]["parameters"].get(panel, "") == value]
+        xs = [p[0] for p in points]
+        ys = [p[1] for p in points]
+        ax.scatter(xs, ys, c=[quadrant_color(x, y) for x, y in zip(xs, ys)], s=22,
+                   edgecolors="black", linewidths=0.3)
+        ax.axvline(1.0, color="grey", linewidth=0.8)
+        ax.axhline(1.0, color="grey", linewidth=0.8)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        lo = min(xs + ys + [0.5]) / 1.3
+        hi = max(xs + ys + [2.0]) * 1.3
+        ax.set_xlim(lo, hi)
+        ax.set_ylim(lo, hi)
+        ax.set_xlabel("relative total time", fontsize=9)
+        ax.set_ylabel("relative final energy", fontsize=9)
+        ax.set_title(f"{panel.split('.')[-1]} = {value}" if panel else "", fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(f"{compare} ≠ {baseline}, normalized by {baseline} (the paper's Fig. 11)",
+                 fontsize=10)
+    fig.tight_layout()
+    return save(fig, directory, "relative_scatter"), (
+        f"Each point: one scenario, total time and final energy relative to `{baseline}`. Green: "
+        "faster and lower energy (the ideal, bottom left); blue: lower energy but slower; "
+        "orange: faster but higher energy; red: slower and higher.")
+
+
+def figure_levels(directory, runs):
+    done = [r for r in runs if ok(r) and len(r.get("levels", [])) > 1]
+    if not done:
+        return None
+    fig, (ax_time, ax_iterations) = plt.subplots(1, 2, figsize=(11, 0.35 * len(done) + 1.5))
+    depth = max(len(r["levels"]) for r in done)
+    cmap = plt.get_cmap("viridis", depth)
+    labels = []
+    for y, run in enumerate(done):
+        left_time = left_iterations = 0.0
+        for level in run["levels"]:
+            color = cmap(level["level"])
+            ax_time.barh(y, level["seconds"], left=left_time, color=color)
+            ax_iterations.barh(y, level["iterations"], left=left_iterations, color=color)
+            left_time += level["seconds"]
+            left_iterations += level["iterations"]
+        labels.append(f"{run['_plan']['scenario']}: {run_name(run)}")
+    for ax in (ax_time, ax_iterations):
+        ax.set_yticks(range(len(done)))
+        ax.invert_yaxis()
+    ax_time.set_yticklabels(labels, fontsize=8)
+    ax_iterations.set_yticklabels([])
+    ax_time.set_xlabel("seconds per level (precompute, factorization and iterations)")
+    ax_iterations.set_xlabel("iterations per level")
+    handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(level)) for level in range(depth)]
+    ax_iterations.legend(handles, [f"level {level}" for level in range(depth)], fontsize=7,
+                         loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.tight_layout()
+    return save(fig, directory, "levels"), (
+        "Seconds (precomputation, factorization and iterations) and iterations per hierarchy "
+        "level (level 0 is the input mesh).")
+
+
+def figure_energy_bars(directory, runs):
+    done = [r for r in runs if ok(r)]
+    scenarios = list(OrderedDict.fromkeys(r["_plan"]["scenario"] for r in done))
+    names = list(OrderedDict.fromkeys(run_name(r) for r in done))
+    if not done:
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(11, 0.9 + 0.35 * len(scenarios) * len(names) / 2))
+    for ax, metric, title in ((axes[0], "energy", "final energy above the scenario's best run, %"),
+                              (axes[1], "total", "total seconds")):
+        for s, scenario in enumerate(scenarios):
+            group = [r for r in done if r["_plan"]["scenario"] == scenario]
+            best = min(r["energy"] for r in group) or 1.0
+            for k, name in enumerate(names):
+                match = [r for r in group if run_name(r) == name]
+                if not match:
+                    continue
+                r = match[0]
+                value = (100.0 * (r["energy"] / best - 1.0) if metric == "energy"
+                         else r["timings"]["total"])
+                y = s * (len(names) + 1) + k
+                ax.barh(y, value, color=plt.rcParams["axes.prop_cycle"].by_key()["color"][
+                    k % 10], label=name if s == 0 else None)
+        ax.set_yticks([s * (len(names) + 1) + (len(names) - 1) / 2 for s in range(len(scenarios))])
+        ax.set_yticklabels(scenarios, fontsize=8)
+        ax.invert_yaxis()
+        ax.set_title(title, fontsize=10)
+    axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.tight_layout()
+    return save(fig, directory, "energy_bars"), (
+        "Final energy above the lowest energy among the runs of the same scenario (in percent; "
+        "0 for the best run) and total time per run.")
+
+
+# ------------------------------------------------------------------------------------------
+# Pictures
+
+def read_ply(path):
+    with open(path, "rb") as file:
+        header = []
+        while True:
+            line = file.readline().decode("ascii", "replace").strip()
+            header.append(line)
+            if line == "end_header":
+                break
+        vertices = faces = 0
+        vertex_type = "f8"
+        for line in header:
+            parts = line.split()
+            if parts[:2] == ["element", "vertex"]:
+                vertices = int(parts[2])
+            elif parts[:2] == ["element", "face"]:
+                faces = int(parts[2])
+            elif parts[:2] == ["property", "float"] and parts[2] == "x":
+                vertex_type = "f4"
+        positions = np.frombuffer(file.read(vertices * 3 * int(vertex_type[1])),
+                                  dtype="<" + vertex_type).reshape(vertices, 3).astype(float)
+        data = np.frombuffer(file.read(), dtype=np.uint8)
+    # Faces: uchar count + count int32 indices; harap writes triangles only.
+    records = data[: faces * 13].reshape(faces, 13)
+    if faces and not np.all(records[:, 0] == 3):
+        raise ValueError(f"{path}: only triangle PLY files are supported")
+    triangles = records[:, 1:].copy().view("<i4").reshape(faces, 3)
+    return positions, triangles
+
+
+def handle_labels(path, count):
+    labels = np.zeros(count, dtype=int)
+    if path and os.path.exists(path):
+        with open(path, encoding="utf-8") as file:
+            for k, handle in enumerate(json.load(file)["handles"]):
+                labels[np.asarray(handle["vertices"], dtype=int)] = k + 1
+    return labels
+
+
+HANDLE_COLORS = np.array([[0.80, 0.80, 0.78], [0.20, 0.40, 0.85], [0.85, 0.25, 0.20],
+                          [0.20, 0.70, 0.30], [0.85, 0.60, 0.10]])
+
+
+VIEW_TILT_DEGREES = 25.0
+
+
+def view_frame(rest, deformed_list):
+    """Camera axes: look along the axis where rest and deformed meshes are thinnest (so the
+    deformation lies mostly in the picture), tilted about the up axis for depth."""
+    stacked = np.vstack([rest] + deformed_list)
+    extent = stacked.max(axis=0) - stacked.min(axis=0)
+    view = int(np.argmin(extent))
+    rest_extent = rest.max(axis=0) - rest.min(axis=0)
+    others = [d for d in range(3) if d != view]
+    up = max(others, key=lambda d: rest_extent[d])
+    center = (stacked.max(axis=0) + stacked.min(axis=0)) / 2
+    radius = np.linalg.norm(extent) / 2
+    return view, up, center, radius
+
+
+def view_direction(view, up):
+    right = [d for d in range(3) if d not in (view, up)][0]
+    tilt = math.radians(VIEW_TILT_DEGREES)
+    direction = np.zeros(3)
+    direction[view] = math.cos(tilt)
+    direction[right] = math.sin(tilt)
+    return direction
+
+
+def render_vtk(panels, size):
+    """Renders each (positions, triangles, labels) panel to an RGB array with VTK."""
+    import vtk
+    from vtk.util import numpy_support
+
+    images = []
+    rest = panels[0][0]
+    view, up, center, radius = view_frame(rest, [p[0] for p in panels[1:]])
+    for positions, triangles, labels in panels:
+        points = vtk.vtkPoints()
+        points.SetData(numpy_support.numpy_to_vtk(np.ascontiguousarray(positions), deep=True))
+        cells = np.hstack([np.full((len(triangles), 1), 3, dtype=np.int64),
+                           triangles.astype(np.int64)]).ravel()
+        polys = vtk.vtkCellArray()
+        polys.SetCells(len(triangles), numpy_support.numpy_to_vtkIdTypeArray(cells, deep=True))
+        mesh = vtk.vtkPolyData()
+        mesh.SetPoints(points)
+        mesh.SetPolys(polys)
+        colors = (HANDLE_COLORS[np.minimum(labels, len(HANDLE_COLORS) - 1)] * 255).astype(np.uint8)
+        color_array = numpy_support.numpy_to_vtk(colors, deep=True)
+        color_array.SetName("colors")
+        mesh.GetPointData().SetScalars(color_array)
+        normals = vtk.vtkPolyDataNormals()
+        normals.SetInputData(mesh)
+        normals.SplittingOff()
+        mapper = vtk.vtkPolyDataMapper()
+        mapper.SetInputConnection(normals.GetOutputPort())
+        mapper.SetColorModeToDirectScalars()
+        actor = vtk.vtkActor()
+        actor.SetMapper(mapper)
+        actor.GetProperty().SetInterpolationToPhong()
+        actor.GetProperty().SetSpecular(0.15)
+        renderer = vtk.vtkRenderer()
+        renderer.AddActor(actor)
+        renderer.SetBackground(1.0, 1.0, 1.0)
+        window = vtk.vtkRenderWindow()
+        window.SetOffScreenRendering(1)
+        window.AddRenderer(renderer)
+        window.SetSize(size, size)
+        camera = renderer.GetActiveCamera()
+        direction = view_direction(view, up)
+        up_vector = np.zeros(3)
+        up_vector[up] = 1.0
+        camera.SetFocalPoint(*center)
+        camera.SetPosition(*(center + direction * radius * 4.0))
+        camera.SetViewUp(*up_vector)
+        camera.SetViewAngle(30.0)
+        renderer.ResetCameraClippingRange()
+        window.Render()
+        grab = vtk.vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.Update()
+        image = grab.GetOutput()
+        width, height, _ = image.GetDimensions()
+        pixels = numpy_support.vtk_to_numpy(image.GetPointData().GetScalars())
+        images.append(pixels.reshape(height, width, -1)[::-1, :, :3])
+        window.Finalize()
+    return images
+
+
+def render_matplotlib(panels, size):
+    """Fallback without VTK/Xvfb: matplotlib's 3D surface plots (coarser)."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    images = []
+    rest = panels[0][0]
+    view, up, center, radius = view_frame(rest, [p[0] for p in panels[1:]])
+    right = [d for d in range(3) if d not in (view, up)][0]
+    for positions, triangles, labels in panels:
+        step = max(1, len(triangles) // 60000)
+        tris = triangles[::step]
+        fig = plt.figure(figsize=(size / 100, size / 100), dpi=100)
+        ax = fig.add_subplot(projection="3d")
+        coords = positions[:, [right, view, up]]
+        shade = np.abs(np.cross(coords[tris[:, 1]] - coords[tris[:, 0]],
+                                coords[tris[:, 2]] - coords[tris[:, 0]]))
+        normal = shade / np.maximum(np.linalg.norm(shade, axis=1, keepdims=True), 1e-30)
+        light = 0.35 + 0.65 * normal[:, 1]
+        base = HANDLE_COLORS[np.minimum(labels[tris].max(axis=1), len(HANDLE_COLORS) - 1)]
+        ax.add_collection3d(Poly3DCollection(coords[tris], facecolors=base * light[:, None],
+                                             linewidths=0))
+        c = center[[right, view, up]]
+        for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
+            setter(c[k] - radius, c[k] + radius)
+        ax.view_init(elev=0, azim=-90 + VIEW_TILT_DEGREES)
+        ax.set_axis_off()
+        fig.canvas.draw()
+        images.append(np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy())
+        plt.close(fig)
+    return images
+
+
+def render_pictures(directory, runs, selection, per_scenario, use_vtk):
+    """One PNG per scenario: rest mesh with handles, then the deformed meshes."""
+    by_scenario = OrderedDict()
+    for run in runs:
+        info = run["run"]
+        if ok(run) and info.get("mesh") and os.path.exists(os.path.join(directory, info["mesh"])):
+            scenario = run["_plan"]["scenario"]
+            if selection is True or scenario in selection:
+                by_scenario.setdefault(scenario, []).append(run)
+    results = []
+    renderer = render_vtk if use_vtk else render_matplotlib
+    os.makedirs(os.path.join(directory, "pictures"), exist_ok=True)
+    for scenario, group in by_scenario.items():
+        group = group[:per_scenario]
+        info = group[0]["run"]
+        rest_path = os.path.join(directory, info["rest_mesh"])
+        if not os.path.exists(rest_path):
+            continue
+        rest, triangles = read_ply(rest_path)
+        labels = handle_labels(os.path.join(directory, info.get("handles", "")), len(rest))
+        panels = [(rest, triangles, labels)]
+        titles = ["rest (handles coloured)"]
+        for run in group:
+            deformed, _ = read_ply(os.path.join(directory, run["run"]["mesh"]))
+            panels.append((deformed, triangles, labels))
+            titles.append(f"{run_name(run)}\nE = {fmt_number(run['energy'])}, "
+                          f"T = {run['timings']['total']:.2f} s")
+        images = renderer(panels, 420)
+        fig, axes = plt.subplots(1, len(images), figsize=(2.6 * len(images), 3.0), squeeze=False)
+        for ax, image, title in zip(axes.flat, images, titles):
+            ax.imshow(image)
+            ax.set_title(title, fontsize=7)
+            ax.axis("off")
+        fig.suptitle(scenario, fontsize=9)
+        fig.tight_layout()
+        path = os.path.join("pictures", f"{scenario}.png")
+        fig.savefig(os.path.join(directory, path), dpi=100, bbox_inches="tight")
+        plt.close(fig)
+        results.append((scenario, path))
+    return results
+
+
+# ------------------------------------------------------------------------------------------
+# Text
+
+def measured_summary(runs, compare, baseline):
+    lines = []
+    pairs = pairs_against_baseline(runs, compare, baseline)
+    by_value = OrderedDict()
+    for run, base in pairs:
+        by_value.setdefault(compare_value(run, compare), []).append((run, base))
+    for value, group in by_value.items():
+        n = len(group)
+        e_ratio = [r["energy"] / b["energy"] for r, b in group if b["energy"] > 0]
+        t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
+                   if b["timings"]["total"] > 0]
+        s_ratio = [r["timings"]["solve"] / b["timings"]["solve"] for r, b in group
+                   if b["timings"]["solve"] > 0]
+        lower = sum(1 for r, b in group if r["energy"] < b["energy"])
+        faster = sum(1 for r, b in group if r["timings"]["total"] < b["timings"]["total"])
+        both = sum(1 for r, b in group if r["energy"] < b["energy"]
+                   and r["timings"]["total"] < b["timings"]["total"])
+        text = (f"**{value}** vs **{baseline}** ({n} {'pair' if n == 1 else 'pairs'}): lower energy in {lower}/{n}, "
+                f"faster in total in {faster}/{n}, both in {both}/{n}")
+        if e_ratio:
+            text += (f"; median energy ratio {statistics.median(e_ratio):.4g} "
+                     f"(range {min(e_ratio):.4g}–{max(e_ratio):.4g})")
+        if t_ratio:
+            text += f", median total-time ratio {statistics.median(t_ratio):.3g}"
+        if s_ratio:
+            text += f", median solve-time ratio {statistics.median(s_ratio):.3g}"
+        lines.append(text + ".")
+    return lines
+
+
+def machine_note(runs):
+    threads = sorted({r["run"].get("threads") for r in runs if r["run"].get("threads")})
+    jobs = sorted({r["run"].get("jobs") for r in runs if r["run"].get("jobs")})
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as file:
+            for line in file:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    load = ""
+    if hasattr(os, "getloadavg"):
+        load = ", load average at report time {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+    return (f"{platform.node() or 'this machine'}: {os.cpu_count()} cores ({cpu or 'unknown CPU'})"
+            f"{load}; threads per run {', '.join(map(str, threads)) or '?'}, "
+            f"concurrent runs (--jobs) {', '.join(map(str, jobs)) or '?'}. Timings on a shared "
+            "machine are noisy (±10–15% and more while others build); energies are exact.")
+
+
+def markdown_escape(text):
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("directory")
+    parser.add_argument("--no-render", action="store_true", help="skip the mesh pictures")
+    parser.add_argument("--render-backend", choices=["auto", "vtk", "matplotlib"], default="auto")
+    parser.add_argument("--render-child", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    directory = args.directory
+
+    plan, runs = load(directory)
+    GRID_KEYS[:] = plan.get("grid_keys", [])
+    report = plan.get("report", {})
+    unknown = set(report) - KNOWN_REPORT_KEYS
+    if unknown:
+        sys.exit(f"{plan.get('config_file')}: unknown [report] keys {sorted(unknown)}; valid: "
+                 f"{sorted(KNOWN_REPORT_KEYS)}")
+    figures = report.get("figures", ["phases", "energy_vs_time"])
+    for figure in figures:
+        if figure not in KNOWN_FIGURES:
+            sys.exit(f"{plan.get('config_file')}: [report] figures: unknown '{figure}'; valid: "
+                     f"{sorted(KNOWN_FIGURES)}")
+    has_variants = any(r["variant"] for r in plan["runs"])
+    compare = report.get("compare", "variant" if has_variants else (GRID_KEYS[0] if GRID_KEYS else ""))
+    values = list(OrderedDict.fromkeys(compare_value(r, compare) for r in runs)) if compare else []
+    baseline = report.get("baseline", values[0] if values else "")
+    render = report.get("render", True)
+    per_scenario = int(report.get("render_runs", 6))
+
+    if args.render_child:
+        # Runs under xvfb-run: only the pictures, written as a JSON list for the parent.
+        pictures = render_pictures(directory, runs, render, per_scenario, use_vtk=True)
+        print(json.dumps(pictures))
+        return 0
+
+    out = []
+    title = plan.get("title") or plan.get("name")
+    out.append(f"# {title}\n")
+    if plan.get("description"):
+        out.append(plan["description"] + "\n")
+    config_file = plan.get("config_file", "")
+    relative_config = os.path.relpath(config_file) if config_file else "CONFIG.toml"
+    out.append("```bash\n"
+               f"./build/harap run {relative_config} --out {directory}\n"
+               f"./build/harap report {directory}\n```\n")
+    statuses = defaultdict(int)
+    for run in runs:
+        statuses[run["run"]["status"]] += 1
+    out.append(f"Runs: {len(runs)} planned — " +
+               ", ".join(f"{count} {status}" for status, count in sorted(statuses.items())) + ".\n")
+    out.append(f"Machine: {machine_note(runs)} Generated "
+               f"{datetime.datetime.now().strftime('%Y-%m-%d %H:%M')}.\n")
+
+    # Claim vs measured.
+    measured = measured_summary(runs, compare, baseline) if compare else []
+    out.append("## Paper vs. measured\n")
+    out.append("| the paper claims | we measured |\n| --- | --- |")
+    claim = report.get("claim", "(no claim given in the config)")
+    out.append(f"| {markdown_escape(claim)} | "
+               f"{markdown_escape('<br>'.join(measured) or 'no comparable pairs of runs')} |\n")
+    if report.get("notes"):
+        out.append(f"Notes: {report['notes']}\n")
+
+    # Main table.
+    out.append("## Runs\n")
+    columns = ["scenario", "V", "run", "H", "P", "C", "S", "T", "E", "M (MiB)",
+               "iterations per level", "conv."]
+    out.append("| " + " | ".join(columns) + " |")
+    out.append("|" + "|".join(["---", "---:", "---"] + ["---:"] * 7 + ["---", "---"]) + "|")
+    for run in runs:
+        plan_entry = run["_plan"]
+        if not ok(run):
+            error = run["run"].get("error", "not run yet")
+            out.append(f"| {plan_entry['scenario']} | | {markdown_escape(run_name(run))} | "
+                       f"{run['run']['status']}: {markdown_escape(error)} |||||||||")
+            continue
+        t = run["timings"]
+        levels = ", ".join(str(level["iterations"]) for level in run.get("levels", []))
+        out.append(
+            f"| {plan_entry['scenario']} | {run['mesh']['vertices']:,} | "
+            f"{markdown_escape(run_name(run))} | "
+            f"{fmt_seconds(t['hierarchy']) if len(run.get('levels', [])) > 1 else '–'} | "
+            f"{fmt_seconds(t['precompute'])} | {fmt_seconds(t['constrain'])} | "
+            f"{fmt_seconds(t['solve'])} | {fmt_seconds(t['total'])} | "
+            f"{fmt_number(run['energy'], 5)} | {run['peak_memory_bytes'] / 2**20:.0f} | "
+            f"{levels} | {'yes' if run['converged'] else 'no'} |")
+    out.append("\nH hierarchy, P precompute, C constrain (factorization), S solve, T total, in "
+               "seconds; E final energy (rotations re-fitted); M peak memory of the run's process. "
+               "Per-run JSON reports (with the energy trace) are in `runs/`, all rows in "
+               "`results.csv`.\n")
+
+    # Figures.
+    out.append("## Figures\n")
+    for figure in figures:
+        if figure == "phases":
+            made = figure_phases(directory, runs)
+        elif figure == "energy_vs_time":
+            made = figure_energy_vs_time(directory, runs)
+        elif figure == "relative_scatter":
+            made = figure_relative_scatter(directory, runs, compare, baseline,
+                                           report.get("panel", ""))
+        elif figure == "levels":
+            made = figure_levels(directory, runs)
+        else:
+            made = figure_energy_bars(directory, runs)
+        if made is None:
+            out.append(f"- {figure}: no data (no successful run with what it needs)\n")
+            continue
+        (png, svg), caption = made
+        out.append(f"![{figure}]({png})\n\n{caption} ([SVG]({svg}))\n")
+
+    # Pictures.
+    if render and not args.no_render:
+        pictures, backend = make_pictures(directory, runs, render, per_scenario,
+                                          args.render_backend)
+        if pictures:
+            out.append("## Pictures\n")
+            out.append(f"Rendered with {backend}; rest mesh with the handles coloured (blue: "
+                       "first handle, red: second), then the deformed meshes of the runs, seen "
+                       "along the axis where the shapes are thinnest.\n")
+            for scenario, path in pictures:
+                out.append(f"![{scenario}]({path})\n")
+        elif not any(r["run"].get("mesh") for r in runs):
+            out.append("No pictures: the config does not save meshes (`[run] save_mesh = "
+                       "true`).\n")
+
+    failed = [r for r in runs if r["run"]["status"] not in ("ok", "missing")]
+    if failed:
+        out.append("## Failed runs\n")
+        for run in failed:
+            out.append(f"- `{run['run']['id']}` ({markdown_escape(run_name(run))}): "
+                       f"{markdown_escape(run['run'].get('error', ''))}")
+        out.append("")
+
+    with open(os.path.join(directory, "report.md"), "w", encoding="utf-8") as file:
+        file.write("\n".join(out) + "\n")
+    print(f"wrote {os.path.join(directory, 'report.md')}")
+    return 0
+
+
+def make_pictures(directory, runs, render, per_scenario, backend):
+    """VTK under xvfb-run in a child process; matplotlib 3D if that is not possible."""
+    if backend in ("auto", "vtk"):
+        xvfb = shutil.which("xvfb-run")
+        try:
+            import vtk  # noqa: F401
+            has_vtk = True
+        except ImportError:
+            has_vtk = False
+        if xvfb and has_vtk:
+            command = [xvfb, "-a", "-s", "-screen 0 1280x1024x24", sys.executable,
+                       os.path.abspath(__file__), directory, "--render-child"]
+            # Two tries: `xvfb-run -a` can lose the race for a display number to another user.
+            for _ in range(2):
+                result = subprocess.run(command, capture_output=True, text=True, check=False)
+                lines = [line for line in result.stdout.splitlines() if line.startswith("[")]
+                if result.returncode == 0 and lines:
+                    return [tuple(p) for p in json.loads(lines[-1])], "VTK (offscreen, Xvfb)"
+            print(f"VTK rendering failed ({result.stderr.strip()[-400:]}); using matplotlib",
+                  file=sys.stderr)
+        elif backend == "vtk":
+            print("VTK or xvfb-run missing; using matplotlib", file=sys.stderr)
+    pictures = render_pictures(directory, runs, render, per_scenario, use_vtk=False)
+    return pictures, "matplotlib 3D (fallback: VTK or Xvfb not available)"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
