@@ -59,7 +59,8 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                     {"faces", scenario.mesh.num_elements()},
                     {"element_kind", scenario.mesh.kind() == ElementKind::kTetrahedron
                                          ? "tetrahedron"
-                                         : "triangle"}};
+                                         : "triangle"},
+                    {"planar", scenario.mesh.planar}};
   report["optimizer"] = outcome.optimizer;
   report["energy_type"] = outcome.energy_type;
   report["solver"] = outcome.solver;
@@ -95,7 +96,10 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                       {"converged", level.converged}});
   }
   report["levels"] = levels;
-  report["notes"] = r.notes;
+  // Remarks about the input (scenario loading) first, then those of the run.
+  std::vector<std::string> notes = scenario.notes;
+  notes.insert(notes.end(), r.notes.begin(), r.notes.end());
+  report["notes"] = notes;
   report["config"] = outcome.resolved_config;
   if (include_trace) {
     json trace = json::array();

@@ -49,6 +49,9 @@ int List() {
   ListRegistry(registries.upsamplers);
   fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
   for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
+  fmt::print("volumetric twins of surfaces (scenario: mesh = {{ tetrahedralize = FILE or "
+             "{{ builtin = NAME, ... }}, max_volume, max_radius_edge_ratio, "
+             "min_dihedral_angle }}, see docs/input.md)\n");
   return 0;
 }
 
@@ -109,6 +112,7 @@ void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
              r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
              r.timings.total);
   fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
+  for (const auto& note : scenario.notes) fmt::print("note        {}\n", note);
   for (const auto& note : r.notes) fmt::print("note        {}\n", note);
 }
 

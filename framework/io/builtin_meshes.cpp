@@ -105,37 +105,119 @@ void StitchRings(MeshBuilder& builder, const Ring& a, const Ring& b) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Disks of radius 0.5 (cylinder caps and the planar `disk`): concentric rings spaced like
+// equilateral triangle rows (sqrt(3)/2 of the boundary's edge length), ring j of `rings` holding
+// about segments*j/rings vertices, so every ring has the boundary's edge length too.
+
+struct DiskLayout {
+  int rings = 0;                // rings from the centre (0) to the boundary ring (rings)
+  std::vector<int> ring_sizes;  // ring_sizes[j], j = 1..rings-1 (index 0 unused)
+  int64_t inner_vertices = 0;   // centre and inner rings (the boundary ring not counted)
+};
+
+constexpr double kDiskRadius = 0.5;
+
+// Distance between equilateral rows whose edges are those of a ring of `segments` on the disk.
+double RowSpacing(int segments) {
+  const double edge = 2.0 * kPi * kDiskRadius / segments;
+  return edge * std::sqrt(3.0) / 2.0;
+}
+
+DiskLayout LayoutDisk(int segments) {
+  DiskLayout layout;
+  layout.rings = std::max(1, static_cast<int>(std::lround(kDiskRadius / RowSpacing(segments))));
+  layout.ring_sizes.assign(layout.rings, 0);
+  layout.inner_vertices = 1;  // centre
+  for (int j = 1; j < layout.rings; ++j) {
+    layout.ring_sizes[j] = std::max(
+        3, static_cast<int>(std::lround(static_cast<double>(segments) * j / layout.rings)));
+    layout.inner_vertices += layout.ring_sizes[j];
+  }
+  return layout;
+}
+
+// Fills the existing ring `boundary` (radius 0.5, height z) with a disk; its normals point along
+// +z if `up`, else along -z.
+void AddDisk(MeshBuilder& builder, const DiskLayout& layout, const Ring& boundary, double z,
+             bool up) {
+  std::vector<Ring> rings(layout.rings + 1);
+  rings[0] = Ring{builder.AddVertex(0.0, 0.0, z), 1, 0.0};
+  for (int j = 1; j < layout.rings; ++j) {
+    const int size = layout.ring_sizes[j];
+    // Alternate half-step turns, as on the cylinder's side, so neighbouring rings do not line up.
+    rings[j] = AddRing(builder, size, kDiskRadius * j / layout.rings, z, (j % 2) * kPi / size);
+  }
+  rings[layout.rings] = boundary;
+  // Normal -z: stitch from the inside out; +z: outside in (see StitchRings).
+  for (int j = 0; j < layout.rings; ++j) {
+    if (up) {
+      StitchRings(builder, rings[j + 1], rings[j]);
+    } else {
+      StitchRings(builder, rings[j], rings[j + 1]);
+    }
+  }
+}
+
+// The segment (or row) count in [estimate - 8, estimate + 8], at least `minimum`, whose exact
+// vertex count, `count(segments)`, comes closest to `vertices`.
+template <class Count>
+int ClosestSegmentCount(int vertices, double estimate, Count count, int minimum = 3) {
+  const int center = std::max(minimum, static_cast<int>(std::lround(std::min(estimate, 1e9))));
+  int best = 0;
+  int64_t best_count = 0;
+  for (int segments = std::max(minimum, center - 8); segments <= center + 8; ++segments) {
+    const int64_t c = count(segments);
+    if (best == 0 || std::llabs(c - vertices) < std::llabs(best_count - vertices)) {
+      best = segments;
+      best_count = c;
+    }
+  }
+  return best;
+}
+
+void RequireVertices(const ConfigNode& parameters, std::string_view name, int vertices,
+                     int minimum) {
+  if (vertices < minimum) {
+    throw ConfigError(fmt::format("{}: built-in {}: 'vertices' must be at least {}, got {}",
+                                  parameters.Where("vertices"), name, minimum, vertices));
+  }
+}
+
+void RequireAspect(const ConfigNode& parameters, std::string_view name, double aspect) {
+  if (!(aspect > 0.0) || aspect > 1e4) {
+    throw ConfigError(fmt::format("{}: built-in {}: 'aspect' must be in (0, 1e4], got {}",
+                                  parameters.Where("aspect"), name, aspect));
+  }
+}
+
+void RequireNotTooMany(const ConfigNode& parameters, std::string_view name, int64_t count,
+                       int vertices) {
+  if (count > std::numeric_limits<Index>::max() / 4) {
+    throw ConfigError(fmt::format("{}: built-in {}: {} vertices is too many",
+                                  parameters.Where("vertices"), name, vertices));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Cylinder: radius 0.5 (diameter 1), z in [0, aspect]. The side is a staggered grid (every other
 // row turned by half a segment) whose row spacing is sqrt(3)/2 of the segment length, i.e.
-// equilateral triangles. Each cap is a disk of concentric rings spaced like the side rows, ring j
-// holding about segments*j/rings vertices, so every ring has the side's edge length too.
+// equilateral triangles. Each cap is a disk (above) whose boundary ring is the last side row.
 
 struct CylinderLayout {
-  int segments = 0;   // vertices per side row
-  int row_gaps = 0;   // side rows - 1
-  int cap_rings = 0;  // rings per cap from the centre (0) to the boundary row (cap_rings)
-  std::vector<int> ring_sizes;  // ring_sizes[j], j = 1..cap_rings-1 (index 0 unused)
+  int segments = 0;  // vertices per side row
+  int row_gaps = 0;  // side rows - 1
+  DiskLayout cap;    // used if caps
   int64_t vertex_count = 0;
 };
 
 CylinderLayout LayoutCylinder(int segments, double aspect, bool caps) {
   CylinderLayout layout;
   layout.segments = segments;
-  const double radius = 0.5;
-  const double edge = 2.0 * kPi * radius / segments;
-  const double row_spacing = edge * std::sqrt(3.0) / 2.0;
-  layout.row_gaps = std::max(1, static_cast<int>(std::lround(aspect / row_spacing)));
+  layout.row_gaps = std::max(1, static_cast<int>(std::lround(aspect / RowSpacing(segments))));
   layout.vertex_count = static_cast<int64_t>(segments) * (layout.row_gaps + 1);
   if (caps) {
-    layout.cap_rings = std::max(1, static_cast<int>(std::lround(radius / row_spacing)));
-    layout.ring_sizes.assign(layout.cap_rings, 0);
-    int64_t cap_vertices = 1;  // centre
-    for (int j = 1; j < layout.cap_rings; ++j) {
-      layout.ring_sizes[j] = std::max(
-          3, static_cast<int>(std::lround(static_cast<double>(segments) * j / layout.cap_rings)));
-      cap_vertices += layout.ring_sizes[j];
-    }
-    layout.vertex_count += 2 * cap_vertices;
+    layout.cap = LayoutDisk(segments);
+    layout.vertex_count += 2 * layout.cap.inner_vertices;
   }
   return layout;
 }
@@ -145,32 +227,19 @@ Mesh MakeCylinder(const ConfigNode& parameters) {
   const double aspect = parameters.Get("aspect", 4.0, "height / diameter (the diameter is 1)");
   const bool caps = parameters.Get("caps", true, "close both ends with triangulated disks");
   parameters.RejectUnknownKeys();
-  if (vertices < 10) {
-    throw ConfigError(fmt::format("{}: built-in cylinder: 'vertices' must be at least 10, got {}",
-                                  parameters.Where("vertices"), vertices));
-  }
-  if (!(aspect > 0.0) || aspect > 1e4) {
-    throw ConfigError(fmt::format("{}: built-in cylinder: 'aspect' must be in (0, 1e4], got {}",
-                                  parameters.Where("aspect"), aspect));
-  }
+  RequireVertices(parameters, "cylinder", vertices, 10);
+  RequireAspect(parameters, "cylinder", aspect);
 
   // vertices ~ segments^2 * (2 aspect + caps) / (pi sqrt 3) (side rows plus two disks); search
   // around that estimate for the segment count whose exact layout comes closest.
   const double per_segment_squared = (2.0 * aspect + (caps ? 1.0 : 0.0)) / (kPi * std::sqrt(3.0));
-  const int estimate = std::max(3, static_cast<int>(std::lround(
-                                       std::sqrt(vertices / per_segment_squared))));
-  CylinderLayout best;
-  for (int segments = std::max(3, estimate - 8); segments <= estimate + 8; ++segments) {
-    CylinderLayout layout = LayoutCylinder(segments, aspect, caps);
-    if (best.segments == 0 || std::llabs(layout.vertex_count - vertices) <
-                                  std::llabs(best.vertex_count - vertices)) {
-      best = std::move(layout);
-    }
-  }
-  if (best.vertex_count > std::numeric_limits<Index>::max() / 4) {
-    throw ConfigError(fmt::format("{}: built-in cylinder: {} vertices is too many",
-                                  parameters.Where("vertices"), vertices));
-  }
+  const CylinderLayout best = LayoutCylinder(
+      ClosestSegmentCount(vertices, std::sqrt(vertices / per_segment_squared),
+                          [&](int segments) {
+                            return LayoutCylinder(segments, aspect, caps).vertex_count;
+                          }),
+      aspect, caps);
+  RequireNotTooMany(parameters, "cylinder", best.vertex_count, vertices);
 
   MeshBuilder builder;
   builder.xyz.reserve(static_cast<size_t>(best.vertex_count) * 3);
@@ -180,33 +249,92 @@ Mesh MakeCylinder(const ConfigNode& parameters) {
   std::vector<Ring> rows;
   for (int row = 0; row <= best.row_gaps; ++row) {
     const double z = height * row / best.row_gaps;
-    rows.push_back(AddRing(builder, s, 0.5, z, (row % 2) * half_step));
+    rows.push_back(AddRing(builder, s, kDiskRadius, z, (row % 2) * half_step));
   }
   for (int row = 0; row < best.row_gaps; ++row) StitchRings(builder, rows[row], rows[row + 1]);
-
   if (caps) {
-    // Bottom (z = 0, normal -z): stitch from the inside out. Top (normal +z): outside in.
-    for (const bool top : {false, true}) {
-      const double z = top ? height : 0.0;
-      std::vector<Ring> rings(best.cap_rings + 1);
-      rings[0] = Ring{builder.AddVertex(0.0, 0.0, z), 1, 0.0};
-      for (int j = 1; j < best.cap_rings; ++j) {
-        const int size = best.ring_sizes[j];
-        // Alternate half-step turns, as on the side, so neighbouring rings do not line up.
-        rings[j] = AddRing(builder, size, 0.5 * j / best.cap_rings, z,
-                           (j % 2) * kPi / size);
-      }
-      rings[best.cap_rings] = top ? rows.back() : rows.front();
-      for (int j = 0; j < best.cap_rings; ++j) {
-        if (top) {
-          StitchRings(builder, rings[j + 1], rings[j]);
-        } else {
-          StitchRings(builder, rings[j], rings[j + 1]);
-        }
+    AddDisk(builder, best.cap, rows.front(), 0.0, /*up=*/false);
+    AddDisk(builder, best.cap, rows.back(), height, /*up=*/true);
+  }
+  return builder.Finish();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Disk (planar): radius 0.5 about the origin in the xy-plane, normals +z (counter-clockwise).
+
+Mesh MakeDisk(const ConfigNode& parameters) {
+  const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
+  parameters.RejectUnknownKeys();
+  RequireVertices(parameters, "disk", vertices, 4);
+  // vertices ~ area / (sqrt(3)/2 edge^2) with edge = pi/segments: segments^2 / (2 sqrt(3) pi).
+  const auto count = [](int segments) { return segments + LayoutDisk(segments).inner_vertices; };
+  const int segments = ClosestSegmentCount(
+      vertices, std::sqrt(vertices * 2.0 * std::sqrt(3.0) * kPi), count);
+  RequireNotTooMany(parameters, "disk", count(segments), vertices);
+  MeshBuilder builder;
+  builder.xyz.reserve(static_cast<size_t>(count(segments)) * 3);
+  const Ring boundary = AddRing(builder, segments, kDiskRadius, 0.0, 0.0);
+  AddDisk(builder, LayoutDisk(segments), boundary, 0.0, /*up=*/true);
+  Mesh mesh = builder.Finish();
+  mesh.planar = true;
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Grids (the spike plane and the planar `rectangle`): columns x in [0, width], rows y in
+// [0, height], vertex (row i, column j) = i * columns + j; the cells' diagonals alternate, which
+// avoids a preferred direction; counter-clockwise seen from +z. `z` (rows*columns, or empty for
+// 0) lifts the vertices.
+
+void AddGrid(MeshBuilder& builder, int rows, int columns, double width, double height,
+             const std::vector<double>& z) {
+  const Index first = static_cast<Index>(builder.xyz.size() / 3);
+  for (int i = 0; i < rows; ++i) {
+    for (int j = 0; j < columns; ++j) {
+      builder.AddVertex(j * (width / (columns - 1)), i * (height / (rows - 1)),
+                        z.empty() ? 0.0 : z[static_cast<size_t>(i) * columns + j]);
+    }
+  }
+  for (int i = 0; i + 1 < rows; ++i) {
+    for (int j = 0; j + 1 < columns; ++j) {
+      const Index v00 = first + i * columns + j;
+      const Index v01 = v00 + 1;        // +x
+      const Index v10 = v00 + columns;  // +y
+      const Index v11 = v10 + 1;
+      if ((i + j) % 2 == 0) {
+        builder.AddTriangle(v00, v01, v11);
+        builder.AddTriangle(v00, v11, v10);
+      } else {
+        builder.AddTriangle(v00, v01, v10);
+        builder.AddTriangle(v01, v11, v10);
       }
     }
   }
-  return builder.Finish();
+}
+
+// Rectangle (planar): [0, aspect] x [0, 1] in the xy-plane, a grid of nearly square cells.
+Mesh MakeRectangle(const ConfigNode& parameters) {
+  const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
+  const double aspect = parameters.Get("aspect", 4.0, "width (along x) / height (along y = 1)");
+  parameters.RejectUnknownKeys();
+  RequireVertices(parameters, "rectangle", vertices, 4);
+  RequireAspect(parameters, "rectangle", aspect);
+  // Square cells: (columns - 1) ~ aspect (rows - 1), at least 2 of each; of the row counts near
+  // sqrt(vertices / aspect), the one whose rows * columns comes closest to `vertices`.
+  const auto columns_for = [aspect](int rows) {
+    return static_cast<int64_t>(std::max(2.0, std::min(std::round(aspect * (rows - 1)) + 1.0, 1e9)));
+  };
+  const int rows = ClosestSegmentCount(
+      vertices, std::sqrt(static_cast<double>(vertices) / aspect),
+      [&](int r) { return static_cast<int64_t>(r) * columns_for(r); }, /*minimum=*/2);
+  RequireNotTooMany(parameters, "rectangle", rows * columns_for(rows), vertices);
+  const int columns = static_cast<int>(columns_for(rows));
+  MeshBuilder builder;
+  builder.xyz.reserve(static_cast<size_t>(rows) * columns * 3);
+  AddGrid(builder, rows, columns, aspect, 1.0, {});
+  Mesh mesh = builder.Finish();
+  mesh.planar = true;
+  return mesh;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -232,10 +360,7 @@ Mesh MakePlane(const ConfigNode& parameters) {
       parameters.Get("spike_radius", 0.02, "base radius of each conical spike (side = 1)");
   const int seed = parameters.Get("seed", 1, "seed of the spike positions");
   parameters.RejectUnknownKeys();
-  if (vertices < 4) {
-    throw ConfigError(fmt::format("{}: built-in plane: 'vertices' must be at least 4, got {}",
-                                  parameters.Where("vertices"), vertices));
-  }
+  RequireVertices(parameters, "plane", vertices, 4);
   if (spikes < 0) {
     throw ConfigError(fmt::format("{}: built-in plane: 'spikes' must be >= 0, got {}",
                                   parameters.Where("spikes"), spikes));
@@ -279,33 +404,13 @@ Mesh MakePlane(const ConfigNode& parameters) {
 
   MeshBuilder builder;
   builder.xyz.reserve(static_cast<size_t>(n) * n * 3);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j) {
-      builder.AddVertex(j * spacing, i * spacing, height[static_cast<size_t>(i) * n + j]);
-    }
-  }
-  for (int i = 0; i + 1 < n; ++i) {
-    for (int j = 0; j + 1 < n; ++j) {
-      const Index v00 = i * n + j;
-      const Index v01 = v00 + 1;  // +x
-      const Index v10 = v00 + n;  // +y
-      const Index v11 = v10 + 1;
-      // Alternating diagonals avoid a preferred direction; counter-clockwise seen from +z.
-      if ((i + j) % 2 == 0) {
-        builder.AddTriangle(v00, v01, v11);
-        builder.AddTriangle(v00, v11, v10);
-      } else {
-        builder.AddTriangle(v00, v01, v10);
-        builder.AddTriangle(v01, v11, v10);
-      }
-    }
-  }
+  AddGrid(builder, n, n, 1.0, 1.0, height);
   return builder.Finish();
 }
 
 }  // namespace
 
-std::vector<std::string> BuiltinMeshNames() { return {"cylinder", "plane"}; }
+std::vector<std::string> BuiltinMeshNames() { return {"cylinder", "plane", "disk", "rectangle"}; }
 
 Mesh MakeBuiltinMesh(const ConfigNode& parameters) {
   const std::vector<std::string> names = BuiltinMeshNames();
@@ -316,7 +421,10 @@ Mesh MakeBuiltinMesh(const ConfigNode& parameters) {
   }
   const std::string name =
       parameters.GetChoice("builtin", names.front(), names, "which built-in mesh to generate");
-  Mesh mesh = name == "cylinder" ? MakeCylinder(parameters) : MakePlane(parameters);
+  Mesh mesh = name == "cylinder" ? MakeCylinder(parameters)
+              : name == "plane"  ? MakePlane(parameters)
+              : name == "disk"   ? MakeDisk(parameters)
+                                 : MakeRectangle(parameters);
   ValidateMesh(mesh, fmt::format("built-in mesh '{}'", name));
   return mesh;
 }

@@ -18,6 +18,12 @@ namespace harap {
 ///   - `plane`: the paper's "spike plane": a square grid on [0,1]^2 (z = 0) of about `vertices`
 ///     vertices with `spikes` (16) conical spikes of height `spike_height` (0.2) and base radius
 ///     `spike_radius` (0.02), placed by `seed` (1); lengths are fractions of the side.
+///   - `disk` (planar): radius 0.5 about the origin in the xy-plane, concentric rings of
+///     near-equilateral triangles like the cylinder's caps; `vertices` ≈ vertex count.
+///   - `rectangle` (planar): [0, `aspect`] × [0, 1] in the xy-plane (aspect = width / height,
+///     default 4), a grid of nearly square cells split by alternating diagonals; `vertices` ≈
+///     vertex count.
+/// Planar built-ins come with `Mesh::planar` set and counter-clockwise triangles (normals +z).
 Mesh MakeBuiltinMesh(const ConfigNode& parameters);
 
 std::vector<std::string> BuiltinMeshNames();

@@ -47,26 +47,18 @@
 
 #include "framework/error.h"
 #include "framework/io/openmesh_log.h"
+#include "framework/io/tet_mesh_io.h"
+#include "framework/io/text_scanning.h"
 
 namespace harap {
 
 namespace {
 
+using namespace io_internal;
+
 constexpr std::string_view kSupportedFormats =
-    ".obj, .ply, .off, .stl (each optionally compressed as .xz, e.g. .obj.xz)";
-
-[[noreturn]] void Fail(const std::string& what, std::string_view problem) {
-  throw InputError(fmt::format("{}: {}", what, problem));
-}
-
-std::string Lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
-
-bool EndsWith(std::string_view text, std::string_view suffix) {
-  return text.size() >= suffix.size() && text.substr(text.size() - suffix.size()) == suffix;
-}
+    ".obj, .ply, .off, .stl (surfaces), .node/.ele (TetGen), .mesh (MEDIT) (each optionally "
+    "compressed as .xz, e.g. .obj.xz)";
 
 // The format extension ("obj", "ply", ...) of a file name, looking through a trailing ".xz".
 struct FileFormat {
@@ -234,81 +226,6 @@ Mesh BuildMesh(const RawMesh& raw, const std::string& what) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Text scanning shared by the OBJ, OFF and ASCII PLY parsers.
-
-bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
-
-// Splits off the next whitespace-separated token of `line` (which is advanced past it).
-std::string_view NextToken(std::string_view& line) {
-  size_t start = 0;
-  while (start < line.size() && IsSpace(line[start])) ++start;
-  size_t end = start;
-  while (end < line.size() && !IsSpace(line[end])) ++end;
-  std::string_view token = line.substr(start, end - start);
-  line.remove_prefix(end);
-  return token;
-}
-
-// Parses a whole token as a double; false if it is not a number. Non-finite spellings ("nan",
-// "inf") parse, so the caller can say that the number is non-finite rather than malformed.
-bool ParseDouble(std::string_view token, double& value) {
-  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
-  if (token.empty()) return false;
-  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
-  if (end != token.data() + token.size()) return false;
-  if (error == std::errc::result_out_of_range) {
-    // from_chars reports both overflow and underflow; strtod tells them apart (denormals and
-    // zero are fine, overflow becomes inf and is reported as non-finite by the caller).
-    value = std::strtod(std::string(token).c_str(), nullptr);
-    return true;
-  }
-  return error == std::errc();
-}
-
-bool ParseInteger(std::string_view token, int64_t& value) {
-  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
-  if (token.empty()) return false;
-  const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
-  return error == std::errc() && end == token.data() + token.size();
-}
-
-// Iterates over the lines of a text buffer, counting them (1-based).
-class LineReader {
- public:
-  explicit LineReader(std::string_view data) : data_(data) {}
-
-  bool Next(std::string_view& line) {
-    if (position_ >= data_.size()) return false;
-    const size_t end = data_.find('\n', position_);
-    const size_t stop = end == std::string_view::npos ? data_.size() : end;
-    line = data_.substr(position_, stop - position_);
-    position_ = stop + 1;
-    ++line_number_;
-    return true;
-  }
-  size_t line_number() const { return line_number_; }
-
- private:
-  std::string_view data_;
-  size_t position_ = 0;
-  size_t line_number_ = 0;
-};
-
-std::string_view StripComment(std::string_view line) {
-  const size_t hash = line.find('#');
-  return hash == std::string_view::npos ? line : line.substr(0, hash);
-}
-
-std::string Quote(std::string_view token) {
-  constexpr size_t kMax = 40;
-  std::string text(token.substr(0, kMax));
-  for (char& c : text) {
-    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-  }
-  return fmt::format("'{}{}'", text, token.size() > kMax ? "..." : "");
-}
-
-// ---------------------------------------------------------------------------------------------
 // OBJ: `v x y z` and `f a b c ...` (a = i, i/t, i//n or i/t/n; 1-based, negative = relative).
 
 RawMesh ParseObj(std::string_view data, const std::string& what) {
@@ -386,16 +303,7 @@ RawMesh ParseOff(std::string_view data, const std::string& what) {
   RawMesh raw;
   LineReader lines(data);
   std::string_view line;
-  // The next line with content (comments and blank lines skipped); false at the end.
-  auto next_content_line = [&](std::string_view& out) {
-    while (lines.Next(out)) {
-      out = StripComment(out);
-      std::string_view probe = out;
-      if (!NextToken(probe).empty()) return true;
-    }
-    return false;
-  };
-  if (!next_content_line(line)) Fail(what, "empty file (no OFF header)");
+  if (!lines.NextContent(line)) Fail(what, "empty file (no OFF header)");
   const std::string header(NextToken(line));
   if (!EndsWith(header, "OFF")) {
     Fail(what, fmt::format("not an OFF file: the first line starts with {} instead of OFF",
@@ -423,7 +331,7 @@ RawMesh ParseOff(std::string_view data, const std::string& what) {
     if (first == "BINARY") {
       Fail(what, "binary OFF is not supported (convert it to PLY or ASCII OFF)");
     }
-    if (first.empty() && !next_content_line(counts_line)) {
+    if (first.empty() && !lines.NextContent(counts_line)) {
       Fail(what, "the file ends after the OFF header (no vertex/face counts)");
     }
   }
@@ -446,7 +354,7 @@ RawMesh ParseOff(std::string_view data, const std::string& what) {
   }
   raw.xyz.reserve(static_cast<size_t>(num_vertices) * 3);
   for (int64_t v = 0; v < num_vertices; ++v) {
-    if (!next_content_line(line)) {
+    if (!lines.NextContent(line)) {
       Fail(what, fmt::format("truncated file: it ends after {} of the {} vertices the header "
                              "declares",
                              v, num_vertices));
@@ -467,7 +375,7 @@ RawMesh ParseOff(std::string_view data, const std::string& what) {
   }
   std::vector<int64_t> polygon;
   for (int64_t f = 0; f < num_faces; ++f) {
-    if (!next_content_line(line)) {
+    if (!lines.NextContent(line)) {
       Fail(what, fmt::format("truncated file: it ends after {} of the {} faces the header "
                              "declares",
                              f, num_faces));
@@ -689,31 +597,6 @@ class BinaryCursor {
   const std::string& what_;
 };
 
-// Sequential whitespace-separated tokens of an ASCII PLY body, with line numbers.
-class AsciiCursor {
- public:
-  AsciiCursor(std::string_view data, size_t first_line) : data_(data), line_(first_line) {}
-
-  std::string_view Next() {
-    while (position_ < data_.size() &&
-           (IsSpace(data_[position_]) || data_[position_] == '\n')) {
-      if (data_[position_] == '\n') ++line_;
-      ++position_;
-    }
-    const size_t start = position_;
-    while (position_ < data_.size() && !IsSpace(data_[position_]) && data_[position_] != '\n') {
-      ++position_;
-    }
-    return data_.substr(start, position_ - start);
-  }
-  size_t line() const { return line_; }
-
- private:
-  std::string_view data_;
-  size_t position_ = 0;
-  size_t line_;
-};
-
 RawMesh ParsePly(std::string_view data, const std::string& what) {
   const PlyHeader header = ParsePlyHeader(data, what);
   const std::string_view body = data.substr(header.data_offset);
@@ -840,7 +723,7 @@ RawMesh ParsePly(std::string_view data, const std::string& what) {
       if (is_face && vertices_done) break;  // later elements hold nothing we use
     }
   } else {
-    AsciiCursor cursor(body, 0);
+    TokenCursor cursor(body, 0, /*skip_comments=*/false);
     auto line_of = [&](size_t body_line) {
       // Lines in messages count from the top of the file.
       return body_line + 1 + static_cast<size_t>(std::count(
@@ -1094,14 +977,12 @@ std::string ReadFileMaybeXz(const std::filesystem::path& file) {
   return data;
 }
 
-Mesh ReadMesh(const std::filesystem::path& file) {
+Mesh ReadMesh(const std::filesystem::path& file, std::vector<std::string>* notes) {
   const std::string what = file.string();
   const FileFormat format = DetectFormat(file);
   const std::string& extension = format.extension;
-  if (extension == "node" || extension == "ele" || extension == "mesh") {
-    Fail(what, "tetrahedral meshes are not supported yet (TetGen .node/.ele and MEDIT .mesh "
-               "files will be)");
-  }
+  if (extension == "node" || extension == "ele") return ReadTetGenMesh(file, notes);
+  if (extension == "mesh") return ReadMeditMesh(file, notes);
   if (extension != "obj" && extension != "ply" && extension != "off" && extension != "stl") {
     Fail(what, fmt::format("unknown mesh file extension '{}{}'; supported: {}",
                            extension.empty() ? "" : ".", extension, kSupportedFormats));
@@ -1118,6 +999,13 @@ Mesh ReadMesh(const std::filesystem::path& file) {
     raw = ParseStl(data, what);
   }
   return BuildMesh(raw, what);
+}
+
+Positions ReadMeshVertices(const std::filesystem::path& file) {
+  const std::string& extension = DetectFormat(file).extension;
+  if (extension == "node") return ReadTetGenNodes(file);
+  if (extension == "mesh") return ReadMeditVertices(file);
+  return ReadMesh(file).vertices;
 }
 
 void WritePly(const std::filesystem::path& file, const Positions& vertices,

@@ -9,7 +9,15 @@
 //   - Everything written in the scenario text (unknown keys, bad values, selections that match
 //     nothing) is a ConfigError; problems with the files it names (missing, unreadable, bad
 //     index files) are InputErrors. Every message starts with "file:line:column".
-//   - The whole text is checked before the mesh is read, so a typo does not cost a mesh load.
+//   - The whole text is checked before the mesh is read, so a typo does not cost a mesh load
+//     (the keys of a `mesh` table are the exception: they are checked when it is built).
+//   - `refine` of a tetrahedralized surface subdivides the surface before TetGen fills it; `refine`
+//     of a tetrahedral file is an error (Loop subdivision is for triangles).
+//   - `initial` reads vertex positions only (ReadMeshVertices): a start configuration may have
+//     inverted or flat tetrahedra, and for TetGen only its .node file is needed.
+//   - Planar (Mesh::planar) is `planar = true/false` if given, else automatic: a triangle mesh
+//     whose vertices, handle targets and initial positions all have z = 0 exactly. A flat mesh
+//     with a handle that leaves the plane is a surface problem (lifting a sheet), not an error.
 #include "framework/io/scenario.h"
 
 #include <fmt/format.h>
@@ -25,12 +33,14 @@
 #include <numbers>
 #include <sstream>
 #include <toml++/toml.h>
+#include <type_traits>
 
 #include "framework/config.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
 #include "framework/io/subdivision.h"
+#include "framework/io/tetrahedralize.h"
 
 namespace harap {
 
@@ -369,7 +379,7 @@ class Parser {
       throw ConfigError(fmt::format("{}: TOML syntax error: {}", Where(error.source()),
                                     error.description()));
     }
-    CheckKeys(root, {"mesh", "refine", "initial", "handle"}, "", "the top level");
+    CheckKeys(root, {"mesh", "refine", "initial", "planar", "handle"}, "", "the top level");
 
     // Everything in the text first (see the top of this file).
     const toml::node* mesh_node = root.get("mesh");
@@ -392,6 +402,13 @@ class Parser {
       initial_file = Resolve(node->as_string()->get());
       initial_where = Where(*node);
     }
+    std::optional<bool> planar;
+    std::string planar_where;
+    if (const toml::node* node = root.get("planar")) {
+      if (!node->is_boolean()) Fail(Where(*node), "", "'planar' must be true or false");
+      planar = node->as_boolean()->get();
+      planar_where = Where(*node);
+    }
     std::vector<HandleSpec> specs;
     if (const toml::node* node = root.get("handle")) {
       const toml::array* handles = node->as_array();
@@ -410,50 +427,38 @@ class Parser {
     }
 
     Scenario scenario;
+    const toml::node* refine_node = root.get("refine");
     if (const toml::table* table = mesh_node->as_table()) {
       // ConfigNode carries the line numbers and the unknown-key check into MakeBuiltinMesh.
       const ConfigNode parameters = ConfigNode::Parse(toml_text, source_).Child("mesh");
-      scenario.mesh = MakeBuiltinMesh(parameters);
-      std::string description = "builtin";
-      for (const auto& [key, value] : *table) {
-        std::ostringstream text;
-        value.visit([&](const auto& v) { text << v; });
-        description += fmt::format(" {}={}", key.str(), text.str());
+      if (const toml::node* source = table->get("tetrahedralize")) {
+        TetrahedralizeSurface(*mesh_node, *source, parameters, refine, refine_node, scenario);
+      } else {
+        scenario.mesh = MakeBuiltinMesh(parameters);
+        scenario.mesh_source = DescribeBuiltin(*table);
+        Refine(scenario, refine, refine_node);
       }
-      scenario.mesh_source = description;
     } else if (const auto* name = mesh_node->as_string()) {
       const std::filesystem::path path = Resolve(name->get());
       scenario.mesh_source = path.string();
-      scenario.mesh = LoadMeshFile(path, Where(*mesh_node), "mesh");
+      scenario.mesh = LoadMeshFile(path, Where(*mesh_node), "mesh", &scenario.notes);
+      Refine(scenario, refine, refine_node);
     } else {
       Fail(Where(*mesh_node), "",
-           "'mesh' must be a file name or a table { builtin = \"cylinder\", ... }");
-    }
-    if (refine > 0) {
-      const double growth = std::pow(4.0, refine);
-      if (static_cast<double>(scenario.mesh.num_elements()) * growth >
-          static_cast<double>(std::numeric_limits<Index>::max())) {
-        Fail(Where(*root.get("refine")), "",
-             fmt::format("refine = {} would make more than {} triangles from {}", refine,
-                         std::numeric_limits<Index>::max(), scenario.mesh.num_elements()));
-      }
-      try {
-        scenario.mesh = LoopSubdivide(scenario.mesh, refine);
-      } catch (const InputError& error) {
-        throw InputError(fmt::format("{}: refine = {} of mesh {}: {}", Where(*root.get("refine")),
-                                     refine, scenario.mesh_source, error.what()));
-      }
+           "'mesh' must be a file name, a table { builtin = \"cylinder\", ... } or a table "
+           "{ tetrahedralize = \"surface file\" or { builtin = ... }, ... }");
     }
     if (initial_file) {
-      const Mesh initial = LoadMeshFile(*initial_file, initial_where, "initial");
-      if (initial.num_vertices() != scenario.mesh.num_vertices()) {
+      Positions initial = ReadNamedFile(*initial_file, initial_where, "initial",
+                                        [](const auto& path) { return ReadMeshVertices(path); });
+      if (initial.rows() != scenario.mesh.num_vertices()) {
         throw InputError(fmt::format("{}: initial configuration {} has {} vertices, but the mesh "
                                      "has {}{} (same count and order needed)",
-                                     initial_where, initial_file->string(),
-                                     initial.num_vertices(), scenario.mesh.num_vertices(),
+                                     initial_where, initial_file->string(), initial.rows(),
+                                     scenario.mesh.num_vertices(),
                                      refine > 0 ? " after refine" : ""));
       }
-      scenario.initial = initial.vertices;
+      scenario.initial = std::move(initial);
     }
 
     // Box of the referenced vertices (see the top of this file).
@@ -504,29 +509,174 @@ class Parser {
       }
       scenario.handles.push_back(std::move(handle));
     }
+    DecidePlanar(scenario, planar, planar_where);
     return scenario;
   }
 
  private:
-  // Reads a mesh named by the scenario; `what` is "mesh" or "initial".
-  Mesh LoadMeshFile(const std::filesystem::path& path, const std::string& where,
-                    std::string_view what) const {
-    std::string extension = path.filename().string();
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (extension.ends_with(".xz")) extension.resize(extension.size() - 3);
-    if (extension.ends_with(".node") || extension.ends_with(".mesh") ||
-        extension.ends_with(".ele")) {
-      throw InputError(fmt::format("{}: {} {}: tetrahedral meshes are not supported yet", where,
-                                   what, path.string()));
-    }
+  // read(path) of a file named by the scenario, with errors prefixed by where it was named and
+  // the key (`what`: "mesh", "initial", "mesh.tetrahedralize").
+  template <class Read>
+  std::invoke_result_t<Read, const std::filesystem::path&> ReadNamedFile(
+      const std::filesystem::path& path, const std::string& where, std::string_view what,
+      Read read) const {
     std::error_code error;
     if (!std::filesystem::exists(path, error)) {
       throw InputError(fmt::format("{}: {} file {} not found", where, what, path.string()));
     }
     try {
-      return ReadMesh(path);
+      return read(path);
     } catch (const InputError& error) {
       throw InputError(fmt::format("{}: {}: {}", where, what, error.what()));
+    }
+  }
+
+  Mesh LoadMeshFile(const std::filesystem::path& path, const std::string& where,
+                    std::string_view what, std::vector<std::string>* notes) const {
+    return ReadNamedFile(path, where, what, [&](const auto& file) { return ReadMesh(file, notes); });
+  }
+
+  static std::string DescribeBuiltin(const toml::table& table) {
+    std::string description = "builtin";
+    for (const auto& [key, value] : table) {
+      std::ostringstream text;
+      value.visit([&](const auto& v) { text << v; });
+      description += fmt::format(" {}={}", key.str(), text.str());
+    }
+    return description;
+  }
+
+  // `refine` rounds of Loop subdivision of the scenario's (triangle) mesh.
+  void Refine(Scenario& scenario, int refine, const toml::node* refine_node) const {
+    if (refine == 0) return;
+    if (scenario.mesh.kind() == ElementKind::kTetrahedron) {
+      Fail(Where(*refine_node), "",
+           fmt::format("refine (Loop subdivision) applies to triangle meshes, but {} has "
+                       "tetrahedra (to refine a surface before filling it, use mesh = "
+                       "{{ tetrahedralize = ... }})",
+                       scenario.mesh_source));
+    }
+    const double growth = std::pow(4.0, refine);
+    if (static_cast<double>(scenario.mesh.num_elements()) * growth >
+        static_cast<double>(std::numeric_limits<Index>::max())) {
+      Fail(Where(*refine_node), "",
+           fmt::format("refine = {} would make more than {} triangles from {}", refine,
+                       std::numeric_limits<Index>::max(), scenario.mesh.num_elements()));
+    }
+    try {
+      scenario.mesh = LoopSubdivide(scenario.mesh, refine);
+    } catch (const InputError& error) {
+      throw InputError(fmt::format("{}: refine = {} of mesh {}: {}", Where(*refine_node), refine,
+                                   scenario.mesh_source, error.what()));
+    }
+  }
+
+  // mesh = { tetrahedralize = "surface file" | { builtin = ... }, max_volume = ..., ... }: the
+  // surface (after `refine`) filled with tetrahedra by TetGen, its vertices first and unchanged.
+  void TetrahedralizeSurface(const toml::node& mesh_node, const toml::node& source,
+                             const ConfigNode& parameters, int refine,
+                             const toml::node* refine_node, Scenario& scenario) const {
+    const std::string where = Where(source);
+    Scenario surface;
+    if (source.is_string()) {
+      const std::filesystem::path path = Resolve(parameters.Get(
+          "tetrahedralize", std::string(),
+          "surface to fill with tetrahedra: a mesh file, or a built-in table { builtin = ... }"));
+      surface.mesh_source = path.string();
+      surface.mesh = LoadMeshFile(path, where, "mesh.tetrahedralize", nullptr);
+    } else if (const toml::table* table = source.as_table()) {
+      surface.mesh = MakeBuiltinMesh(parameters.Child("tetrahedralize"));
+      surface.mesh_source = DescribeBuiltin(*table);
+    } else {
+      Fail(where, "", "mesh.tetrahedralize must be a surface file name or a built-in mesh table "
+                      "{ builtin = \"cylinder\", ... }");
+    }
+    TetrahedralizeOptions options;
+    options.max_volume = parameters.Get(
+        "max_volume", options.max_volume,
+        "largest tetrahedron volume as a fraction of the enclosed volume (0: no bound)");
+    options.max_radius_edge_ratio = parameters.Get(
+        "max_radius_edge_ratio", options.max_radius_edge_ratio,
+        "TetGen quality bound: circumradius / shortest edge (0: no quality refinement)");
+    options.min_dihedral_angle = parameters.Get(
+        "min_dihedral_angle", options.min_dihedral_angle,
+        "TetGen quality bound: smallest dihedral angle in degrees (0: TetGen's default)");
+    parameters.RejectUnknownKeys();
+    if (const std::string problem = CheckTetrahedralizeOptions(options); !problem.empty()) {
+      Fail(Where(mesh_node), "", problem);
+    }
+    if (surface.mesh.kind() == ElementKind::kTetrahedron) {
+      throw InputError(fmt::format("{}: mesh.tetrahedralize: {} has tetrahedra already; give a "
+                                   "triangle surface (or name the tetrahedral file as mesh)",
+                                   where, surface.mesh_source));
+    }
+    Refine(surface, refine, refine_node);
+    scenario.mesh = Tetrahedralize(
+        surface.mesh, options,
+        fmt::format("{}: tetrahedralize {}", where, surface.mesh_source));
+    scenario.mesh_source = fmt::format(
+        "tetrahedralized {}{} (max_volume={}, max_radius_edge_ratio={}, min_dihedral_angle={})",
+        surface.mesh_source, refine > 0 ? fmt::format(" refined {}x", refine) : "",
+        options.max_volume, options.max_radius_edge_ratio, options.min_dihedral_angle);
+    scenario.notes.push_back(fmt::format(
+        "tetrahedralize: {} surface vertices (indices 0..{}, unchanged) and {} interior Steiner "
+        "points, {} tetrahedra",
+        surface.mesh.num_vertices(), surface.mesh.num_vertices() - 1,
+        scenario.mesh.num_vertices() - surface.mesh.num_vertices(), scenario.mesh.num_elements()));
+  }
+
+  // Sets scenario.mesh.planar: from `planar = true/false`, else automatically (see docs/input.md):
+  // a triangle mesh whose vertices, handle targets and initial positions all have z = 0.
+  void DecidePlanar(Scenario& scenario, std::optional<bool> setting,
+                    const std::string& where) const {
+    Mesh& mesh = scenario.mesh;
+    mesh.planar = false;
+    if (setting == false) return;
+    const bool triangles = mesh.kind() == ElementKind::kTriangle;
+    if (setting == true && !triangles) {
+      Fail(where, "", "planar = true needs a triangle mesh, but the mesh has tetrahedra");
+    }
+    if (!triangles) return;
+    // The first vertex, handle target or initial position off the plane, described; "" if none.
+    std::string off_plane;
+    for (Index v = 0; v < mesh.num_vertices() && off_plane.empty(); ++v) {
+      if (mesh.vertices(v, 2) != 0.0) {
+        off_plane = fmt::format("vertex {} has z = {}", v, mesh.vertices(v, 2));
+      }
+    }
+    for (const ScenarioHandle& handle : scenario.handles) {
+      for (Index i = 0; i < handle.targets.rows() && off_plane.empty(); ++i) {
+        if (handle.targets(i, 2) != 0.0) {
+          off_plane = fmt::format("handle '{}' moves vertex {} to z = {}", handle.name,
+                                  handle.vertices[i], handle.targets(i, 2));
+        }
+      }
+    }
+    if (scenario.initial) {
+      for (Index v = 0; v < scenario.initial->rows() && off_plane.empty(); ++v) {
+        if ((*scenario.initial)(v, 2) != 0.0) {
+          off_plane = fmt::format("the initial configuration has vertex {} at z = {}", v,
+                                  (*scenario.initial)(v, 2));
+        }
+      }
+    }
+    if (setting == true) {
+      if (!off_plane.empty()) {
+        Fail(where, "", fmt::format("planar = true, but {} (a planar mesh and its motion stay "
+                                    "in the plane z = 0)",
+                                    off_plane));
+      }
+      mesh.planar = true;
+      return;
+    }
+    if (off_plane.empty()) {
+      mesh.planar = true;
+      scenario.notes.push_back("planar: every vertex, handle target and initial position has "
+                               "z = 0, so the mesh is deformed in the plane (planar = false "
+                               "deforms it as a surface)");
+    } else if (off_plane.rfind("vertex", 0) != 0) {
+      scenario.notes.push_back(fmt::format("not planar although the mesh is flat (z = 0): {}",
+                                           off_plane));
     }
   }
 

@@ -18,13 +18,17 @@ struct ScenarioHandle {
   Positions targets;            ///< #vertices×3 target positions.
 };
 
-/// A deformation scenario (../shared/scenarios/FORMAT.md): the mesh and its handles.
+/// A deformation scenario (../shared/scenarios/FORMAT.md, harap's additions in docs/input.md):
+/// the mesh and its handles.
 struct Scenario {
   std::filesystem::path file;       ///< The scenario file ("" for in-memory scenarios).
   std::string mesh_source;          ///< Mesh file path or builtin description, for reports.
-  Mesh mesh;                        ///< After `refine`.
+  Mesh mesh;                        ///< After `refine` / `tetrahedralize`; `planar` decided.
   std::vector<ScenarioHandle> handles;
   std::optional<Positions> initial; ///< From `initial = "file"`.
+  /// Remarks about the input for reports: reoriented tetrahedra, what tetrahedralization made,
+  /// why the mesh is (not) treated as planar.
+  std::vector<std::string> notes;
 
   /// All handles merged; a vertex selected by several handles takes the first handle's target.
   Constraints MergedConstraints() const;

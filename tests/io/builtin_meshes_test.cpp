@@ -164,6 +164,71 @@ TEST_CASE("builtin plane: grid with sharp spikes", "[io][builtin]") {
   CHECK(flat.vertices.col(2).cwiseAbs().maxCoeff() == 0.0);
 }
 
+// A planar disk-like mesh: z = 0, `planar` set, every triangle counter-clockwise (positive
+// area), edges in one or two triangles with one boundary loop, Euler characteristic 1.
+void CheckPlanarDisk(const Mesh& mesh) {
+  CHECK(mesh.planar);
+  CHECK(mesh.vertices.col(2).cwiseAbs().maxCoeff() == 0.0);
+  int clockwise = 0;
+  for (Index f = 0; f < mesh.num_elements(); ++f) {
+    const Eigen::Vector3d p = mesh.vertices.row(mesh.elements(f, 0)).transpose();
+    const Eigen::Vector3d q = mesh.vertices.row(mesh.elements(f, 1)).transpose();
+    const Eigen::Vector3d r = mesh.vertices.row(mesh.elements(f, 2)).transpose();
+    clockwise += (q - p).cross(r - p).z() <= 0.0;
+  }
+  CHECK(clockwise == 0);
+  const auto counts = testing::CountEdges(mesh);
+  int boundary = 0;
+  for (const auto& [edge, count] : counts.undirected) {
+    REQUIRE((count == 1 || count == 2));
+    boundary += count == 1;
+  }
+  for (const auto& [edge, count] : counts.directed) REQUIRE(count == 1);
+  CHECK(boundary > 0);
+  const auto referenced = ReferencedVertices(mesh);
+  CHECK(std::count(referenced.begin(), referenced.end(), false) == 0);
+  CHECK(mesh.num_vertices() - static_cast<Index>(counts.undirected.size()) +
+            mesh.num_elements() ==
+        1);
+  CHECK(testing::MinAngleDegrees(mesh) > 25.0);
+}
+
+TEST_CASE("builtin disk and rectangle: planar, counter-clockwise, sized", "[io][builtin]") {
+  for (const int vertices : {30, 1000, 20000}) {
+    INFO("vertices = " << vertices);
+    const Mesh disk = Make(fmt::format("builtin = \"disk\"\nvertices = {}", vertices));
+    CheckPlanarDisk(disk);
+    CHECK(std::abs(disk.num_vertices() - vertices) <= std::max(5, vertices / 10));
+    CHECK(disk.vertices.rowwise().norm().maxCoeff() == Approx(0.5));
+    // The area of an inscribed polygon: a little below pi / 4.
+    double area = 0.0;
+    for (Index f = 0; f < disk.num_elements(); ++f) {
+      const Eigen::Vector3d p = disk.vertices.row(disk.elements(f, 0)).transpose();
+      area += 0.5 * (disk.vertices.row(disk.elements(f, 1)).transpose() - p)
+                        .cross(disk.vertices.row(disk.elements(f, 2)).transpose() - p)
+                        .z();
+    }
+    CHECK(area < M_PI / 4);
+    CHECK(area == Approx(M_PI / 4).epsilon(0.05));
+    for (const double aspect : {1.0, 4.0, 0.25}) {
+      INFO("aspect = " << aspect);
+      const Mesh rectangle = Make(fmt::format("builtin = \"rectangle\"\nvertices = {}\n"
+                                              "aspect = {}",
+                                              vertices, aspect));
+      CheckPlanarDisk(rectangle);
+      CHECK(std::abs(rectangle.num_vertices() - vertices) <= std::max(10, vertices / 10));
+      CHECK(rectangle.vertices.col(0).maxCoeff() == Approx(aspect));
+      CHECK(rectangle.vertices.col(1).maxCoeff() == Approx(1.0));
+      CHECK(rectangle.vertices.colwise().minCoeff().norm() == 0.0);
+    }
+  }
+  CHECK(Make("builtin = \"disk\"\nvertices = 500").vertices ==
+        Make("builtin = \"disk\"\nvertices = 500").vertices);
+  CHECK_THROWS_WITH(Make("builtin = \"disk\"\naspect = 2"), Contains("unknown option 'aspect'"));
+  CHECK_THROWS_WITH(Make("builtin = \"rectangle\"\nvertices = 3"), Contains("'vertices'"));
+  CHECK_THROWS_WITH(Make("builtin = \"rectangle\"\naspect = 0"), Contains("'aspect'"));
+}
+
 TEST_CASE("builtin meshes reject unknown names, unknown keys and bad values", "[io][builtin]") {
   CHECK_THROWS_WITH(Make("builtin = \"torus\""),
                     Contains("torus") && Contains("cylinder") && Contains("plane"));
@@ -179,7 +244,8 @@ TEST_CASE("builtin meshes reject unknown names, unknown keys and bad values", "[
   CHECK_THROWS_WITH(Make("builtin = \"plane\"\nvertices = 100\nspike_radius = 0.45"),
                     Contains("do not fit"));
   CHECK_THROWS_AS(Make("builtin = \"cylinder\"\nvertices = \"many\""), ConfigError);
-  CHECK(BuiltinMeshNames() == std::vector<std::string>{"cylinder", "plane"});
+  CHECK(BuiltinMeshNames() ==
+        std::vector<std::string>{"cylinder", "plane", "disk", "rectangle"});
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "framework/error.h"
 #include "framework/mesh.h"
 
 namespace harap::testing {
@@ -65,6 +66,43 @@ inline uint64_t NextRandom(uint64_t& state) {
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
   return z ^ (z >> 31);
+}
+
+/// Applies one to four random edits to `bytes` (for robustness tests of the readers): overwrite a
+/// byte with a random one or with a character that matters to text formats, truncate, or
+/// duplicate a chunk.
+inline void Mutate(std::string& bytes, uint64_t& state) {
+  const int edits = 1 + static_cast<int>(NextRandom(state) % 4);
+  for (int edit = 0; edit < edits && !bytes.empty(); ++edit) {
+    const size_t at = NextRandom(state) % bytes.size();
+    switch (NextRandom(state) % 4) {
+      case 0:  // overwrite a byte
+        bytes[at] = static_cast<char>(NextRandom(state));
+        break;
+      case 1:  // overwrite with a character that matters to the text formats
+        bytes[at] = "0123456789-+.e /\n#nanif"[NextRandom(state) % 23];
+        break;
+      case 2:  // truncate
+        bytes.resize(at);
+        break;
+      default:  // duplicate a chunk
+        bytes.insert(at, bytes.substr(at, NextRandom(state) % 16));
+        break;
+    }
+  }
+}
+
+/// Runs `run` and expects an InputError whose message contains every phrase.
+template <class Run>
+void ExpectInputError(Run run, const std::vector<std::string>& phrases) {
+  try {
+    run();
+    FAIL("no exception");
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    INFO("message: " << message);
+    for (const std::string& phrase : phrases) CHECK_THAT(message, Catch::Matchers::Contains(phrase));
+  }
 }
 
 /// Undirected edge -> number of incident triangles, and directed edge -> count.

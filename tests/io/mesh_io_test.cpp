@@ -214,9 +214,8 @@ TEST_CASE("ReadMesh reports missing files and unknown extensions", "[io]") {
   ExpectReadError(unknown, "unknown mesh file extension '.abc'");
   ExpectReadError(unknown, ".obj, .ply, .off, .stl");
   ExpectReadError(dir.Write("noext", "v 0 0 0\n"), "unknown mesh file extension");
-  ExpectReadError(dir.Write("bunny.mesh", "MeshVersionFormatted 1\n"),
-                  "tetrahedral meshes are not supported yet");
-  ExpectReadError(dir.Write("bunny.node.xz", ""), "tetrahedral meshes are not supported yet");
+  ExpectReadError(dir.Write("bunny.mesh", "MeshVersionFormatted 1\n"), "no Vertices section");
+  ExpectReadError(dir.Write("bunny.node.xz", ""), "the .ele file with its tetrahedra is missing");
 }
 
 TEST_CASE("ReadMesh rejects empty files", "[io]") {
@@ -285,24 +284,7 @@ TEST_CASE("ReadMesh survives mutations of valid files in every format", "[io]") 
   for (const auto& [extension, original] : seeds) {
     for (int trial = 0; trial < 300; ++trial) {
       std::string bytes = original;
-      const int edits = 1 + static_cast<int>(testing::NextRandom(state) % 4);
-      for (int edit = 0; edit < edits && !bytes.empty(); ++edit) {
-        const size_t at = testing::NextRandom(state) % bytes.size();
-        switch (testing::NextRandom(state) % 4) {
-          case 0:  // overwrite a byte
-            bytes[at] = static_cast<char>(testing::NextRandom(state));
-            break;
-          case 1:  // overwrite with a character that matters to the text formats
-            bytes[at] = "0123456789-+.e /\n#nanif"[testing::NextRandom(state) % 23];
-            break;
-          case 2:  // truncate
-            bytes.resize(at);
-            break;
-          default:  // duplicate a chunk
-            bytes.insert(at, bytes.substr(at, testing::NextRandom(state) % 16));
-            break;
-        }
-      }
+      testing::Mutate(bytes, state);
       const auto file = dir.Write("mutant." + extension, bytes);
       INFO(extension << " trial " << trial);
       try {
@@ -483,6 +465,18 @@ TEST_CASE("ReadMesh reads every shared surface mesh with the manifest's counts",
     ++checked;
   }
   CHECK(checked == 13);
+}
+
+TEST_CASE("ReadMesh reads the shared tetrahedral meshes with the manifest's counts",
+          "[io][shared][tet]") {
+  HARAP_REQUIRE_SHARED(manifest, "meshes/MANIFEST.tsv");
+  int checked = 0;
+  for (const ManifestRow& row : ReadManifest(manifest)) {
+    if (row.type != "tet") continue;
+    CheckSharedMesh(manifest.parent_path(), row);
+    ++checked;
+  }
+  CHECK(checked == 2);
 }
 
 TEST_CASE("ReadMesh reads the full Stanford dragon", "[io][shared][.slow]") {

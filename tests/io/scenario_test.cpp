@@ -71,7 +71,8 @@ TEST_CASE("scenario errors: unknown keys at every level", "[io][scenario]") {
       {"handle 1", "unknown key 'upto'"});
   ExpectError<ConfigError>("mesh = { builtin = \"cylinder\", vertexes = 500 }\n",
                            {"errors.toml:1", "unknown option 'mesh.vertexes'"});
-  ExpectError<ConfigError>("mesh = { builtin = \"donut\" }\n", {"donut", "cylinder, plane"});
+  ExpectError<ConfigError>("mesh = { builtin = \"donut\" }\n",
+                           {"donut", "cylinder, plane, disk, rectangle"});
 }
 
 TEST_CASE("scenario errors: selections", "[io][scenario]") {
@@ -129,11 +130,11 @@ TEST_CASE("scenario errors: mesh, files and syntax", "[io][scenario]") {
   ExpectError<ConfigError>("[[handle]]\nselect.indices = [0]\n", {"no 'mesh'"});
   ExpectError<InputError>("mesh = \"missing.obj\"\n",
                           {"errors.toml:1:8", "missing.obj", "not found"}, dir.path());
-  ExpectError<InputError>("mesh = \"bunny.mesh.xz\"\n",
-                          {"bunny.mesh.xz", "tetrahedral meshes are not supported yet"},
+  ExpectError<InputError>("mesh = \"bunny.mesh.xz\"\n", {"bunny.mesh.xz", "not found"},
                           dir.path());
+  dir.Write("rabbit.node", "1 3 0 0\n0 0 0 0\n");
   ExpectError<InputError>("mesh = \"rabbit.node\"\n",
-                          {"tetrahedral meshes are not supported yet"}, dir.path());
+                          {"errors.toml:1", "rabbit.ele", "is missing"}, dir.path());
   dir.Write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
   ExpectError<InputError>("mesh = \"bad.obj\"\n", {"errors.toml:1", "bad.obj", "out of range"},
                           dir.path());
@@ -312,6 +313,185 @@ TEST_CASE("scenario: refine subdivides before selecting", "[io][scenario]") {
 }
 
 // -----------------------------------------------------------------------------------------------
+// Tetrahedral meshes, tetrahedralized surfaces, planar meshes.
+
+TEST_CASE("scenario: TetGen files, a .node start configuration, target = initial",
+          "[io][scenario][tet]") {
+  ScratchDir dir;
+  // Two tetrahedra, 1-based, the second written with negative orientation.
+  dir.Write("tets/bar_rest.node", "5 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n");
+  dir.Write("tets/bar_rest.ele", "2 4 0\n1 1 2 3 4\n2 2 3 5 4\n");
+  // The start configuration: only a .node file, shifted by (0, 0, 2).
+  dir.Write("tets/bar_init.node", "5 3 0 0\n1 0 0 2\n2 1 0 2\n3 0 1 2\n4 0 0 3\n5 1 1 3\n");
+  dir.Write("tets/handles.txt", "0 1\n\t4\n");
+  const std::string text =
+      "mesh = \"tets/bar_rest.node\"\ninitial = \"tets/bar_init.node\"\n"
+      "[[handle]]\nselect.index_file = \"tets/handles.txt\"\ntarget = \"initial\"\n";
+  const Scenario scenario = Parse(text, dir.path());
+  CHECK(scenario.mesh.kind() == ElementKind::kTetrahedron);
+  CHECK(scenario.mesh.num_elements() == 2);
+  CHECK(!scenario.mesh.planar);
+  REQUIRE(scenario.notes.size() == 1);
+  CHECK_THAT(scenario.notes[0], Contains("bar_rest.ele") && Contains("reoriented"));
+  REQUIRE(scenario.initial);
+  CHECK(scenario.initial->row(4) == Eigen::RowVector3d(1, 1, 3));
+  REQUIRE(scenario.handles.size() == 1);
+  CHECK(scenario.handles[0].vertices == std::vector<Index>{0, 1, 4});
+  CHECK(scenario.handles[0].targets.row(2) == Eigen::RowVector3d(1, 1, 3));
+  // refine is Loop subdivision of triangles; planar needs triangles.
+  ExpectError<ConfigError>("refine = 1\n" + text, {"errors.toml:1", "refine", "tetrahedra"},
+                           dir.path());
+  ExpectError<ConfigError>("planar = true\n" + text, {"errors.toml:1", "planar = true",
+                                                      "tetrahedra"},
+                           dir.path());
+  // A start configuration of the wrong size; a broken .node file names its line.
+  dir.Write("tets/short.node", "2 3\n0 0 0 0\n1 1 0 0\n");
+  ExpectError<InputError>("mesh = \"tets/bar_rest.node\"\ninitial = \"tets/short.node\"\n",
+                          {"errors.toml:2", "short.node", "has 2 vertices"}, dir.path());
+  dir.Write("tets/broken.node", "2 3\n0 0 0 0\n1 1 zero 0\n");
+  ExpectError<InputError>("mesh = \"tets/bar_rest.node\"\ninitial = \"tets/broken.node\"\n",
+                          {"errors.toml:2", "initial", "broken.node", "line 3", "'zero'"},
+                          dir.path());
+}
+
+TEST_CASE("scenario: tetrahedralize a built-in surface or a surface file",
+          "[io][scenario][tetrahedralize]") {
+  ScratchDir dir;
+  const Mesh surface =
+      MakeBuiltinMesh(ConfigNode::Parse("builtin = \"cylinder\"\nvertices = 300", "test"));
+  const Scenario scenario = Parse(
+      "mesh = { tetrahedralize = { builtin = \"cylinder\", vertices = 300 }, max_volume = 0.01 }\n"
+      "[[handle]]\nname = \"bottom\"\nselect.indices = [0, 1, 2]\n"
+      "[[handle]]\nname = \"top\"\nselect.slab = { axis = \"z\", from = 0.95, to = 1.0 }\n"
+      "translate = [0.1, 0, 0]\n");
+  const Mesh& mesh = scenario.mesh;
+  CHECK(mesh.kind() == ElementKind::kTetrahedron);
+  REQUIRE(mesh.num_vertices() > surface.num_vertices());
+  CHECK(mesh.vertices.topRows(surface.num_vertices()) == surface.vertices);
+  CHECK_THAT(scenario.mesh_source, Contains("tetrahedralized builtin") &&
+                                       Contains("max_volume=0.01"));
+  REQUIRE(scenario.notes.size() == 1);
+  CHECK_THAT(scenario.notes[0], Contains("surface vertices") && Contains("tetrahedra"));
+  // Handle indices refer to the surface's vertices, unchanged.
+  CHECK(scenario.handles[0].targets == surface.vertices.topRows(3));
+  CHECK(!scenario.handles[1].vertices.empty());
+
+  // A surface file, refined before it is filled.
+  dir.Write("cube.obj",
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\n"
+            "f 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n");
+  const Scenario cube =
+      Parse("mesh = { tetrahedralize = \"cube.obj\", max_radius_edge_ratio = 0 }\nrefine = 1\n",
+            dir.path());
+  CHECK(cube.mesh.kind() == ElementKind::kTetrahedron);
+  CHECK(cube.mesh.num_vertices() == 8 + 18);  // refined surface: 8 + 18 edge midpoints
+  CHECK_THAT(cube.mesh_source, Contains("cube.obj refined 1x"));
+
+  // Errors: keys, values, broken surfaces.
+  ExpectError<ConfigError>("mesh = { tetrahedralize = \"cube.obj\", max_volumes = 1 }\n",
+                           {"errors.toml:1", "max_volumes", "max_volume"}, dir.path());
+  ExpectError<ConfigError>("mesh = { tetrahedralize = \"cube.obj\", max_volume = 2 }\n",
+                           {"errors.toml:1", "max_volume must be in [0, 1)"}, dir.path());
+  ExpectError<ConfigError>("mesh = { tetrahedralize = 3 }\n",
+                           {"errors.toml:1", "mesh.tetrahedralize must be"});
+  ExpectError<ConfigError>(
+      "mesh = { tetrahedralize = { builtin = \"cylinder\", vertexes = 9 } }\n",
+      {"errors.toml:1", "vertexes"});
+  ExpectError<InputError>("mesh = { tetrahedralize = \"none.obj\" }\n",
+                          {"errors.toml:1", "none.obj", "not found"}, dir.path());
+  ExpectError<InputError>(
+      "mesh = { tetrahedralize = { builtin = \"cylinder\", vertices = 100, caps = false } }\n",
+      {"errors.toml:1", "tetrahedralize builtin", "not closed"});
+  dir.Write("t.node", "4 3\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+  dir.Write("t.ele", "1 4\n0 0 1 2 3\n");
+  ExpectError<InputError>("mesh = { tetrahedralize = \"t.node\" }\n",
+                          {"errors.toml:1", "t.node", "has tetrahedra already"}, dir.path());
+}
+
+TEST_CASE("scenario: planar meshes, automatic and explicit", "[io][scenario][planar]") {
+  ScratchDir dir;
+  const std::string rectangle = "mesh = { builtin = \"rectangle\", vertices = 200 }\n";
+  const std::string left = "[[handle]]\nname = \"left\"\n"
+                           "select.slab = { axis = \"x\", from = 0.0, to = 0.05 }\n";
+  const std::string right = "[[handle]]\nname = \"right\"\n"
+                            "select.slab = { axis = \"x\", from = 0.95, to = 1.0 }\n";
+  // In-plane motion of a flat mesh: planar.
+  const Scenario in_plane =
+      Parse(rectangle + left + right + "rotate = { axis = [0, 0, 1], degrees = 45 }\n");
+  CHECK(in_plane.mesh.planar);
+  REQUIRE(in_plane.notes.size() == 1);
+  CHECK_THAT(in_plane.notes[0], Contains("planar") && Contains("planar = false"));
+  // A handle leaving the plane: a surface problem.
+  const Scenario lifted = Parse(rectangle + left + right + "translate = [0, 0, 0.1]\n");
+  CHECK(!lifted.mesh.planar);
+  REQUIRE(lifted.notes.size() == 1);
+  CHECK_THAT(lifted.notes[0], Contains("not planar") && Contains("handle 'right'"));
+  // Explicit settings win.
+  CHECK(!Parse("planar = false\n" + rectangle + left).mesh.planar);
+  CHECK(Parse("planar = true\n" + rectangle + left).mesh.planar);
+  ExpectError<ConfigError>("planar = true\n" + rectangle + left + right +
+                               "translate = [0, 0, 0.1]\n",
+                           {"errors.toml:1", "planar = true", "handle 'right'", "z ="});
+  ExpectError<ConfigError>("planar = true\nmesh = { builtin = \"plane\", vertices = 400 }\n",
+                           {"errors.toml:1", "planar = true", "vertex", "z ="});
+  ExpectError<ConfigError>("planar = 1\n" + rectangle, {"errors.toml:1", "true or false"});
+  // OBJ/OFF files with z = 0 are planar like the built-ins; the spike plane is not.
+  dir.Write("flat.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n");
+  CHECK(Parse("mesh = \"flat.off\"\n", dir.path()).mesh.planar);
+  CHECK(!Parse("mesh = { builtin = \"plane\", vertices = 400 }\n").mesh.planar);
+  CHECK(!Parse(kMesh).mesh.planar);
+}
+
+TEST_CASE("example scenarios without data load: surface, volumetric twin, planar",
+          "[io][scenario][tetrahedralize][planar]") {
+  const auto dir = testing::SourceDir() / "experiments" / "scenarios";
+  const Scenario surface = LoadScenario(dir / "cylinder-bend.toml");
+  CHECK(surface.mesh.kind() == ElementKind::kTriangle);
+  CHECK(!surface.mesh.planar);
+  const Scenario twin = LoadScenario(dir / "cylinder-bend-tet.toml");
+  CHECK(twin.mesh.kind() == ElementKind::kTetrahedron);
+  CHECK(twin.mesh.num_elements() >= 10000);  // max_volume = 1e-4
+  REQUIRE(twin.handles.size() == 2);
+  CHECK(twin.handles[1].vertices.size() > 100);
+  const Scenario flat = LoadScenario(dir / "rectangle-bend-2d.toml");
+  CHECK(flat.mesh.planar);
+  CHECK(std::abs(flat.mesh.num_vertices() - 20000) <= 2000);
+  // The right end's targets lie where a length-preserving quarter-circle bend puts it: centred
+  // on (R, 0.5 + R) with R = 4 / (pi / 2), within the rounding of the scenario's numbers.
+  const ScenarioHandle& right = flat.handles[1];
+  const Eigen::RowVector3d centre = right.targets.colwise().mean();
+  const double radius = 4.0 / (M_PI / 2.0);
+  CHECK(centre.x() == Approx(radius).margin(0.05));
+  CHECK(centre.y() == Approx(0.5 + radius).margin(0.05));
+  CHECK(centre.z() == 0.0);
+}
+
+TEST_CASE("example volumetric twin of the armadillo loads", "[io][scenario][shared][.slow]") {
+  HARAP_REQUIRE_SHARED(armadillo, "meshes/armadillo-43k.obj.xz");
+  const Scenario surface = LoadScenario(testing::SharedDir() / "scenarios/armadillo-bend-43k.toml");
+  const auto start = std::chrono::steady_clock::now();
+  const Scenario twin =
+      LoadScenario(testing::SourceDir() / "experiments/scenarios/armadillo-bend-tet.toml");
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  REQUIRE(twin.mesh.kind() == ElementKind::kTetrahedron);
+  WARN("armadillo-bend-tet.toml: " << twin.mesh.num_vertices() << " vertices, "
+                                   << twin.mesh.num_elements() << " tetrahedra, loaded in "
+                                   << seconds << " s");
+  const Index n = surface.mesh.num_vertices();
+  CHECK(twin.mesh.vertices.topRows(n) == surface.mesh.vertices);
+  // The handles hold the same surface vertices (and interior points in the same slabs).
+  for (size_t h = 0; h < 2; ++h) {
+    std::vector<Index> on_surface;
+    for (const Index v : twin.handles[h].vertices) {
+      if (v < n) on_surface.push_back(v);
+    }
+    CHECK(on_surface == surface.handles[h].vertices);
+  }
+}
+
+// -----------------------------------------------------------------------------------------------
 // The shared scenarios.
 
 void CheckSharedScenario(const std::filesystem::path& file) {
@@ -366,19 +546,36 @@ TEST_CASE("shared scenarios: every surface scenario loads", "[io][scenario][shar
   CHECK(std::abs(LoadScenario(cylinder).mesh.num_vertices() - 480000) <= 48000);
 }
 
-TEST_CASE("shared scenarios: tetrahedral ones say they are not supported yet",
-          "[io][scenario][shared]") {
+TEST_CASE("shared scenarios: every tetrahedral scenario loads", "[io][scenario][shared]") {
   HARAP_REQUIRE_SHARED(dir, "scenarios/tets");
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     if (entry.path().extension() != ".toml") continue;
     INFO(entry.path().string());
-    CHECK_THROWS_WITH(LoadScenario(entry.path()),
-                      Contains(entry.path().filename().string()) &&
-                          Contains("tetrahedral meshes are not supported yet"));
+    const auto start = std::chrono::steady_clock::now();
+    const Scenario scenario = LoadScenario(entry.path());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const Mesh& mesh = scenario.mesh;
+    WARN(entry.path().filename().string() << ": " << mesh.num_vertices() << " vertices, "
+                                          << mesh.num_elements() << " tetrahedra, loaded in "
+                                          << seconds << " s");
+    CHECK(mesh.kind() == ElementKind::kTetrahedron);
+    CHECK(!mesh.planar);
+    // WRAPD's rest tetrahedra are all positively oriented (../shared/tets/README.md).
+    CHECK(scenario.notes.empty());
+    REQUIRE(scenario.initial);
+    REQUIRE(scenario.initial->rows() == mesh.num_vertices());
+    REQUIRE(scenario.handles.size() == 1);
+    const ScenarioHandle& handle = scenario.handles[0];
+    CHECK(handle.vertices.size() > 100);
+    for (size_t i = 0; i < handle.vertices.size(); ++i) {
+      REQUIRE(handle.targets.row(static_cast<Index>(i)) ==
+              scenario.initial->row(handle.vertices[i]));
+    }
     ++count;
   }
-  CHECK(count >= 1);
+  CHECK(count == 11);
 }
 
 }  // namespace
