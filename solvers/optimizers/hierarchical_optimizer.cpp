@@ -169,8 +169,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
           upsampler->Upsample(hierarchy.levels[f], hierarchy.levels[f + 1], site, coarse_state,
                               state, context);
         }
-        result.energy = solvers[0]->energy().FitRotations(state.positions, state.rotations,
-                                                          context);
+        result.energy = solvers[0]->FitRotations(state, context);
       }
       break;
     }
@@ -179,6 +178,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   result.timings.solve = solve_clock.Seconds();
   std::reverse(result.levels.begin(), result.levels.end());
 
+  result.measures = solvers[0]->AuxiliaryMeasures(state, context);
   result.positions = std::move(state.positions);
   result.constraints = solvers[0]->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);
