@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Micro-benchmarks of the classic ARAP kernels: local step, right-hand side, factorization,
 // one solve, one full iteration — on a generated cylinder and, when ../shared is present, on the
-// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices).
+// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices) and the tetrahedral WRAPD
+// rabbit (26K vertices, 102K tetrahedra, energy `elements`).
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
 #include <benchmark/benchmark.h>
@@ -12,6 +13,7 @@
 
 #include "experiments/builtins.h"
 #include "framework/constrained_system.h"
+#include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/scenario.h"
 #include "solvers/optimizers/vertex_ordering.h"
@@ -180,6 +182,16 @@ translate = [0.0, 0.35, -0.3]
     RegisterAll("armadillo-bend");
   } else {
     fmt::print(stderr, "note: {} not found; armadillo benchmarks skipped\n", armadillo.string());
+  }
+  // A volumetric WRAPD scene with the per-element energy (needs the TetGen reader).
+  const std::filesystem::path rabbit =
+      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/tets/rabbit.toml";
+  try {
+    if (!std::filesystem::exists(rabbit)) throw InputError(rabbit.string() + " not found");
+    Fixtures()["wrapd-rabbit"] = std::make_unique<Fixture>(LoadScenario(rabbit), "elements");
+    RegisterAll("wrapd-rabbit");
+  } catch (const InputError& error) {
+    fmt::print(stderr, "note: wrapd-rabbit benchmarks skipped: {}\n", error.what());
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
