@@ -66,6 +66,12 @@ void RequireSupportedMesh(const Mesh& mesh) {
         "'spokes' for surfaces",
         ElementArapEnergy::kName));
   }
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.vertices(v, 2) != 0.0) {
+      throw InputError(fmt::format("energy '{}': the mesh is planar but vertex {} has z = {}",
+                                   ElementArapEnergy::kName, v, mesh.vertices(v, 2)));
+    }
+  }
 }
 
 }  // namespace

@@ -266,6 +266,10 @@ TEST_CASE("elements: surface triangle meshes and planar tetrahedra are rejected"
   Mesh tets = TetBox(3, 3, 3);
   tets.planar = true;
   CHECK_THROWS_WITH(energy.Precompute(tets, Context()), Catch::Contains("tetrahedra"));
+  Mesh lifted = PlanarGrid(4, 4);
+  lifted.vertices(5, 2) = 0.1;
+  CHECK_THROWS_WITH(energy.Precompute(lifted, Context()),
+                    Catch::Contains("planar") && Catch::Contains("vertex 5"));
 }
 
 // On a flat triangle mesh, the planar `elements` energy (2D rotation per triangle) and the
