@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "energies/register_energies.h"
 
+#include "energies/element_arap_energy.h"
 #include "energies/spokes_and_rims_energy.h"
 #include "energies/spokes_energy.h"
 
@@ -15,6 +16,10 @@ void RegisterEnergies(Registry<Energy>& registry) {
                "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
                "½(cot α + cot β) [Sorkine & Alexa 2007]",
                &SpokesEnergy::Create);
+  registry.Add(std::string(ElementArapEnergy::kName),
+               "per-element ARAP, one rotation per tetrahedron or per triangle of a planar mesh, "
+               "cotangent weights (the paper's Eqs. 8, 9); reports energy_wrapd = E/2",
+               &ElementArapEnergy::Create);
 }
 
 }  // namespace harap

@@ -107,6 +107,7 @@ void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
   fmt::print("iterations  {} ({})\n", r.iterations,
              r.converged ? "converged" : (r.stopped_by_callback ? "stopped" : "not converged"));
   fmt::print("energy      {:.9e}\n", r.energy);
+  for (const auto& [name, value] : r.measures) fmt::print("{:<11} {:.9e}\n", name, value);
   fmt::print("time [s]    hierarchy {:.3f} | precompute {:.3f} | constrain {:.3f} | solve {:.3f} "
              "| total {:.3f}\n",
              r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
@@ -289,7 +290,9 @@ int main(int argc, char** argv) {
   deform->add_option("--config", args.config_file,
                      "TOML file with [optimizer] [energy] [solver] [hierarchy] [upsampler] tables");
   deform->add_option("--optimizer", args.optimizer, "optimizer name (default classic)");
-  deform->add_option("--energy", args.energy, "energy name (default spokes_and_rims)");
+  deform->add_option("--energy", args.energy,
+                     "energy name (default spokes_and_rims; elements for tetrahedral and planar "
+                     "meshes)");
   deform->add_option("--solver", args.solver, "linear solver name (default cholmod)");
   deform->add_option("--hierarchy", args.hierarchy, "hierarchy name (hierarchical optimizers)");
   deform->add_option("--upsampler", args.upsampler, "upsampler name (hierarchical optimizers)");

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <map>
+#include <string>
 #include <string_view>
 
 #include "framework/context.h"
@@ -61,6 +63,17 @@ class Energy {
   /// E(u, rotations).
   virtual double Evaluate(const Positions& u, const Rotations& rotations,
                           const Context& context) const = 0;
+
+  /// Further named measures of the state (u, rotations), e.g. the energy in another package's
+  /// units so results compare directly (`elements`: "energy_wrapd"). Optimizers call it once
+  /// for the final state, with rotations fitted to u, and report each value under its name next
+  /// to `energy`; never per iteration. Names must be valid report keys (lower_snake_case) and not
+  /// clash with the report's own keys. Default: none.
+  virtual std::map<std::string, double> AuxiliaryMeasures(const Positions& /*u*/,
+                                                          const Rotations& /*rotations*/,
+                                                          const Context& /*context*/) const {
+    return {};
+  }
 
  protected:
   Energy() = default;

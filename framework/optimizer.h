@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -73,6 +74,8 @@ struct ConstraintReport {
 struct OptimizeResult {
   Positions positions;  ///< #V×3 deformed positions on the input mesh.
   double energy = 0.0;  ///< Final energy, rotations re-fitted to `positions`.
+  /// Energy::AuxiliaryMeasures of the final state (e.g. "energy_wrapd"); empty for most energies.
+  std::map<std::string, double> measures;
   int iterations = 0;   ///< Iterations on the finest level.
   int total_iterations = 0;
   bool converged = false;

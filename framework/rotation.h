@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace harap {
 
@@ -15,6 +16,25 @@ inline Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m) {
   const Eigen::Matrix3d& v = svd.matrixV();
   if ((u * v.transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   return u * v.transpose();
+}
+
+/// The rotation of the xy-plane closest to the upper-left 2×2 block of `m` in the Frobenius norm,
+/// embedded in a 3×3 matrix (z row and column of the identity): θ = atan2(m10 − m01, m00 + m11).
+/// The projection for planar meshes, whose rotations must not tilt out of the plane.
+inline Eigen::Matrix3d NearestPlanarRotation(const Eigen::Matrix3d& m) {
+  const double theta = std::atan2(m(1, 0) - m(0, 1), m(0, 0) + m(1, 1));
+  const double c = std::cos(theta), s = std::sin(theta);
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  r(0, 0) = c;
+  r(0, 1) = -s;
+  r(1, 0) = s;
+  r(1, 1) = c;
+  return r;
+}
+
+/// NearestPlanarRotation for planar meshes, NearestRotation otherwise.
+inline Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m, bool planar) {
+  return planar ? NearestPlanarRotation(m) : NearestRotation(m);
 }
 
 }  // namespace harap

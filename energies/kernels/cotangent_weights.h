@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <array>
+#include <utility>
+
 #include "framework/types.h"
 
 namespace harap {
@@ -16,5 +19,24 @@ inline constexpr double kDegenerateTriangleRatio = 1e-12;
 Eigen::Matrix<double, Eigen::Dynamic, 3> HalfCotangents(const Positions& vertices,
                                                         const Elements& triangles,
                                                         Index* num_degenerate = nullptr);
+
+/// A tetrahedron with |6·volume| below this fraction of its longest edge cubed has no
+/// well-defined dihedral angles; its weights are set to zero (docs/energies.md).
+inline constexpr double kDegenerateTetrahedronRatio = 1e-12;
+
+/// The six edges (a, b) of a tetrahedron's corners, in the column order of
+/// TetrahedronCotangentWeights. Edge e and edge 5 − e are opposite each other.
+inline constexpr std::array<std::pair<int, int>, 6> kTetrahedronEdges = {
+    {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+
+/// The volumetric cotangent weight of each edge of each tetrahedron (#T×6, columns in the order
+/// of kTetrahedronEdges): w_ab = ℓ_cd · cot θ_cd / 6, with cd the opposite edge, ℓ_cd its length
+/// and θ_cd the dihedral angle at it (the weight of the paper's Eq. 9 with its ⅙). Computed as
+/// w_ab = −vol·∇φ_a·∇φ_b from the gradients of the barycentric coordinates, which is the same
+/// number without trigonometry, and independent of the orientation of the tetrahedron.
+/// Negative for obtuse dihedral angles. Degenerate tetrahedra get zeros and are counted in
+/// `num_degenerate` (if given).
+Eigen::Matrix<double, Eigen::Dynamic, 6> TetrahedronCotangentWeights(
+    const Positions& vertices, const Elements& tetrahedra, Index* num_degenerate = nullptr);
 
 }  // namespace harap

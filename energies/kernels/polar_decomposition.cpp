@@ -88,15 +88,6 @@ Eigen::Matrix3d ClosestRotation(const Eigen::Matrix3d& m, const Eigen::Matrix3d&
   return ClosestRotationSvd(m);
 }
 
-Eigen::Matrix3d ClosestPlanarRotation(const Eigen::Matrix3d& m) {
-  const double theta = std::atan2(m(1, 0) - m(0, 1), m(0, 0) + m(1, 1));
-  const double c = std::cos(theta), s = std::sin(theta);
-  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
-  r(0, 0) = c;
-  r(0, 1) = -s;
-  r(1, 0) = s;
-  r(1, 1) = c;
-  return r;
-}
+Eigen::Matrix3d ClosestPlanarRotation(const Eigen::Matrix3d& m) { return NearestPlanarRotation(m); }
 
 }  // namespace harap

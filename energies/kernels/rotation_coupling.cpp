@@ -78,6 +78,40 @@ RotationCoupling MakeVertexSiteCoupling(const SparseMatrix& pattern,
   return coupling;
 }
 
+RotationCoupling MakeElementSiteCoupling(Index num_vertices, const Elements& elements,
+                                         std::vector<Eigen::Vector3d> coefficient_by_corner,
+                                         double constant, bool planar) {
+  const Index num_elements = static_cast<Index>(elements.rows());
+  const int size = static_cast<int>(elements.cols());
+  HARAP_CHECK(static_cast<Index>(coefficient_by_corner.size()) == num_elements * size,
+              "{} coefficients for {} elements of {} corners", coefficient_by_corner.size(),
+              num_elements, size);
+  RotationCoupling coupling;
+  coupling.num_sites = num_elements;
+  coupling.num_vertices = num_vertices;
+  coupling.planar = planar;
+  coupling.constant = constant;
+  coupling.site_offsets.resize(num_elements + 1);
+  for (Index t = 0; t <= num_elements; ++t) coupling.site_offsets[t] = t * size;
+  coupling.site_vertices.assign(elements.data(), elements.data() + elements.size());
+  // By vertex: a counting sort of the corners, in element order within each vertex.
+  coupling.vertex_offsets.assign(num_vertices + 1, 0);
+  for (Index v : coupling.site_vertices) ++coupling.vertex_offsets[v + 1];
+  for (Index v = 0; v < num_vertices; ++v) {
+    coupling.vertex_offsets[v + 1] += coupling.vertex_offsets[v];
+  }
+  coupling.vertex_sites.resize(coupling.site_vertices.size());
+  coupling.vertex_coefficients.resize(coupling.site_vertices.size());
+  std::vector<Index> fill(coupling.vertex_offsets.begin(), coupling.vertex_offsets.end() - 1);
+  for (size_t p = 0; p < coupling.site_vertices.size(); ++p) {
+    const Index slot = fill[coupling.site_vertices[p]]++;
+    coupling.vertex_sites[slot] = static_cast<Index>(p) / size;
+    coupling.vertex_coefficients[slot] = coefficient_by_corner[p];
+  }
+  coupling.site_coefficients = std::move(coefficient_by_corner);
+  return coupling;
+}
+
 double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,
                            const Positions& u, Rotations& rotations, const Context& context) {
   HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,

@@ -49,6 +49,12 @@ RotationCoupling MakeVertexSiteCoupling(const SparseMatrix& pattern,
                                         std::vector<Eigen::Vector3d> coefficient_by_entry,
                                         double constant);
 
+/// The coupling of a per-element energy: site t is element t, coupled to its K vertices with
+/// `coefficient_by_corner[K·t + a]` = c_{t, elements(t, a)}. `planar`: rotations in the xy-plane.
+RotationCoupling MakeElementSiteCoupling(Index num_vertices, const Elements& elements,
+                                         std::vector<Eigen::Vector3d> coefficient_by_corner,
+                                         double constant, bool planar);
+
 /// Local step: rotations[s] = argmax_R ⟨R, M_s(u)⟩ (warm-started from rotations[s]); returns
 /// E(u, rotations) with the fitted rotations.
 double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,

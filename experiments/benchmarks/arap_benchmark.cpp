@@ -3,7 +3,8 @@
 // one solve, one full iteration; and of the hierarchical pieces: building each registered
 // hierarchy, and each registered up-sampler from level 1 to the input mesh — on a generated
 // cylinder and, when ../shared is present, on the armadillo-bend scenario (armadillo-43k refined
-// once: ~173K vertices).
+// once: ~173K vertices) and the tetrahedral WRAPD rabbit (26K vertices, 102K tetrahedra, energy
+// `elements`).
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
 #include <benchmark/benchmark.h>
@@ -15,6 +16,7 @@
 
 #include "experiments/builtins.h"
 #include "framework/constrained_system.h"
+#include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/scenario.h"
 #include "solvers/cholmod_solver.h"
@@ -267,6 +269,16 @@ translate = [0.0, 0.35, -0.3]
     RegisterAll("armadillo-bend");
   } else {
     fmt::print(stderr, "note: {} not found; armadillo benchmarks skipped\n", armadillo.string());
+  }
+  // A volumetric WRAPD scene with the per-element energy (needs the TetGen reader).
+  const std::filesystem::path rabbit =
+      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/tets/rabbit.toml";
+  try {
+    if (!std::filesystem::exists(rabbit)) throw InputError(rabbit.string() + " not found");
+    Fixtures()["wrapd-rabbit"] = std::make_unique<Fixture>(LoadScenario(rabbit), "elements");
+    RegisterAll("wrapd-rabbit");
+  } catch (const InputError& error) {
+    fmt::print(stderr, "note: wrapd-rabbit benchmarks skipped: {}\n", error.what());
   }
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

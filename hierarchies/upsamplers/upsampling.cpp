@@ -29,6 +29,10 @@ void IncidentElements(const Mesh& mesh, std::vector<Index>& offsets, std::vector
 
 }  // namespace
 
+bool PlanarRotations(const Mesh& mesh, RotationSite site) {
+  return mesh.planar && site == RotationSite::kElement;
+}
+
 Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& rotations,
                           const Context& context) {
   if (site == RotationSite::kVertex) {
@@ -40,6 +44,7 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
               "{} rotations for {} elements", rotations.size(), mesh.num_elements());
   std::vector<Index> offsets, items;
   IncidentElements(mesh, offsets, items);
+  const bool planar = PlanarRotations(mesh, site);
   Rotations result(mesh.num_vertices(), Rotation::Identity());
   context.Run([&] {
     tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_vertices(), 2048),
@@ -50,7 +55,7 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
                           for (Index p = offsets[v]; p < offsets[v + 1]; ++p) {
                             sum += rotations[items[p]];
                           }
-                          result[v] = NearestRotation(sum);
+                          result[v] = NearestRotation(sum, planar);
                         }
                       });
   });
@@ -60,6 +65,7 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
 Rotations SiteRotations(const Mesh& mesh, RotationSite site, const Rotations& vertex_rotations,
                         const Context& context) {
   if (site == RotationSite::kVertex) return vertex_rotations;
+  const bool planar = PlanarRotations(mesh, site);
   Rotations result(mesh.num_elements());
   context.Run([&] {
     tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_elements(), 2048),
@@ -69,7 +75,7 @@ Rotations SiteRotations(const Mesh& mesh, RotationSite site, const Rotations& ve
                           for (int a = 0; a < mesh.simplex_size(); ++a) {
                             sum += vertex_rotations[mesh.elements(e, a)];
                           }
-                          result[e] = NearestRotation(sum);
+                          result[e] = NearestRotation(sum, planar);
                         }
                       });
   });
@@ -105,8 +111,9 @@ Positions ProlongPositions(const HierarchyLevel& fine, const HierarchyLevel& coa
   return result;
 }
 
-void SmoothVertexRotations(const Mesh& mesh, int passes, Rotations& vertex_rotations,
-                           const Context& context) {
+void SmoothVertexRotations(const Mesh& mesh, RotationSite site, int passes,
+                           Rotations& vertex_rotations, const Context& context) {
+  const bool planar = PlanarRotations(mesh, site);
   // 1-ring as a CSR neighbour list (both directions of every element edge, deduplicated).
   const Index n = mesh.num_vertices();
   std::vector<std::vector<Index>> ring(n);
@@ -129,7 +136,8 @@ void SmoothVertexRotations(const Mesh& mesh, int passes, Rotations& vertex_rotat
                           for (Index v = range.begin(); v != range.end(); ++v) {
                             Eigen::Matrix3d sum = vertex_rotations[v];
                             for (Index w : ring[v]) sum += vertex_rotations[w];
-                            next[v] = ring[v].empty() ? vertex_rotations[v] : NearestRotation(sum);
+                            next[v] = ring[v].empty() ? vertex_rotations[v]
+                                                      : NearestRotation(sum, planar);
                           }
                         });
     });
@@ -150,7 +158,7 @@ void UpsampleCells(const HierarchyLevel& fine, const HierarchyLevel& coarse, Rot
       ProlongPositions(fine, coarse, coarse_state.positions, coarse_vertex_rotations);
   Rotations fine_vertex_rotations = ProlongRotations(fine, coarse_vertex_rotations);
   if (smoothing_passes > 0) {
-    SmoothVertexRotations(fine.mesh, smoothing_passes, fine_vertex_rotations, context);
+    SmoothVertexRotations(fine.mesh, site, smoothing_passes, fine_vertex_rotations, context);
   }
   fine_state.rotations = SiteRotations(fine.mesh, site, fine_vertex_rotations, context);
 }

@@ -6,6 +6,11 @@
 
 namespace harap {
 
+/// Whether a level's rotations are rotations of the plane: per-element rotations on a planar
+/// mesh (the 2D energy). Averages of them are then projected to the nearest rotation of the
+/// plane, so they stay exactly in it; every other average to the nearest rotation of space.
+bool PlanarRotations(const Mesh& mesh, RotationSite site);
+
 /// Per-vertex rotations of a level: the rotations themselves for per-vertex energies; for
 /// per-element energies the average of the incident elements' rotations projected to the nearest
 /// rotation (the paper's Eq. 11). Vertices without elements get the identity.
@@ -29,8 +34,8 @@ Positions ProlongPositions(const HierarchyLevel& fine, const HierarchyLevel& coa
 
 /// Averages each vertex rotation with its 1-ring neighbours' (edges of `mesh`'s elements), then
 /// projects back to the nearest rotation; `passes` times (the smoothed up-sampling of Fig. 16).
-void SmoothVertexRotations(const Mesh& mesh, int passes, Rotations& vertex_rotations,
-                           const Context& context);
+void SmoothVertexRotations(const Mesh& mesh, RotationSite site, int passes,
+                           Rotations& vertex_rotations, const Context& context);
 
 }  // namespace harap
 

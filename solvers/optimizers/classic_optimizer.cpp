@@ -50,6 +50,7 @@ OptimizeResult ClassicOptimizer::Optimize(const DeformationProblem& problem,
                              BoundingBoxDiagonal(mesh), context);
   result.timings.solve = solve_clock.Seconds();
 
+  result.measures = level.AuxiliaryMeasures(state, context);
   result.positions = std::move(state.positions);
   result.energy = run.energy;
   result.iterations = run.iterations;

@@ -22,6 +22,7 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
     sum_offset.row(c) += input.vertices.row(m) - mesh.vertices.row(c);
   }
   LevelConstraints result;
+  result.planar = mesh.planar;
   for (Index c = 0; c < mesh.num_vertices(); ++c) {
     if (count[c] > 0) result.vertices.push_back(c);
   }
@@ -46,7 +47,7 @@ Eigen::Matrix3d ConstrainedVertexRotation(const LevelConstraints& constraints, s
   if (elements.empty()) return Eigen::Matrix3d::Identity();
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
   for (Index e : elements) sum += rotations[e];
-  return NearestRotation(sum);
+  return NearestRotation(sum, constraints.planar);
 }
 
 }  // namespace

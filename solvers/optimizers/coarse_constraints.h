@@ -17,6 +17,8 @@ struct LevelConstraints {
   Positions mean_target;  ///< #vertices×3
   Positions mean_offset;  ///< #vertices×3: mean of v̄_m − v̄_c over the members m
   std::vector<std::vector<Index>> incident_elements;  ///< per-element energies only
+  /// The level is planar: per-element rotations average to a rotation of the plane.
+  bool planar = false;
 };
 
 /// Maps the finest-level constraints to level `level` through the hierarchy's vertex maps.

@@ -198,8 +198,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
                               state, context);
         }
         wait_for(0);
-        result.energy = solvers[0]->energy().FitRotations(state.positions, state.rotations,
-                                                          context);
+        result.energy = solvers[0]->FitRotations(state, context);
       }
       break;
     }
@@ -213,6 +212,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   result.timings.solve = solve_clock.Seconds() - waiting_seconds;
   std::reverse(result.levels.begin(), result.levels.end());
 
+  result.measures = solvers[0]->AuxiliaryMeasures(state, context);
   result.positions = std::move(state.positions);
   result.constraints = solvers[0]->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/local_global_solver.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "framework/config.h"
@@ -52,6 +53,27 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
   caller_state.positions = ordering_.ToOld(state.positions);
   caller_state.rotations = ordering_.ToOld(state.rotations, per_element);
   return result;
+}
+
+double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context) const {
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  const Positions u = ordering_.ToNew(state.positions);
+  Rotations rotations = ordering_.ToNew(state.rotations, per_element);
+  if (static_cast<Index>(rotations.size()) != energy_->num_rotations()) {
+    rotations.assign(energy_->num_rotations(), Rotation::Identity());
+  }
+  const double energy = energy_->FitRotations(u, rotations, context);
+  state.rotations = ordering_.ToOld(rotations, per_element);
+  return energy;
+}
+
+std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
+                                                                   const Context& context) const {
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
+              "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
+  return energy_->AuxiliaryMeasures(ordering_.ToNew(state.positions),
+                                    ordering_.ToNew(state.rotations, per_element), context);
 }
 
 LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
@@ -141,6 +163,23 @@ Positions InitialPositions(const DeformationProblem& problem) {
       throw InputError(fmt::format("the target of constrained vertex {} is not finite", v));
     }
     u.row(v) = constraints.targets.row(k);
+  }
+  if (mesh.planar) {
+    // Planar energies rotate in the plane only; a position off the plane would be pulled back
+    // by nothing but the Laplacian of z, which is not the energy the user asked for.
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (u(v, 2) != 0.0) {
+        throw InputError(
+            fmt::format("the mesh is planar (z = 0) but the {} of vertex {} has "
+                        "z = {}; targets and initial positions of a planar mesh "
+                        "must lie in the plane",
+                        std::find(constraints.indices.begin(), constraints.indices.end(), v) !=
+                                constraints.indices.end()
+                            ? "target"
+                            : "initial position",
+                        v, u(v, 2)));
+      }
+    }
   }
   return u;
 }

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
+#include <string>
 
 #include "framework/config.h"
 #include "framework/constrained_system.h"
@@ -55,6 +57,14 @@ class LocalGlobalSolver {
                 double diagonal, const Context& context,
                 const FixedPositionUpdate& update_fixed = {});
 
+  /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
+  /// returns the energy.
+  double FitRotations(LevelState& state, const Context& context) const;
+  /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
+  std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
+                                                  const Context& context) const;
+
+  /// The level's energy; it works in the internal numbering of ordering().
   const Energy& energy() const { return *energy_; }
   const MeshOrdering& ordering() const { return ordering_; }
   const ConstrainedSystem& system() const { return *system_; }

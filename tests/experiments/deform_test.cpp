@@ -12,6 +12,7 @@
 #include "experiments/deform.h"
 #include "framework/io/mesh_io.h"
 #include "tests/support/shared_data.h"
+#include "tests/support/test_meshes.h"
 
 using namespace harap;
 namespace fs = std::filesystem;
@@ -80,6 +81,42 @@ TEST_CASE("RunDeform: report has every documented key, trace times increase", "[
       for (size_t i = 1; i < trace.size(); ++i) CHECK(trace[i]["t"] >= trace[i - 1]["t"]);
       CHECK(trace.back()["level"] == 0);
       CHECK(outcome.result.converged);
+    }
+  }
+}
+
+TEST_CASE("RunDeform: tetrahedral and planar meshes default to the elements energy and report "
+          "energy_wrapd",
+          "[experiments]") {
+  const Registries registries = MakeBuiltinRegistries();
+  for (bool planar : {false, true}) {
+    DYNAMIC_SECTION((planar ? "planar" : "tetrahedra")) {
+      Scenario scenario;
+      scenario.mesh_source = "generated";
+      scenario.mesh = planar ? testing::PlanarGrid(20, 8) : testing::TetBox(12, 4, 4, 5);
+      ScenarioHandle fixed{"fixed", {}, {}}, moved{"moved", {}, {}};
+      for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
+        const double x = scenario.mesh.vertices(v, 0);
+        if (x == 0.0) fixed.vertices.push_back(v);
+        if (x == 1.0) moved.vertices.push_back(v);
+      }
+      fixed.targets = scenario.mesh.vertices(fixed.vertices, Eigen::all);
+      moved.targets = scenario.mesh.vertices(moved.vertices, Eigen::all);
+      moved.targets.col(1).array() += 0.3;
+      scenario.handles = {fixed, moved};
+      for (const char* optimizer : {"classic", "hierarchical"}) {
+        ConfigNode config;
+        config.Set("optimizer.type", fmt::format("\"{}\"", optimizer));
+        config.Set("hierarchy.min_vertices", "30");
+        const DeformOutcome outcome = RunDeform(registries, scenario, config, {});
+        const auto report = nlohmann::json::parse(DeformReportJson(scenario, outcome, true));
+        CHECK(report["energy_type"] == "elements");
+        CHECK(report["mesh"]["element_kind"] == (planar ? "triangle" : "tetrahedron"));
+        REQUIRE(report.contains("energy_wrapd"));
+        CHECK(report["energy_wrapd"].get<double>() ==
+              Approx(0.5 * report["energy"].get<double>()).epsilon(1e-9));
+        CHECK(outcome.result.converged);
+      }
     }
   }
 }

@@ -35,45 +35,6 @@ OctreeHierarchy::Options WithMinVertices(int min_vertices, bool topology_aware =
   return options;
 }
 
-/// An n×n×n vertex grid on [0,1]³, each cube split into 6 tetrahedra around its main diagonal.
-Mesh TetGrid(int n) {
-  Mesh mesh;
-  mesh.vertices.resize(n * n * n, 3);
-  auto id = [n](int i, int j, int k) { return (k * n + j) * n + i; };
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        mesh.vertices.row(id(i, j, k)) << double(i) / (n - 1), double(j) / (n - 1),
-            double(k) / (n - 1);
-      }
-    }
-  }
-  std::vector<std::array<int, 4>> tets;
-  const std::array<std::array<int, 3>, 6> orders = {
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  for (int k = 0; k + 1 < n; ++k) {
-    for (int j = 0; j + 1 < n; ++j) {
-      for (int i = 0; i + 1 < n; ++i) {
-        for (const auto& order : orders) {
-          std::array<int, 3> c = {i, j, k};
-          std::array<int, 4> tet;
-          tet[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[order[s]];
-            tet[s + 1] = id(c[0], c[1], c[2]);
-          }
-          tets.push_back(tet);
-        }
-      }
-    }
-  }
-  mesh.elements.resize(tets.size(), 4);
-  for (size_t t = 0; t < tets.size(); ++t) {
-    for (int a = 0; a < 4; ++a) mesh.elements(t, a) = tets[t][a];
-  }
-  return mesh;
-}
-
 Mesh Translated(Mesh mesh, const Eigen::RowVector3d& offset) {
   mesh.vertices.rowwise() += offset;
   return mesh;
@@ -509,27 +470,32 @@ TEST_CASE("octree: min_vertices and max_levels stop the hierarchy", "[hierarchie
 }
 
 TEST_CASE("octree: tetrahedral meshes (Eq. 10)", "[hierarchies][octree]") {
-  const Mesh mesh = TetGrid(14);
-  for (bool aware : {true, false}) {
-    for (auto positions :
-         {OctreeHierarchy::CoarsePositions::kMean, OctreeHierarchy::CoarsePositions::kQuantized}) {
-      DYNAMIC_SECTION((aware ? "topology-aware " : "plain ")
-                      << OctreeHierarchy::ToString(positions)) {
-        OctreeHierarchy::Options options = WithMinVertices(20, aware);
-        options.coarse_positions = positions;
-        const MeshHierarchy h = BuildOctree(mesh, options);
-        REQUIRE(h.num_levels() >= 3);
-        CheckStructure(mesh, h);
-        CheckAllMapped(h);
-        for (const auto& level : h.levels) CHECK(level.mesh.elements.cols() == 4);
+  const std::vector<std::pair<std::string, Mesh>> meshes = {
+      {"6-tet box", TetBox(14, 14, 14, 6)},
+      {"jittered 5-tet box", Jittered(TetBox(13, 12, 11, 5), 13, 0.2, 5)}};
+  for (const auto& [name, mesh] : meshes) {
+    for (bool aware : {true, false}) {
+      for (auto positions : {OctreeHierarchy::CoarsePositions::kMean,
+                             OctreeHierarchy::CoarsePositions::kQuantized}) {
+        DYNAMIC_SECTION(name << (aware ? " topology-aware " : " plain ")
+                             << OctreeHierarchy::ToString(positions)) {
+          OctreeHierarchy::Options options = WithMinVertices(20, aware);
+          options.coarse_positions = positions;
+          const MeshHierarchy h = BuildOctree(mesh, options);
+          REQUIRE(h.num_levels() >= 3);
+          CheckStructure(mesh, h);
+          CheckAllMapped(h);
+          for (const auto& level : h.levels) CHECK(level.mesh.elements.cols() == 4);
+        }
       }
     }
   }
 }
 
 TEST_CASE("octree: planar meshes stay in the plane", "[hierarchies][octree]") {
-  Mesh mesh = Grid(64, 40);
-  mesh.planar = true;
+  const Mesh mesh = PlanarGrid(64, 40);
+  // A quadtree: the flat z axis is a single cell (q_z = 0), so cells never split along z.
+  REQUIRE(IntegerGrid(mesh).bits[2] == 0);
   for (auto positions :
        {OctreeHierarchy::CoarsePositions::kMean, OctreeHierarchy::CoarsePositions::kQuantized}) {
     OctreeHierarchy::Options options = WithMinVertices(20);

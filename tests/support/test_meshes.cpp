@@ -2,6 +2,7 @@
 #include "tests/support/test_meshes.h"
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -24,6 +25,92 @@ Mesh Grid(int nx, int ny) {
       mesh.elements.row(f++) << a, b, d;
       mesh.elements.row(f++) << a, d, c;
     }
+  }
+  return mesh;
+}
+
+Mesh PlanarGrid(int nx, int ny) {
+  Mesh mesh = Grid(nx, ny);
+  mesh.planar = true;
+  return mesh;
+}
+
+Mesh TetBox(int nx, int ny, int nz, int tets_per_cube) {
+  Mesh mesh;
+  mesh.vertices.resize(nx * ny * nz, 3);
+  auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        mesh.vertices.row(id(i, j, k)) << double(i) / (nx - 1), double(j) / (ny - 1),
+            double(k) / (nz - 1);
+      }
+    }
+  }
+  std::vector<std::array<int, 4>> tets;
+  for (int k = 0; k + 1 < nz; ++k) {
+    for (int j = 0; j + 1 < ny; ++j) {
+      for (int i = 0; i + 1 < nx; ++i) {
+        // Corner (a, b, c) ∈ {0,1}³ of the cube at (i, j, k).
+        auto corner = [&](int a, int b, int c) { return id(i + a, j + b, k + c); };
+        if (tets_per_cube == 6) {
+          // Paths from corner 000 to 111 along the axes in each of the 6 orders.
+          const std::array<std::array<int, 3>, 6> orders = {
+              {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+          for (const auto& order : orders) {
+            std::array<int, 3> c = {0, 0, 0};
+            std::array<int, 4> tet;
+            tet[0] = corner(0, 0, 0);
+            for (int s = 0; s < 3; ++s) {
+              ++c[order[s]];
+              tet[s + 1] = corner(c[0], c[1], c[2]);
+            }
+            tets.push_back(tet);
+          }
+        } else {
+          // The middle tetrahedron joins the corners of even global parity, so neighbouring
+          // cubes split their shared face along the same diagonal; each odd corner cuts off a
+          // corner tetrahedron with its three (even) neighbours.
+          const int parity = (i + j + k) % 2;
+          std::array<int, 4> middle;
+          int m = 0;
+          for (int a = 0; a < 2; ++a) {
+            for (int b = 0; b < 2; ++b) {
+              for (int c = 0; c < 2; ++c) {
+                if ((parity + a + b + c) % 2 == 0) {
+                  middle[m++] = corner(a, b, c);
+                } else {
+                  tets.push_back({corner(a, b, c), corner(1 - a, b, c), corner(a, 1 - b, c),
+                                  corner(a, b, 1 - c)});
+                }
+              }
+            }
+          }
+          tets.push_back(middle);
+        }
+      }
+    }
+  }
+  mesh.elements.resize(tets.size(), 4);
+  for (size_t t = 0; t < tets.size(); ++t) {
+    auto& tet = tets[t];
+    const Eigen::Vector3d p0 = mesh.vertices.row(tet[0]);
+    const Eigen::Matrix3d d = (Eigen::Matrix3d() << mesh.vertices.row(tet[1]) - p0.transpose(),
+                               mesh.vertices.row(tet[2]) - p0.transpose(),
+                               mesh.vertices.row(tet[3]) - p0.transpose())
+                                  .finished();
+    if (d.determinant() < 0) std::swap(tet[2], tet[3]);
+    for (int a = 0; a < 4; ++a) mesh.elements(t, a) = tet[a];
+  }
+  return mesh;
+}
+
+Mesh Jittered(Mesh mesh, int n, double amount, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> offset(-1.0, 1.0);
+  const double step = amount / (n - 1);
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    for (int d = 0; d < (mesh.planar ? 2 : 3); ++d) mesh.vertices(v, d) += step * offset(rng);
   }
   return mesh;
 }

@@ -8,6 +8,19 @@ namespace harap::testing {
 /// A regular grid of nx×ny vertices on [0,1]² (z = 0), each quad split into two triangles.
 Mesh Grid(int nx, int ny);
 
+/// Grid(nx, ny) marked planar: a 2D triangle mesh (z = 0) for the per-element energy.
+Mesh PlanarGrid(int nx, int ny);
+
+/// A box of nx×ny×nz vertices on [0,1]³, each grid cube split into `tets_per_cube` = 6
+/// tetrahedra around its main diagonal (Kuhn) or 5 (a middle tetrahedron and four corners,
+/// mirrored in a checkerboard so faces match). Every tetrahedron is positively oriented.
+Mesh TetBox(int nx, int ny, int nz, int tets_per_cube = 6);
+
+/// The mesh with every vertex moved by a deterministic random offset of up to `amount` × the
+/// smallest grid spacing 1/(n−1) of `n` (in the plane for planar meshes): irregular elements,
+/// obtuse angles and negative cotangent weights, still valid for amount < ~0.25.
+Mesh Jittered(Mesh mesh, int n, double amount, unsigned seed);
+
 /// A closed, subdivided icosahedron of unit radius (`subdivisions` = 0 gives 12 vertices).
 Mesh Icosphere(int subdivisions);
 
