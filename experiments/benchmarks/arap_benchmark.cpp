@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 
+#include "experiments/benchmarks/hierarchy_benchmark.h"
 #include "experiments/builtins.h"
 #include "framework/constrained_system.h"
 #include "framework/io/builtin_meshes.h"
@@ -181,6 +182,7 @@ translate = [0.0, 0.35, -0.3]
   } else {
     fmt::print(stderr, "note: {} not found; armadillo benchmarks skipped\n", armadillo.string());
   }
+  harap::benchmarks::RegisterHierarchyBenchmarks(HARAP_SHARED_DIR);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

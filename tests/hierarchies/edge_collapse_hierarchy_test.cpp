@@ -107,6 +107,20 @@ Index CheckManifold(const Mesh& mesh) {
   return mesh.num_vertices() - Index(edges.size()) + mesh.num_elements();
 }
 
+/// The largest aspect ratio (longest edge / its height) of the triangles.
+double MaxAspectRatio(const Mesh& mesh) {
+  double worst = 0.0;
+  for (Index t = 0; t < mesh.num_elements(); ++t) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.elements(t, 0));
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.elements(t, 1));
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.elements(t, 2));
+    const double longest =
+        std::max({(a - b).squaredNorm(), (b - c).squaredNorm(), (c - a).squaredNorm()});
+    worst = std::max(worst, longest / (b - a).cross(c - a).norm());
+  }
+  return worst;
+}
+
 /// The contract of every level, plus what edge collapse promises: nested levels (coarse vertices
 /// at the rest positions of fine vertices of their own cluster), strictly fewer vertices,
 /// manifold levels, every referenced vertex in the cluster of a valid coarse vertex, clusters
@@ -306,7 +320,7 @@ TEST_CASE("edge_collapse: several components, planar meshes, determinism",
     // Tube (χ = 0) + two spheres (χ = 2 each); a sphere stops at a tetrahedron (4 vertices).
     for (const auto& level : h.levels) CHECK(CheckManifold(level.mesh) == 4);
   }
-  SECTION("planar meshes stay in the plane") {
+  SECTION("planar meshes stay in the plane, without needles") {
     Mesh mesh = Grid(64, 40);
     mesh.planar = true;
     const MeshHierarchy h = BuildEdgeCollapse(mesh, WithMinVertices(20));
@@ -315,7 +329,14 @@ TEST_CASE("edge_collapse: several components, planar meshes, determinism",
     for (const auto& level : h.levels) {
       CHECK(level.mesh.planar);
       CHECK(level.mesh.vertices.col(2).cwiseAbs().maxCoeff() == 0.0);
+      // Every quadric error is 0 here; the aspect-ratio check keeps the faces usable.
+      CHECK(MaxAspectRatio(level.mesh) <= 20.0);
     }
+    EdgeCollapseHierarchy::Options unchecked = WithMinVertices(20);
+    unchecked.max_aspect_ratio = 0.0;
+    const MeshHierarchy needles = BuildEdgeCollapse(mesh, unchecked);
+    REQUIRE(needles.num_levels() >= 2);
+    CHECK(MaxAspectRatio(needles.levels[1].mesh) > 20.0);
   }
   SECTION("the same hierarchy whatever the thread count") {
     const Mesh mesh = Concatenate(Tube(60, 48), Icosphere(4));
@@ -401,7 +422,7 @@ TEST_CASE("edge_collapse: options from config", "[hierarchies][edge_collapse]") 
     for (const auto& option : registries.hierarchies.DescribeOptions("edge_collapse")) {
       keys.push_back(option.key);
     }
-    CHECK(options.max_aspect_ratio == 5.0);
+    CHECK(options.max_aspect_ratio == 20.0);
     CHECK(keys == std::vector<std::string>{"ratio", "min_vertices", "max_levels",
                                            "max_normal_deviation", "max_aspect_ratio"});
   }
