@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Micro-benchmarks of the classic ARAP kernels: local step, right-hand side, factorization,
 // one solve, one full iteration — on a generated cylinder and, when ../shared is present, on the
-// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices).
+// armadillo-bend scenario (armadillo-43k refined once: ~173K vertices). Hierarchy construction
+// benchmarks are registered from hierarchy_benchmark.cpp.
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
 #include <benchmark/benchmark.h>
