@@ -19,8 +19,8 @@
 #include "hierarchies/octree_hierarchy.h"
 
 // Cost: the decimation dominates and is sequential (one priority queue): ~18 s of CPU for the
-// 173K-vertex armadillo-bend mesh and ~41 s for the 437K-vertex Dragon (HierarchyBuild
-// benchmark, loaded shared machine; the octree takes 0.1–0.6 s), most of it in OpenMesh's legality test
+// 173K-vertex armadillo-bend mesh, ~41 s for the 437K-vertex Dragon (HierarchyBuild benchmark on
+// the loaded shared machine; the octree takes 0.1–0.6 s). Most of it is OpenMesh's legality test
 // is_collapse_ok(), which DecimaterT calls for every outgoing halfedge of every vertex around
 // each collapse. See docs/results.md ("Octree vs edge collapse").
 
@@ -148,7 +148,8 @@ void JoinFans(const Mesh& input, CornerClasses& fans) {
         const Index a = run[0], b = run[1];  // directed edges vertex(a) → vertex(next(a)), ...
         if (vertex(a) == vertex(b)) {
           if (misoriented++ == 0) {
-            first_misoriented = fmt::format("edge {}–{}, triangles {} and {}", lo, hi, a / 3, b / 3);
+            first_misoriented =
+                fmt::format("edge {}–{}, triangles {} and {}", lo, hi, a / 3, b / 3);
           }
         } else {
           // a: x → y, b: y → x. Corner a and corner next(b) are both at x, next(a) and b at y.
@@ -200,8 +201,8 @@ Surface BuildSurface(const Mesh& input) {
   mesh.reserve(n, std::size_t(3) * m / 2, m);
   auto add_vertex = [&](Index v) {
     return mesh
-        .add_vertex(SurfaceMesh::Point(input.vertices(v, 0), input.vertices(v, 1),
-                                       input.vertices(v, 2)))
+        .add_vertex(
+            SurfaceMesh::Point(input.vertices(v, 0), input.vertices(v, 1), input.vertices(v, 2)))
         .idx();
   };
   for (Index v = 0; v < n; ++v) {
@@ -442,10 +443,10 @@ MeshHierarchy EdgeCollapseHierarchy::Build(const Mesh& mesh, const Context& cont
   hierarchy.levels.push_back(HierarchyLevel{mesh, {}, {}});
   if (mesh.num_elements() == 0) return hierarchy;
   if (mesh.kind() == ElementKind::kTetrahedron) {
-    throw InputError(fmt::format(
-        "the edge_collapse hierarchy decimates triangle surfaces, but this mesh has {} "
-        "tetrahedra; use the octree hierarchy for volumetric meshes",
-        mesh.num_elements()));
+    throw InputError(
+        fmt::format("the edge_collapse hierarchy decimates triangle surfaces, but this mesh has {} "
+                    "tetrahedra; use the octree hierarchy for volumetric meshes",
+                    mesh.num_elements()));
   }
   HARAP_CHECK(mesh.simplex_size() == 3, "elements have {} vertices; edge_collapse needs triangles",
               mesh.simplex_size());

@@ -152,9 +152,8 @@ void CheckLevels(const Mesh& input, const MeshHierarchy& h) {
     }
     const Mesh& coarse = h.levels[l + 1].mesh;
     const Index n = fine.num_vertices();
-    CHECK(coarse.num_vertices() < (l == 0 ? Index(std::count(referenced.begin(),
-                                                             referenced.end(), true))
-                                          : n));
+    CHECK(coarse.num_vertices() <
+          (l == 0 ? Index(std::count(referenced.begin(), referenced.end(), true)) : n));
     REQUIRE(level.coarse_vertex.size() == size_t(n));
     REQUIRE(level.in_cluster.size() == size_t(n));
 
@@ -192,7 +191,8 @@ void CheckLevels(const Mesh& input, const MeshHierarchy& h) {
     }
     std::map<Index, std::set<Index>> pieces;  // coarse vertex → components of its cluster
     for (Index i = 0; i < n; ++i) {
-      if (level.coarse_vertex[i] != kNoVertex) pieces[level.coarse_vertex[i]].insert(classes.Find(i));
+      if (level.coarse_vertex[i] != kNoVertex)
+        pieces[level.coarse_vertex[i]].insert(classes.Find(i));
     }
     Index split_clusters = 0;
     for (const auto& [c, components] : pieces) split_clusters += components.size() > 1;
@@ -218,7 +218,8 @@ Mesh PinchedSpheres(int subdivisions) {
   // Put the second sphere's vertex 0 onto the first's vertex 0, then identify the two.
   const Eigen::RowVector3d p = sphere.vertices.row(0);
   other.vertices = (-other.vertices).rowwise() + 2.0 * p;
-  for (Index t = 0; t < other.num_elements(); ++t) std::swap(other.elements(t, 1), other.elements(t, 2));
+  for (Index t = 0; t < other.num_elements(); ++t)
+    std::swap(other.elements(t, 1), other.elements(t, 2));
   Mesh both = Concatenate(sphere, other);
   const Index shift = sphere.num_vertices();
   for (Index t = sphere.num_elements(); t < both.num_elements(); ++t) {
@@ -496,7 +497,8 @@ TEST_CASE("edge_collapse: hierarchical ARAP on it lowers the energy level by lev
         energies[s.level].push_back(s.energy);
         return CallbackAction::kContinue;
       };
-      const OptimizeResult result = setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
+      const OptimizeResult result =
+          setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
       REQUIRE(result.levels.size() >= 3);
       for (const auto& [level, trace] : energies) {
         REQUIRE(!trace.empty());
@@ -508,7 +510,8 @@ TEST_CASE("edge_collapse: hierarchical ARAP on it lowers the energy level by lev
       CHECK(result.converged);
       // The same problem with classic ARAP stops higher (the reason for a hierarchy).
       TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n");
-      const OptimizeResult flat = classic.MakeOptimizer()->Optimize(problem, classic.factory, Context());
+      const OptimizeResult flat =
+          classic.MakeOptimizer()->Optimize(problem, classic.factory, Context());
       CHECK(result.energy < flat.energy);
     }
   }
