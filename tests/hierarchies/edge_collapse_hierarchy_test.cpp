@@ -235,7 +235,7 @@ Mesh PinchedSpheres(int subdivisions) {
 TEST_CASE("edge_collapse: nested manifold levels on generated meshes",
           "[hierarchies][edge_collapse]") {
   const std::vector<std::pair<std::string, Mesh>> meshes = {
-      {"icosphere", Icosphere(5)}, {"tube", Tube(80, 64)}, {"grid", Grid(90, 70)}};
+      {"icosphere", Icosphere(4)}, {"tube", Tube(60, 40)}, {"grid", Grid(60, 45)}};
   for (const auto& [name, mesh] : meshes) {
     for (double ratio : {0.0, 0.3}) {
       DYNAMIC_SECTION(name << " ratio " << ratio) {
