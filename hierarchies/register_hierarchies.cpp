@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "hierarchies/register_hierarchies.h"
 
+#include "hierarchies/edge_collapse_hierarchy.h"
 #include "hierarchies/octree_hierarchy.h"
 
 namespace harap {
@@ -10,6 +11,11 @@ void RegisterHierarchies(Registry<Hierarchy>& registry) {
                "vertex clustering on nested regular grids with the topology check, elements "
                "kept while their vertices lie in different clusters [Meyer et al. 2025, Sec. 4]",
                &OctreeHierarchy::Create);
+  registry.Add(std::string(EdgeCollapseHierarchy::kName),
+               "manifold-preserving levels by quadric-error edge collapse (OpenMesh's decimater), "
+               "by default with the octree's level vertex counts; the alternative of the "
+               "paper's Fig. 18",
+               &EdgeCollapseHierarchy::Create);
 }
 
 }  // namespace harap

@@ -4,7 +4,8 @@
 // hierarchy, and each registered up-sampler from level 1 to the input mesh — on a generated
 // cylinder and, when ../shared is present, on the armadillo-bend scenario (armadillo-43k refined
 // once: ~173K vertices) and the tetrahedral WRAPD rabbit (26K vertices, 102K tetrahedra, energy
-// `elements`).
+// `elements`). Octree vs edge collapse on meshes in file order (also dragon-lift) are registered
+// from hierarchy_benchmark.cpp as HierarchyBuildFileOrder_<name>.
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
 #include <benchmark/benchmark.h>
@@ -14,6 +15,7 @@
 #include <map>
 #include <memory>
 
+#include "experiments/benchmarks/hierarchy_benchmark.h"
 #include "experiments/builtins.h"
 #include "framework/constrained_system.h"
 #include "framework/error.h"
@@ -280,6 +282,7 @@ translate = [0.0, 0.35, -0.3]
   } catch (const InputError& error) {
     fmt::print(stderr, "note: wrapd-rabbit benchmarks skipped: {}\n", error.what());
   }
+  harap::benchmarks::RegisterHierarchyBenchmarks(HARAP_SHARED_DIR);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;
