@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <string>
+#include <vector>
 
 #include "framework/error.h"
 #include "solvers/optimizers/classic_optimizer.h"
@@ -140,6 +142,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   const RotationSite site = solvers[coarsest]->energy().rotation_site();
   LevelState state;
   bool start_with_global_step = false;
+  std::vector<std::string> frozen_target_notes;
   for (int l = coarsest; l >= 0; --l) {
     const HierarchyLevel& level = hierarchy.levels[l];
     if (l < coarsest) {
@@ -178,6 +181,12 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
       return solver.Run(state, start_with_global_step, options, diagonal, context, update);
     });
     level_seconds[l] += level_clock.Seconds();
+    if (run.targets_frozen_at > 0) {
+      frozen_target_notes.push_back(fmt::format(
+          "level {}: coarse constraint targets stopped following the rotations after iteration "
+          "{} (the energy kept rising)",
+          l, run.targets_frozen_at));
+    }
     result.total_iterations += run.iterations;
     result.levels.push_back(LevelResult{l, level.mesh.num_vertices(), level.mesh.num_elements(),
                                         run.iterations, run.energy, level_seconds[l],
@@ -216,6 +225,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   result.positions = std::move(state.positions);
   result.constraints = solvers[0]->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);
+  result.notes.insert(result.notes.end(), frozen_target_notes.begin(), frozen_target_notes.end());
   result.timings.total = total.Seconds();
   return result;
 }

@@ -97,8 +97,18 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     result.converged = true;
     return result;
   }
+  // Moving constraint targets (coarse levels following their cluster rotations) make an iteration
+  // no longer a descent step, and the energy can cycle instead of converging (seen on coarse
+  // levels of tetrahedral meshes and of edge-collapse hierarchies). A few increases are a normal
+  // transient while the targets swing into place; after the third one the targets stay where
+  // they are for the rest of the level, so the remaining iterations are plain local/global
+  // steps: monotone and convergent.
+  constexpr int kEnergyIncreasesBeforeFreezing = 3;
+  int energy_increases = 0;
+  bool targets_frozen = false;
+  double previous_energy = energy;
   while (result.iterations < options.max_iterations) {
-    if (update_fixed) {
+    if (update_fixed && !targets_frozen) {
       update_fixed(state.rotations, state.positions);
       system_->SetFixedPositions(state.positions);
     }
@@ -121,6 +131,12 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
                                        energy, level_, result.iterations));
     }
+    if (update_fixed && !targets_frozen && result.iterations > 1 && energy > previous_energy &&
+        ++energy_increases == kEnergyIncreasesBeforeFreezing) {
+      targets_frozen = true;
+      result.targets_frozen_at = result.iterations;
+    }
+    previous_energy = energy;
     if (context.iteration_callback) {
       IterationSummary summary_for_callback{level_, result.iterations, energy, displacement,
                                             context.run_clock.Seconds()};

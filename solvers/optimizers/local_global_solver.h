@@ -41,6 +41,9 @@ class LocalGlobalSolver {
     double energy = 0.0;  ///< E(u, R) with R fitted to the final u.
     bool converged = false;
     bool stopped_by_callback = false;
+    /// With moving constraint targets: the iteration after which they were frozen because the
+    /// energy kept rising (0: never).
+    int targets_frozen_at = 0;
   };
 
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
