@@ -380,6 +380,7 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& /*context*/)
 
 SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                   Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+  const Stopwatch clock;
   Impl& impl = *impl_;
   HARAP_CHECK(impl.factorized, "Solve() needs a successful Factorize() first");
   HARAP_CHECK(b.rows() == impl.rows && x.rows() == impl.rows && x.cols() == b.cols(),
@@ -414,12 +415,14 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   if (!x.allFinite()) {
     summary.success = false;
     summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
+    summary.seconds = clock.Seconds();
     return summary;
   }
   if (impl.options.check_residual) {
     summary.relative_residual =
         solver_checks::MaxRelativeResidual(impl.a_copy, b, x, impl.residual);
   }
+  summary.seconds = clock.Seconds();
   return summary;
 }
 

@@ -39,6 +39,7 @@ class LocalGlobalSolver {
     double energy = 0.0;  ///< E(u, R) with R fitted to the final u.
     bool converged = false;
     bool stopped_by_callback = false;
+    SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
