@@ -38,6 +38,16 @@ uint64_t MatrixHash(const SparseMatrix& a) {
   return hash == 0 ? 1 : hash;
 }
 
+/// Spectra's tolerance for the bounds. The margins (1% by default) dwarf the error of a Ritz
+/// value with relative residual 1e-3: on the armadillo's finest level λ_max = 2.2180109 after
+/// 51 products at 1e-3, 2.2180121 after 81 at 1e-6 (an underestimate beyond the margin would
+/// show as a diverging solve, which fails loudly).
+EigenSolverOptions BoundsEstimateOptions() {
+  EigenSolverOptions options;
+  options.tolerance = 1e-3;
+  return options;
+}
+
 }  // namespace
 
 ChebyshevSolver::Options ChebyshevSolver::Options::FromConfig(const ConfigNode& node) {
@@ -95,7 +105,7 @@ void ChebyshevSolver::Factorize(const SparseMatrix& a, const Context& context) {
           a_, SpectrumScaling::kJacobi,
           lower_bound == LowerBound::kShiftInvert ? SmallestEigenvalue::kShiftInvert
                                                   : SmallestEigenvalue::kSkip,
-          EigenSolverOptions{}, context);
+          BoundsEstimateOptions(), context);
     } catch (const NumericalError& error) {
       throw NumericalError(fmt::format("chebyshev: {}", error.what()));
     }
@@ -189,19 +199,9 @@ SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>
 
 SolveSummary ChebyshevSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                     Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  const Stopwatch clock;
-  HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == a_.rows() && x.rows() == a_.rows() && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), a_.rows());
-  SolveSummary summary;
-  if (a_.rows() > 0) {
-    summary = iterative::SolveByBlocks(b.cols(), [&](Eigen::Index first, auto width) {
-      return SolveBlock<decltype(width)::value>(b, x, first);
-    });
-  }
-  summary.seconds = clock.Seconds();
-  return summary;
+  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x, [&](Eigen::Index first, auto width) {
+    return SolveBlock<decltype(width)::value>(b, x, first);
+  });
 }
 
 }  // namespace harap

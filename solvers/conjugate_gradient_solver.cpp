@@ -227,21 +227,10 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
 }
 
 SolveSummary ConjugateGradientSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                            Eigen::Ref<Eigen::MatrixXd> x,
-                                            const Context& /*context*/) {
-  const Stopwatch clock;
-  HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == a_.rows() && x.rows() == a_.rows() && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), a_.rows());
-  SolveSummary summary;
-  if (a_.rows() > 0) {
-    summary = iterative::SolveByBlocks(b.cols(), [&](Eigen::Index first, auto width) {
-      return SolveBlock<decltype(width)::value>(b, x, first);
-    });
-  }
-  summary.seconds = clock.Seconds();
-  return summary;
+                                            Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x, [&](Eigen::Index first, auto width) {
+    return SolveBlock<decltype(width)::value>(b, x, first);
+  });
 }
 
 }  // namespace harap

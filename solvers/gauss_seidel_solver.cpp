@@ -247,19 +247,9 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
 
 SolveSummary GaussSeidelSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                       Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  const Stopwatch clock;
-  HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == rows_ && x.rows() == rows_ && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), rows_);
-  SolveSummary summary;
-  if (rows_ > 0) {
-    summary = iterative::SolveByBlocks(b.cols(), [&](Eigen::Index first, auto width) {
-      return SolveBlock<decltype(width)::value>(b, x, first);
-    });
-  }
-  summary.seconds = clock.Seconds();
-  return summary;
+  return iterative::SolveByBlocks(factorized_, rows_, b, x, [&](Eigen::Index first, auto width) {
+    return SolveBlock<decltype(width)::value>(b, x, first);
+  });
 }
 
 }  // namespace harap

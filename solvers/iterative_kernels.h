@@ -25,6 +25,8 @@
 #include <vector>
 
 #include "framework/config.h"
+#include "framework/context.h"
+#include "framework/error.h"
 #include "framework/linear_solver.h"
 #include "framework/types.h"
 
@@ -207,14 +209,22 @@ void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
 /// The message for an iteration that diverged (residual grew by kDivergenceFactor, or NaN).
 std::string DivergenceMessage(std::string_view solver, int iteration, std::string_view cause);
 
-/// Runs solve_block(first, std::integral_constant<int, K>{}) for the column blocks
-/// [first, first + K) of an n×k solve (K = 3 except for the last block) and merges what they
-/// report: iterations and residual are maxima over blocks, the first failure wins.
+/// The body of every iterative Solve(): checks the call (a Factorize() happened, b and x fit
+/// the `rows`×`rows` matrix), runs solve_block(first, std::integral_constant<int, K>{}) for the
+/// column blocks [first, first + K) of b and x (K = 3 except for the last block), merges what
+/// the blocks report (iterations and residual are maxima over blocks, the first failure wins)
+/// and times the whole call.
 template <class F>
-SolveSummary SolveByBlocks(Eigen::Index columns, F&& solve_block) {
+SolveSummary SolveByBlocks(bool factorized, Index rows, const Eigen::Ref<const Eigen::MatrixXd>& b,
+                           const Eigen::Ref<Eigen::MatrixXd>& x, F&& solve_block) {
+  const Stopwatch clock;
+  HARAP_CHECK(factorized, "Solve() needs a successful Factorize() first");
+  HARAP_CHECK(b.rows() == rows && x.rows() == rows && x.cols() == b.cols(),
+              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
+              x.cols(), rows);
   SolveSummary summary;
-  for (Eigen::Index first = 0; first < columns; first += kMaxBlockColumns) {
-    const int k = static_cast<int>(std::min<Eigen::Index>(kMaxBlockColumns, columns - first));
+  for (Eigen::Index first = 0; rows > 0 && first < b.cols(); first += kMaxBlockColumns) {
+    const int k = static_cast<int>(std::min<Eigen::Index>(kMaxBlockColumns, b.cols() - first));
     const SolveSummary block =
         DispatchColumns(k, [&](auto width) { return solve_block(first, width); });
     summary.iterations = std::max(summary.iterations, block.iterations);
@@ -224,6 +234,7 @@ SolveSummary SolveByBlocks(Eigen::Index columns, F&& solve_block) {
       summary.message = block.message;
     }
   }
+  summary.seconds = clock.Seconds();
   return summary;
 }
 
