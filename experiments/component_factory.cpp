@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "experiments/component_factory.h"
 
+#include <limits>
+
 namespace harap {
 
 namespace {
@@ -10,6 +12,20 @@ std::string TypeOf(const ConfigNode& table, const std::string& default_name,
   return table.Get("type", default_name, fmt::format("which {} to use", kind));
 }
 
+constexpr std::string_view kSmallSystems = "small_systems";
+
+// Reads the size limit of a `[solver.small_systems]` table (0 if the table is absent).
+Index SmallSystemsLimit(const ConfigNode& table) {
+  const int limit = table.Get("max_unknowns", 0,
+                              "reduced systems with at most this many unknowns (free vertices) "
+                              "use this table's solver, larger ones [solver]'s; 0: none");
+  if (limit < 0) {
+    throw ConfigError(fmt::format("{}: max_unknowns must be >= 0, got {}",
+                                  table.Where("max_unknowns"), limit));
+  }
+  return limit;
+}
+
 }  // namespace
 
 RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
@@ -17,7 +33,18 @@ RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
                                                    DefaultComponents defaults)
     : registries_(registries), root_(root), defaults_(std::move(defaults)) {
   MakeEnergy();
-  registries_.linear_solvers.Create(root_.Child("solver"), defaults_.solver);
+  // Both solver tables are validated now (the small-system one only if present).
+  const ConfigNode solver = root_.Child("solver");
+  if (solver.Has(kSmallSystems)) {
+    const ConfigNode small = solver.Child(kSmallSystems);
+    if (SmallSystemsLimit(small) == 0) {
+      throw ConfigError(fmt::format("{}: [solver.small_systems] needs max_unknowns > 0",
+                                    small.Where("max_unknowns")));
+    }
+    registries_.linear_solvers.Create(small, defaults_.solver);
+  }
+  registries_.linear_solvers.Create(SolverTableFor(std::numeric_limits<Index>::max()),
+                                    defaults_.solver);
   if (root_.Has("hierarchy")) MakeHierarchy();
   if (root_.Has("upsampler")) MakeUpsampler();
 }
@@ -26,8 +53,17 @@ std::unique_ptr<Energy> RegistryComponentFactory::MakeEnergy() const {
   return registries_.energies.Create(root_.Child("energy"), defaults_.energy);
 }
 
-std::unique_ptr<LinearSolver> RegistryComponentFactory::MakeLinearSolver(int, Index) const {
-  return registries_.linear_solvers.Create(root_.Child("solver"), defaults_.solver);
+ConfigNode RegistryComponentFactory::SolverTableFor(Index num_unknowns) const {
+  const ConfigNode solver = root_.Child("solver");
+  // Reading the sub-table also marks it as known to [solver]'s unknown-key check.
+  const ConfigNode small = solver.Child(kSmallSystems);
+  if (solver.Has(kSmallSystems) && num_unknowns <= SmallSystemsLimit(small)) return small;
+  return solver;
+}
+
+std::unique_ptr<LinearSolver> RegistryComponentFactory::MakeLinearSolver(
+    int, Index num_unknowns) const {
+  return registries_.linear_solvers.Create(SolverTableFor(num_unknowns), defaults_.solver);
 }
 
 std::unique_ptr<Hierarchy> RegistryComponentFactory::MakeHierarchy() const {
@@ -44,6 +80,9 @@ std::string RegistryComponentFactory::energy_name() const {
 std::string RegistryComponentFactory::solver_name() const {
   return TypeOf(root_.Child("solver"), defaults_.solver, "solver");
 }
+std::string RegistryComponentFactory::solver_name_for(Index num_unknowns) const {
+  return TypeOf(SolverTableFor(num_unknowns), defaults_.solver, "solver");
+}
 std::string RegistryComponentFactory::hierarchy_name() const {
   return TypeOf(root_.Child("hierarchy"), defaults_.hierarchy, "hierarchy");
 }
@@ -54,6 +93,14 @@ std::string RegistryComponentFactory::upsampler_name() const {
 std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const ConfigNode& root,
                                          const DefaultComponents& defaults) {
   return registries.optimizers.Create(root.Child("optimizer"), defaults.optimizer);
+}
+
+std::vector<OptionInfo> DescribeSmallSystemsOptions() {
+  const ConfigNode node = ConfigNode::Describing();
+  SmallSystemsLimit(node);
+  node.Get("type", DefaultComponents{}.solver,
+           "the solver for the small systems (its own options go in the same table)");
+  return node.Options();
 }
 
 void ValidateRunConfig(const ConfigNode& root) {

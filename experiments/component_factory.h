@@ -20,6 +20,18 @@ struct DefaultComponents {
 
 /// The ComponentFactory of a run: creates each piece by the `type` of its table in the run's
 /// config (`[energy]`, `[solver]`, `[hierarchy]`, `[upsampler]`) with that table's options.
+///
+/// Per-level solver choice: an optional `[solver.small_systems]` table names a second solver
+/// (its `type`, default the default solver, and its options) for every reduced system with at
+/// most `max_unknowns` unknowns; larger systems use `[solver]`. This is the paper's suggestion
+/// (Section 5.2) to factor the levels that fit and iterate on the ones that do not:
+///
+///   [solver]
+///   type = "cg"               # levels with more than 50000 unknowns
+///   max_iterations = 30
+///   [solver.small_systems]
+///   max_unknowns = 50000      # levels (classic: the mesh) up to this size
+///   type = "cholmod"
 class RegistryComponentFactory final : public ComponentFactory {
  public:
   /// Validates the energy and solver tables (and hierarchy/upsampler tables if present) at once,
@@ -32,13 +44,19 @@ class RegistryComponentFactory final : public ComponentFactory {
   std::unique_ptr<Hierarchy> MakeHierarchy() const override;
   std::unique_ptr<Upsampler> MakeUpsampler() const override;
 
-  /// The registry name each table resolves to.
+  /// The registry name each table resolves to; solver_name() is `[solver]`'s, whatever the
+  /// small-system rule says.
   std::string energy_name() const;
   std::string solver_name() const;
+  /// The solver a reduced system of `num_unknowns` unknowns gets.
+  std::string solver_name_for(Index num_unknowns) const;
   std::string hierarchy_name() const;
   std::string upsampler_name() const;
 
  private:
+  /// The table whose solver a system of `num_unknowns` unknowns gets.
+  ConfigNode SolverTableFor(Index num_unknowns) const;
+
   const Registries& registries_;
   ConfigNode root_;
   DefaultComponents defaults_;
@@ -47,6 +65,9 @@ class RegistryComponentFactory final : public ComponentFactory {
 /// Creates the optimizer named by the `[optimizer]` table.
 std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const ConfigNode& root,
                                          const DefaultComponents& defaults = {});
+
+/// The options of the `[solver.small_systems]` table (drives `harap list`).
+std::vector<OptionInfo> DescribeSmallSystemsOptions();
 
 /// Rejects unknown top-level tables/keys of a run config, listing the valid ones.
 void ValidateRunConfig(const ConfigNode& root);

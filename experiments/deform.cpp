@@ -45,12 +45,25 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
     outcome.trace.push_back({summary.seconds, summary.energy, summary.level});
     return options.progress ? options.progress(summary) : CallbackAction::kContinue;
   };
+  std::map<int, SparseMatrix> level_matrices;
+  if (options.diagnostics) {
+    context.system_callback = [&](int level, const SparseMatrix& reduced) {
+      level_matrices[level] = reduced;
+    };
+  }
   DeformationProblem problem;
   problem.mesh = &scenario.mesh;
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
   context.run_clock.Restart();
   outcome.result = context.Run([&] { return optimizer->Optimize(problem, factory, context); });
+  for (const LevelResult& level : outcome.result.levels) {
+    outcome.level_solvers.push_back(factory.solver_name_for(level.unknowns));
+  }
+  for (auto& [level, matrix] : level_matrices) {
+    outcome.spectra[level] = AnalyzeSystemSpectrum(matrix, EigenSolverOptions{}, context);
+    matrix = SparseMatrix();  // release it
+  }
   return outcome;
 }
 
@@ -97,14 +110,38 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   }
   report["handles"] = handles;
   json levels = json::array();
-  for (const auto& level : r.levels) {
-    levels.push_back({{"level", level.level},
-                      {"vertices", level.vertices},
-                      {"faces", level.elements},
-                      {"iterations", level.iterations},
-                      {"energy", level.energy},
-                      {"seconds", level.seconds},
-                      {"converged", level.converged}});
+  for (size_t k = 0; k < r.levels.size(); ++k) {
+    const LevelResult& level = r.levels[k];
+    const SolveStatistics& solves = level.linear_solves;
+    json entry = {{"level", level.level},
+                  {"vertices", level.vertices},
+                  {"faces", level.elements},
+                  {"unknowns", level.unknowns},
+                  {"iterations", level.iterations},
+                  {"energy", level.energy},
+                  {"seconds", level.seconds},
+                  {"converged", level.converged},
+                  {"solver", k < outcome.level_solvers.size() ? outcome.level_solvers[k] : ""},
+                  {"solves", solves.solves},
+                  {"solver_iterations", solves.iterations},
+                  {"max_relative_residual", solves.max_relative_residual},
+                  {"last_relative_residual", solves.last_relative_residual},
+                  {"solve_seconds", solves.seconds}};
+    if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
+      auto describe = [](const ExtremeEigenvalues& e) {
+        return json{{"lambda_min", e.smallest},
+                    {"lambda_max", e.largest},
+                    {"condition_number", e.condition_number()},
+                    {"converged", e.converged},
+                    {"products", e.products},
+                    {"solves", e.solves},
+                    {"seconds", e.seconds}};
+      };
+      entry["spectrum"] = {{"matrix", describe(it->second.matrix)},
+                           {"jacobi", describe(it->second.jacobi)},
+                           {"seconds", it->second.seconds}};
+    }
+    levels.push_back(entry);
   }
   report["levels"] = levels;
   // Remarks about the input (scenario loading) first, then those of the run.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "framework/io/scenario.h"
 #include "framework/optimizer.h"
 #include "framework/registries.h"
+#include "solvers/spectral_bounds.h"
 
 namespace harap {
 
@@ -23,6 +25,10 @@ struct DeformOptions {
   int threads = 0;  ///< 0: all hardware threads.
   /// Called for every iteration (after the trace is recorded), e.g. for a progress display.
   IterationCallback progress;
+  /// Compute the extreme eigenvalues of every solved level's reduced global-step matrix (A and
+  /// its Jacobi scaling; Spectra, see solvers/spectral_bounds.h). The matrices are copied during
+  /// the run and analysed after it, so the run's timings do not include the analysis.
+  bool diagnostics = false;
 };
 
 /// Everything a `harap deform` run produced.
@@ -32,10 +38,12 @@ struct DeformOutcome {
   std::string solver;
   std::string hierarchy;  ///< Empty for single-level optimizers.
   std::string upsampler;
+  std::vector<std::string> level_solvers;  ///< Solver name per entry of result.levels.
   int threads = 0;
   OptimizeResult result;
   std::vector<TraceEntry> trace;
   std::string resolved_config;  ///< The run's config as TOML.
+  std::map<int, SystemSpectrum> spectra;  ///< With diagnostics: per solved level.
 };
 
 /// Solves the scenario's deformation with the pieces named in `config` (tables `optimizer`,

@@ -45,6 +45,12 @@ int List() {
   ListRegistry(registries.optimizers);
   ListRegistry(registries.energies);
   ListRegistry(registries.linear_solvers);
+  fmt::print("solver.small_systems (optional table: a second solver for small reduced systems):\n");
+  for (const auto& option : DescribeSmallSystemsOptions()) {
+    fmt::print("      solver.small_systems.{} = {}\n          {}\n", option.key,
+               option.default_value, option.help);
+  }
+  fmt::print("\n");
   ListRegistry(registries.hierarchies);
   ListRegistry(registries.upsamplers);
   fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
@@ -65,6 +71,7 @@ struct DeformArguments {
   std::string out, report;
   std::string out_rest, out_handles;
   bool trace = false;
+  bool diagnostics = false;
   bool quiet = false;
   int threads = 0;
 };
@@ -114,6 +121,22 @@ void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
              r.timings.total);
   fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
   for (const auto& note : scenario.notes) fmt::print("note        {}\n", note);
+  for (size_t k = 0; k < r.levels.size(); ++k) {
+    const LevelResult& level = r.levels[k];
+    const SolveStatistics& solves = level.linear_solves;
+    fmt::print("level {:<5} {:>8} unknowns | {:<12} {:4} solves {:7} iterations {:7.3f} s | max "
+               "residual {:.2e}\n",
+               level.level, level.unknowns, outcome.level_solvers[k], solves.solves,
+               solves.iterations, solves.seconds, solves.max_relative_residual);
+    if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
+      const SystemSpectrum& spectrum = it->second;
+      fmt::print("            A: λ [{:.4e}, {:.4e}] κ {:.3e} | D^-1/2 A D^-1/2: λ [{:.4e}, "
+                 "{:.4e}] κ {:.3e} | {:.2f} s\n",
+                 spectrum.matrix.smallest, spectrum.matrix.largest,
+                 spectrum.matrix.condition_number(), spectrum.jacobi.smallest,
+                 spectrum.jacobi.largest, spectrum.jacobi.condition_number(), spectrum.seconds);
+    }
+  }
   for (const auto& note : r.notes) fmt::print("note        {}\n", note);
 }
 
@@ -151,6 +174,7 @@ int Deform(const DeformArguments& args) {
   ProgressLine progress(!args.quiet);
   DeformOptions options;
   options.threads = args.threads;
+  options.diagnostics = args.diagnostics;
   options.progress = [&](const IterationSummary& s) { return progress(s); };
   const DeformOutcome outcome = RunDeform(registries, scenario, config, options);
   progress.Finish();
@@ -307,6 +331,9 @@ int main(int argc, char** argv) {
   deform->add_option("--out-handles", args.out_handles,
                      "write the handles' vertex indices as JSON (for pictures)");
   deform->add_flag("--trace", args.trace, "include the per-iteration energy trace in the report");
+  deform->add_flag("--diagnostics", args.diagnostics,
+                   "per level: extreme eigenvalues and condition number of the reduced "
+                   "global-step matrix and of its Jacobi scaling (Spectra; after the run)");
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
 

@@ -7,6 +7,8 @@
 #include <functional>
 #include <memory>
 
+#include "framework/types.h"
+
 namespace harap {
 
 /// Wall-clock stopwatch (steady clock), in seconds.
@@ -34,6 +36,13 @@ struct IterationSummary {
 enum class CallbackAction { kContinue, kStop };
 using IterationCallback = std::function<CallbackAction(const IterationSummary&)>;
 
+/// Hands a level's reduced global-step matrix A_ff (free × free, full symmetric storage, in the
+/// level's internal vertex numbering) to the caller, once per solved level right after it is
+/// factored. For analyses the optimizer knows nothing about (`harap deform --diagnostics`
+/// computes its extreme eigenvalues); the time spent in it counts towards the C phase, so a
+/// caller that wants clean timings copies the matrix and analyses it after the run.
+using SystemCallback = std::function<void(int level, const SparseMatrix& reduced_matrix)>;
+
 /// Everything an algorithm needs from its caller besides its inputs: threads, the run clock and
 /// the callback. Passed by reference; algorithms never create global thread pools or print.
 struct Context {
@@ -46,6 +55,7 @@ struct Context {
   std::shared_ptr<tbb::task_arena> arena = std::make_shared<tbb::task_arena>();
   Stopwatch run_clock;                 ///< Started when the run starts; trace times count from it.
   IterationCallback iteration_callback;  ///< May be empty.
+  SystemCallback system_callback;        ///< May be empty.
 
   /// A context with `threads` worker threads (0 = all hardware threads).
   static Context WithThreads(int threads) {

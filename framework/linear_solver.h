@@ -9,11 +9,35 @@
 namespace harap {
 
 /// What one Solve() did.
+///
+/// `success` is false only when the answer is unusable (breakdown, divergence, NaN); an iterative
+/// solver that spends its iteration budget before reaching its tolerance succeeds and says how
+/// far it got through `relative_residual` (a fixed budget per global step is normal use).
 struct SolveSummary {
   bool success = true;
   int iterations = 0;              ///< 0 for direct solvers.
   double relative_residual = 0.0;  ///< max over columns of ‖b − A x‖ / ‖b‖ (if computed, else 0).
+  double seconds = 0.0;            ///< Wall time of the Solve() call.
   std::string message;             ///< Why it failed, if it did.
+};
+
+/// Totals over a sequence of Solve() calls (one hierarchy level's global steps).
+struct SolveStatistics {
+  int solves = 0;
+  long long iterations = 0;            ///< Sum of SolveSummary::iterations.
+  double max_relative_residual = 0.0;  ///< Largest final relative residual of any solve.
+  double last_relative_residual = 0.0;
+  double seconds = 0.0;                ///< Sum of SolveSummary::seconds.
+
+  void Add(const SolveSummary& summary) {
+    ++solves;
+    iterations += summary.iterations;
+    if (summary.relative_residual > max_relative_residual) {
+      max_relative_residual = summary.relative_residual;
+    }
+    last_relative_residual = summary.relative_residual;
+    seconds += summary.seconds;
+  }
 };
 
 /// Solves A X = B for a fixed symmetric positive definite A and several right-hand sides at once

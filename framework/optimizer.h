@@ -61,6 +61,8 @@ struct LevelResult {
   double energy = 0.0;   ///< At the end of the level, rotations fitted to the final positions.
   double seconds = 0.0;  ///< Wall time spent on the level (precompute, factor and iterations).
   bool converged = false;
+  Index unknowns = 0;              ///< Rows of the level's reduced global-step matrix A_ff.
+  SolveStatistics linear_solves;   ///< The level's global-step solves.
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -294,18 +294,17 @@ struct CholmodSolver::Impl {
                                  options.pivot_tolerance);
   }
 
-  // Checks a solution and measures its residual if asked to.
+  // Checks a solution, measures its residual if asked to, and the time since `clock` started.
   SolveSummary FinishSolve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                           const Eigen::Ref<Eigen::MatrixXd>& x) {
+                           const Eigen::Ref<Eigen::MatrixXd>& x, const Stopwatch& clock) {
     SolveSummary summary;
     if (!x.allFinite()) {
       summary.success = false;
       summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
-      return summary;
-    }
-    if (options.check_residual) {
+    } else if (options.check_residual) {
       summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy, b, x, residual);
     }
+    summary.seconds = clock.Seconds();
     return summary;
   }
 
@@ -418,6 +417,7 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
 
 SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                   Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
+  const Stopwatch clock;
   Impl& impl = *impl_;
   HARAP_CHECK(impl.factorized, "Solve() needs a successful Factorize() first");
   HARAP_CHECK(b.rows() == impl.rows && x.rows() == impl.rows && x.cols() == b.cols(),
@@ -427,7 +427,7 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   if (impl.rows == 0 || b.cols() == 0) return summary;
   if (impl.use_tree_solve) {
     impl.tree_solve.Solve(b, x, context);
-    return impl.FinishSolve(b, x);
+    return impl.FinishSolve(b, x, clock);
   }
 
   // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
@@ -452,7 +452,7 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   x = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
       static_cast<const double*>(impl.x->x), b.rows(), b.cols(),
       Eigen::OuterStride<>(static_cast<Eigen::Index>(impl.x->d)));
-  return impl.FinishSolve(b, x);
+  return impl.FinishSolve(b, x, clock);
 }
 
 }  // namespace harap

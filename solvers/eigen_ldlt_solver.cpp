@@ -56,6 +56,7 @@ void EigenLdltSolver::Factorize(const SparseMatrix& a, const Context& /*context*
 
 SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                     Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
+  const Stopwatch clock;
   HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
   HARAP_CHECK(b.rows() == rows_ && x.rows() == rows_ && x.cols() == b.cols(),
               "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
@@ -75,11 +76,13 @@ SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   if (!x.allFinite()) {
     summary.success = false;
     summary.message = solver_checks::NonFiniteSolutionMessage("eigen_ldlt", b);
+    summary.seconds = clock.Seconds();
     return summary;
   }
   if (options_.check_residual) {
     summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy_, b, x, residual_);
   }
+  summary.seconds = clock.Seconds();
   return summary;
 }
 

@@ -3,7 +3,10 @@
 
 #include <string>
 
+#include "solvers/chebyshev_solver.h"
+#include "solvers/conjugate_gradient_solver.h"
 #include "solvers/eigen_ldlt_solver.h"
+#include "solvers/gauss_seidel_solver.h"
 #ifdef HARAP_HAVE_CHOLMOD
 #include "solvers/cholmod_solver.h"
 #endif
@@ -19,6 +22,18 @@ void RegisterLinearSolvers(Registry<LinearSolver>& registry) {
   registry.Add(std::string(EigenLdltSolver::kName),
                "sparse LDLᵀ with Eigen's SimplicialLDLT and AMD ordering (reference, always built)",
                &EigenLdltSolver::Create);
+  registry.Add(std::string(GaussSeidelSolver::kName),
+               "Gauss–Seidel/SOR sweeps (forward or symmetric), parallel by graph colouring, "
+               "warm-started",
+               &GaussSeidelSolver::Create);
+  registry.Add(std::string(ConjugateGradientSolver::kName),
+               "preconditioned conjugate gradients (Jacobi or incomplete Cholesky), three "
+               "right-hand sides per pass, warm-started",
+               &ConjugateGradientSolver::Create);
+  registry.Add(std::string(ChebyshevSolver::kName),
+               "Chebyshev semi-iterative acceleration of Jacobi [Wang 2015], bounds from Spectra, "
+               "warm-started",
+               &ChebyshevSolver::Create);
 }
 
 }  // namespace harap

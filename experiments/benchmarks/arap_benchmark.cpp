@@ -6,14 +6,20 @@
 // once: ~173K vertices) and the tetrahedral WRAPD rabbit (26K vertices, 102K tetrahedra, energy
 // `elements`). Octree vs edge collapse on meshes in file order (also dragon-lift) are registered
 // from hierarchy_benchmark.cpp as HierarchyBuildFileOrder_<name>.
+// The iterative solvers (gauss_seidel, cg, chebyshev) get their setup cost and the cost of one
+// solve with a fixed budget of 10 iterations (counter `per_iteration`: seconds per solver
+// iteration, 3 columns).
 //
 //   ./build/harap_benchmarks --benchmark_filter=armadillo
+//   ./build/harap_benchmarks --benchmark_filter='Iterative.*armadillo' 
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "experiments/benchmarks/hierarchy_benchmark.h"
 #include "experiments/builtins.h"
@@ -144,6 +150,60 @@ void Solve(benchmark::State& state, std::string key, std::string mode, std::stri
   SetCounters(state, f);
 }
 
+/// An iterative solver configuration, benchmarked with max_iterations = kBudget and no tolerance.
+struct IterativeCase {
+  std::string label;
+  std::string solver;
+  std::string options;
+};
+
+constexpr int kBudget = 10;
+
+const std::vector<IterativeCase>& IterativeCases() {
+  static const std::vector<IterativeCase> cases = {
+      {"gauss_seidel_forward", "gauss_seidel", ""},
+      {"gauss_seidel_symmetric", "gauss_seidel", "sweep = \"symmetric\""},
+      {"gauss_seidel_natural", "gauss_seidel", "ordering = \"natural\""},
+      {"cg_jacobi", "cg", ""},
+      {"cg_incomplete_cholesky", "cg", "preconditioner = \"incomplete_cholesky\""},
+      {"chebyshev_budget", "chebyshev", ""},
+      {"chebyshev_shift_invert", "chebyshev", "lower_bound = \"shift_invert\""},
+  };
+  return cases;
+}
+
+ConfigNode IterativeOptions(const IterativeCase& c) {
+  return ConfigNode::Parse(fmt::format("max_iterations = {}\n{}", kBudget, c.options),
+                           c.label);
+}
+
+// Factorize(): colouring, preconditioner, spectral bounds.
+void IterativeSetup(benchmark::State& state, std::string key, IterativeCase c) {
+  Fixture& f = Get(key);
+  const ConfigNode options = IterativeOptions(c);
+  for (auto _ : state) {
+    auto solver = f.registries.linear_solvers.Create(c.solver, options);
+    f.context.Run([&] { solver->Factorize(f.system->reduced_matrix(), f.context); });
+    benchmark::DoNotOptimize(solver.get());
+  }
+  SetCounters(state, f);
+}
+
+// One warm-started solve of the three coordinates with kBudget iterations.
+void IterativeSolve(benchmark::State& state, std::string key, IterativeCase c) {
+  Fixture& f = Get(key);
+  auto solver = f.registries.linear_solvers.Create(c.solver, IterativeOptions(c));
+  f.context.Run([&] { solver->Factorize(f.system->reduced_matrix(), f.context); });
+  Eigen::MatrixXd x = f.reduced_x;
+  for (auto _ : state) {
+    f.context.Run([&] { benchmark::DoNotOptimize(solver->Solve(f.reduced_rhs, x, f.context)); });
+  }
+  state.counters["per_iteration"] = benchmark::Counter(
+      static_cast<double>(kBudget), benchmark::Counter::kIsIterationInvariantRate |
+                                        benchmark::Counter::kInvert);
+  SetCounters(state, f);
+}
+
 void FullIteration(benchmark::State& state, std::string key) {
   Fixture& f = Get(key);
   for (auto _ : state) {
@@ -241,6 +301,10 @@ void RegisterAll(const std::string& key) {
   }
   for (const std::string& name : registries.upsamplers.Names()) {
     add("Upsample_" + name, Upsample, key, name);
+  }
+  for (const IterativeCase& c : IterativeCases()) {
+    add("IterativeSetup_" + c.label, IterativeSetup, key, c);
+    add("IterativeSolve3_" + c.label, IterativeSolve, key, c);
   }
 }
 

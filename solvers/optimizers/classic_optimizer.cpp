@@ -62,7 +62,8 @@ OptimizeResult ClassicOptimizer::Optimize(const DeformationProblem& problem,
   result.timings.total = total.Seconds();
   result.levels.push_back(LevelResult{0, mesh.num_vertices(), mesh.num_elements(),
                                       run.iterations, run.energy, result.timings.total,
-                                      run.converged});
+                                      run.converged, level.system().num_free(),
+                                      run.linear_solves});
   return result;
 }
 

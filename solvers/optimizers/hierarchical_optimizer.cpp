@@ -190,7 +190,8 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     result.total_iterations += run.iterations;
     result.levels.push_back(LevelResult{l, level.mesh.num_vertices(), level.mesh.num_elements(),
                                         run.iterations, run.energy, level_seconds[l],
-                                        run.converged});
+                                        run.converged, solver.system().num_free(),
+                                        run.linear_solves});
     if (l == 0) {
       result.energy = run.energy;
       result.iterations = run.iterations;

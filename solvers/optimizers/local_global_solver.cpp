@@ -30,6 +30,7 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
   solver_ = factory.MakeLinearSolver(level, system_->num_free());
   if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
   constrain_seconds_ = clock.Seconds();
+  if (context.system_callback) context.system_callback(level_, system_->reduced_matrix());
 
   rhs_.resize(mesh.num_vertices(), 3);
   reduced_rhs_.resize(system_->num_free(), 3);
@@ -118,6 +119,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     // Iterative solvers start from the current positions; direct ones ignore the warm start.
     if (!solver_->is_direct()) system_->GatherFree(state.positions, reduced_x_);
     const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
+    result.linear_solves.Add(summary);
     if (!summary.success) {
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                        summary.message));

@@ -44,6 +44,7 @@ class LocalGlobalSolver {
     /// With moving constraint targets: the iteration after which they were frozen because the
     /// energy kept rising (0: never).
     int targets_frozen_at = 0;
+    SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for

@@ -109,21 +109,11 @@ TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints ex
           "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
           "[hierarchy]\nmin_vertices = 100\n[upsampler]\ntype = \"{}\"\n",
           upsampler));
-      std::map<int, std::vector<double>> energies;
-      Context context;
-      context.iteration_callback = [&](const IterationSummary& s) {
-        energies[s.level].push_back(s.energy);
-        return CallbackAction::kContinue;
-      };
-      const OptimizeResult result =
-          setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+      EnergyTrace energies;
+      const OptimizeResult result = OptimizeWithTrace(setup, tube.problem, energies);
       REQUIRE(result.levels.size() >= 3);
       CHECK(energies.size() == result.levels.size());
-      for (const auto& [level, trace] : energies) {
-        for (size_t i = 1; i < trace.size(); ++i) {
-          CHECK(trace[i] <= trace[i - 1] * (1.0 + 1e-12) + 1e-15);
-        }
-      }
+      CheckEnergiesNeverIncrease(energies);
       for (size_t l = 1; l < result.levels.size(); ++l) {
         CHECK(result.levels[l].vertices < result.levels[l - 1].vertices);
         CHECK(result.levels[l].level == static_cast<int>(l));

@@ -32,6 +32,30 @@ inline std::unique_ptr<LinearSolver> MakeSolver(const Registry<LinearSolver>& re
   return registry.Create(name, ConfigNode::Parse(toml, "<test>"));
 }
 
+/// Iterative solvers read a `tolerance` option; direct ones do not.
+inline bool IsIterative(const Registry<LinearSolver>& registry, const std::string& name) {
+  for (const auto& option : registry.DescribeOptions(name)) {
+    if (option.key == "tolerance") return true;
+  }
+  return false;
+}
+
+/// Tolerance the conformance tests give iterative solvers; their answers are then checked
+/// against the direct solution to within kIterativeAccuracy instead of 1e-10.
+inline constexpr double kConformanceTolerance = 1e-12;
+inline constexpr double kIterativeAccuracy = 1e-8;
+
+/// Creates `name` so that it solves to kConformanceTolerance (iterative solvers; a cap of 20000
+/// iterations keeps non-converging cases fast) or exactly (direct solvers), plus `toml`.
+inline std::unique_ptr<LinearSolver> MakeAccurateSolver(const Registry<LinearSolver>& registry,
+                                                        const std::string& name,
+                                                        const std::string& toml = "") {
+  if (!IsIterative(registry, name)) return MakeSolver(registry, name, toml);
+  return MakeSolver(
+      registry, name,
+      fmt::format("tolerance = {}\nmax_iterations = 20000\n{}", kConformanceTolerance, toml));
+}
+
 /// Graph Laplacian of a rows×cols grid (4-neighbour), random edge weights in [0.5, 2]: symmetric
 /// PSD, singular (constants are in its null space), full storage.
 inline SparseMatrix GridLaplacian(int rows, int cols, unsigned seed) {

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <catch2/catch.hpp>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "experiments/builtins.h"
 #include "experiments/component_factory.h"
@@ -20,5 +23,29 @@ struct TestSetup {
   ConfigNode config;
   RegistryComponentFactory factory;
 };
+
+/// Energies reported through the iteration callback, per hierarchy level.
+using EnergyTrace = std::map<int, std::vector<double>>;
+
+/// Runs the setup's optimizer on `problem`, recording every iteration's energy in `energies`.
+inline OptimizeResult OptimizeWithTrace(const TestSetup& setup, const DeformationProblem& problem,
+                                        EnergyTrace& energies) {
+  Context context;
+  context.iteration_callback = [&](const IterationSummary& s) {
+    energies[s.level].push_back(s.energy);
+    return CallbackAction::kContinue;
+  };
+  return setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
+}
+
+/// CHECKs that the energy never increases within a level (up to rounding).
+inline void CheckEnergiesNeverIncrease(const EnergyTrace& energies) {
+  for (const auto& [level, trace] : energies) {
+    for (size_t i = 1; i < trace.size(); ++i) {
+      INFO("level " << level << ", iteration " << i + 1);
+      CHECK(trace[i] <= trace[i - 1] * (1.0 + 1e-12) + 1e-15);
+    }
+  }
+}
 
 }  // namespace harap::testing

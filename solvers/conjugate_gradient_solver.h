@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <Eigen/IterativeLinearSolvers>
+#include <memory>
+#include <string_view>
+
+#include "framework/config.h"
+#include "framework/linear_solver.h"
+#include "solvers/iterative_kernels.h"
+
+namespace harap {
+
+/// Preconditioned conjugate gradients [Hestenes & Stiefel 1952; Saad, Iterative Methods for
+/// Sparse Linear Systems, Alg. 9.1], warm-started from `x`.
+///
+/// The columns of B are solved together in blocks of three: each column has its own CG scalars
+/// (α, β), but one pass over A computes A·p for all of them, so the global step's three
+/// coordinates stream the matrix once per iteration. A column stops when its recurrence residual
+/// r_k reaches `tolerance`; others go on. The residual reported is the true ‖b − A x‖ / ‖b‖ at
+/// return (one more pass over A per solve): r_k drifts from it, slightly in general and by
+/// orders of magnitude on singular systems.
+///
+/// Preconditioners: Jacobi (M = diag A; fused into the vector updates, so an iteration is two
+/// parallel passes) or incomplete Cholesky (Eigen's IncompleteCholesky, a threshold IC with
+/// diagonal shifting [Lin & Moré 1999]; its two triangular solves per iteration are sequential).
+///
+/// Factorize() copies A and builds the preconditioner; Solve() allocates nothing after its first
+/// call with a given column count. A non-positive curvature pᵀAp ≤ 0 proves A is not positive
+/// definite: the solve then fails with that message. Not thread-safe; kernels run in parallel in
+/// the caller's task arena.
+class ConjugateGradientSolver final : public LinearSolver {
+ public:
+  static constexpr std::string_view kName = "cg";
+
+  enum class Preconditioner { kJacobi, kIncompleteCholesky };
+
+  struct Options {
+    /// max_iterations: CG iterations per solve (per global step; a cap when tolerance > 0).
+    /// Default 20 iterations, no tolerance: a fixed cost per global step, like the paper's
+    /// "few iterations of an iterative solver per global solve" (Section 5.2).
+    iterative::IterationLimits limits{20, 0.0};
+    /// Jacobi by default: see docs/solvers.md for the measured comparison.
+    Preconditioner preconditioner = Preconditioner::kJacobi;
+
+    static Options FromConfig(const ConfigNode& node);
+  };
+
+  explicit ConjugateGradientSolver(const Options& options) : options_(options) {}
+
+  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
+
+  void Factorize(const SparseMatrix& a, const Context& context) override;
+  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                     const Context& context) override;
+  bool is_direct() const override { return false; }
+
+  const Options& options() const { return options_; }
+
+ private:
+  template <int K>
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                          Eigen::Ref<Eigen::MatrixXd> x, Eigen::Index first);
+  /// z = M⁻¹ r for the incomplete Cholesky preconditioner (sequential).
+  template <int K>
+  void ApplyIncompleteCholesky(const double* r, double* z);
+
+  using IncompleteCholesky =
+      Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
+
+  Options options_;
+  SparseMatrix a_;
+  Eigen::VectorXd inverse_diagonal_;
+  std::unique_ptr<IncompleteCholesky> incomplete_cholesky_;
+  bool factorized_ = false;
+  // Row-major work blocks (b, x, r, z, p, A p, the IC workspace), kept between solves.
+  iterative::Block b_, x_, r_, z_, p_, q_, w_;
+};
+
+}  // namespace harap
