@@ -62,8 +62,8 @@ class GaussSeidelSolver final : public LinearSolver {
 
  private:
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                          Eigen::Ref<Eigen::MatrixXd> x, Eigen::Index first);
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                          Eigen::Index first);
   template <int K>
   void RunSweep(const double* b, double* x, const std::array<bool, 3>& active, bool backward) const;
   template <int K>

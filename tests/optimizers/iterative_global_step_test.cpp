@@ -3,7 +3,6 @@
 // decreases, and the per-level solve statistics are reported.
 #include <catch2/catch.hpp>
 
-
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -43,9 +42,10 @@ TEST_CASE("classic ARAP with each solver: the energy decreases monotonically", "
   BentTube tube;
   for (const char* solver : kSolvers) {
     DYNAMIC_SECTION(solver) {
-      TestSetup setup(fmt::format("[optimizer]\ntype = \"classic\"\ntolerance = 0\n"
-                                  "max_iterations = 40\n[solver]\ntype = \"{}\"\n",
-                                  solver));
+      TestSetup setup(
+          fmt::format("[optimizer]\ntype = \"classic\"\ntolerance = 0\n"
+                      "max_iterations = 40\n[solver]\ntype = \"{}\"\n",
+                      solver));
       EnergyTrace trace;
       const OptimizeResult result = OptimizeWithTrace(setup, tube.problem, trace);
       const std::vector<double>& energies = trace[0];
@@ -102,8 +102,8 @@ TEST_CASE("the per-level solver rule picks the small-system solver by size", "[o
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmin_vertices = 100\n"
       "[solver]\ntype = \"cg\"\n[solver.small_systems]\nmax_unknowns = 600\n"
       "type = \"eigen_ldlt\"\n");
-  const OptimizeResult result = setup.MakeOptimizer()->Optimize(tube.problem, setup.factory,
-                                                                Context());
+  const OptimizeResult result =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context());
   REQUIRE(result.levels.size() >= 3);
   bool saw_direct = false, saw_iterative = false;
   for (const LevelResult& level : result.levels) {
