@@ -101,17 +101,17 @@ void ChebyshevSolver::Factorize(const SparseMatrix& a, const Context& context) {
     matrix_hash_ = 0;
     Bounds bounds;
     try {
-      bounds.estimate = ComputeExtremeEigenvalues(
-          a_, SpectrumScaling::kJacobi,
-          lower_bound == LowerBound::kShiftInvert ? SmallestEigenvalue::kShiftInvert
-                                                  : SmallestEigenvalue::kSkip,
-          BoundsEstimateOptions(), context);
+      bounds.estimate = ComputeExtremeEigenvalues(a_, SpectrumScaling::kJacobi,
+                                                  lower_bound == LowerBound::kShiftInvert
+                                                      ? SmallestEigenvalue::kShiftInvert
+                                                      : SmallestEigenvalue::kSkip,
+                                                  BoundsEstimateOptions(), context);
     } catch (const NumericalError& error) {
       throw NumericalError(fmt::format("chebyshev: {}", error.what()));
     }
     bounds.gershgorin = GershgorinUpperBound(a_, SpectrumScaling::kJacobi);
-    bounds.upper = std::min((1.0 + options_.upper_margin) * bounds.estimate.largest,
-                            bounds.gershgorin);
+    bounds.upper =
+        std::min((1.0 + options_.upper_margin) * bounds.estimate.largest, bounds.gershgorin);
     if (lower_bound == LowerBound::kShiftInvert) {
       bounds.lower = (1.0 - options_.lower_margin) * bounds.estimate.smallest;
     } else {
@@ -199,9 +199,10 @@ SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>
 
 SolveSummary ChebyshevSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                     Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x, [&](Eigen::Index first, auto width) {
-    return SolveBlock<decltype(width)::value>(b, x, first);
-  });
+  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x,
+                                  [&](Eigen::Index first, auto width) {
+                                    return SolveBlock<decltype(width)::value>(b, x, first);
+                                  });
 }
 
 }  // namespace harap

@@ -92,14 +92,14 @@ class ChebyshevSolver final : public LinearSolver {
     double upper = 0.0;  ///< λ_hi
     /// Spectra's estimates for D^{-1/2} A D^{-1/2} (smallest = 0 unless shift_invert).
     ExtremeEigenvalues estimate;
-    double gershgorin = 0.0;      ///< Gershgorin's bound on λ_max.
+    double gershgorin = 0.0;  ///< Gershgorin's bound on λ_max.
   };
   const Bounds& bounds() const { return bounds_; }
 
  private:
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                          Eigen::Ref<Eigen::MatrixXd> x, Eigen::Index first);
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                          Eigen::Index first);
 
   Options options_;
   SparseMatrix a_;

@@ -33,8 +33,8 @@ ConjugateGradientSolver::Options ConjugateGradientSolver::Options::FromConfig(
       "jacobi = diagonal scaling (parallel, fused into the vector updates); incomplete_cholesky "
       "= Eigen's threshold IC with AMD ordering (fewer iterations, sequential triangular "
       "solves)");
-  options.preconditioner = preconditioner == kJacobiName ? Preconditioner::kJacobi
-                                                          : Preconditioner::kIncompleteCholesky;
+  options.preconditioner =
+      preconditioner == kJacobiName ? Preconditioner::kJacobi : Preconditioner::kIncompleteCholesky;
   node.RejectUnknownKeys();
   return options;
 }
@@ -147,11 +147,11 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
   if (!jacobi) {
     ApplyIncompleteCholesky<K>(r, z);
     rz = SumRows<1>(n, [&](Index i, auto& sums) {
-           for (int c = 0; c < K; ++c) {
-             p[i * K + c] = z[i * K + c];
-             sums[0][c] += r[i * K + c] * z[i * K + c];
-           }
-         })[0];
+      for (int c = 0; c < K; ++c) {
+        p[i * K + c] = z[i * K + c];
+        sums[0][c] += r[i * K + c] * z[i * K + c];
+      }
+    })[0];
   }
   iterative::ColumnConvergence convergence(K, start[0], start[1], options_.limits.tolerance);
 
@@ -195,8 +195,8 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
     if (!jacobi) {
       ApplyIncompleteCholesky<K>(r, z);
       rz_next = SumRows<1>(n, [&](Index i, auto& sums) {
-                  for (int c = 0; c < K; ++c) sums[0][c] += r[i * K + c] * z[i * K + c];
-                })[0];
+        for (int c = 0; c < K; ++c) sums[0][c] += r[i * K + c] * z[i * K + c];
+      })[0];
     }
     ++summary.iterations;
     if (!convergence.Update(update[0])) {
@@ -227,10 +227,12 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
 }
 
 SolveSummary ConjugateGradientSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                            Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x, [&](Eigen::Index first, auto width) {
-    return SolveBlock<decltype(width)::value>(b, x, first);
-  });
+                                            Eigen::Ref<Eigen::MatrixXd> x,
+                                            const Context& /*context*/) {
+  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x,
+                                  [&](Eigen::Index first, auto width) {
+                                    return SolveBlock<decltype(width)::value>(b, x, first);
+                                  });
 }
 
 }  // namespace harap

@@ -59,8 +59,8 @@ class ConjugateGradientSolver final : public LinearSolver {
 
  private:
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                          Eigen::Ref<Eigen::MatrixXd> x, Eigen::Index first);
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                          Eigen::Index first);
   /// z = M⁻¹ r for the incomplete Cholesky preconditioner (sequential).
   template <int K>
   void ApplyIncompleteCholesky(const double* r, double* z);

@@ -16,7 +16,7 @@ namespace harap {
 /// 0 < ω < 2 every sweep decreases the A-norm of the error, whatever the row order.
 ///
 /// Orderings: "colored" (default) colours the matrix graph greedily (rows of one colour share no
-/// non-zero, so they are updated in parallel; a triangle mesh needs 6–9 colours) and sweeps
+/// non-zero, so they are updated in parallel; 6–7 colours on the shared meshes) and sweeps
 /// colour by colour — a valid Gauss–Seidel ordering, just not the natural one; "natural" sweeps
 /// rows 0..n−1 sequentially (the textbook method, one thread). A symmetric sweep is a forward
 /// sweep followed by a backward one (SGS/SSOR: a symmetric iteration; counts as one iteration).
@@ -62,8 +62,8 @@ class GaussSeidelSolver final : public LinearSolver {
 
  private:
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                          Eigen::Ref<Eigen::MatrixXd> x, Eigen::Index first);
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                          Eigen::Index first);
   template <int K>
   void RunSweep(const double* b, double* x, const std::array<bool, 3>& active, bool backward) const;
   template <int K>

@@ -49,9 +49,9 @@ double ColumnConvergence::max_relative_residual() const {
 
 void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
                          IterationLimits& limits) {
-  limits.max_iterations = node.Get(
-      "max_iterations", limits.max_iterations,
-      fmt::format("{}s per solve (per global step); a cap when tolerance > 0", iteration));
+  limits.max_iterations =
+      node.Get("max_iterations", limits.max_iterations,
+               fmt::format("{}s per solve (per global step); a cap when tolerance > 0", iteration));
   limits.tolerance = node.Get("tolerance", limits.tolerance,
                               "stop when ‖b − A x‖ / ‖b‖ ≤ tolerance (per column); 0: always run "
                               "max_iterations");

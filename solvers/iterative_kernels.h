@@ -126,7 +126,8 @@ template <int K>
 void GatherColumns(const Eigen::Ref<const Eigen::MatrixXd>& source, Eigen::Index first,
                    double* block) {
   ForRows(static_cast<Index>(source.rows()), [&](Index i) {
-    for (int c = 0; c < K; ++c) block[static_cast<std::ptrdiff_t>(i) * K + c] = source(i, first + c);
+    for (int c = 0; c < K; ++c)
+      block[static_cast<std::ptrdiff_t>(i) * K + c] = source(i, first + c);
   });
 }
 
@@ -134,7 +135,8 @@ void GatherColumns(const Eigen::Ref<const Eigen::MatrixXd>& source, Eigen::Index
 template <int K>
 void ScatterColumns(const double* block, Eigen::Index first, Eigen::Ref<Eigen::MatrixXd> target) {
   ForRows(static_cast<Index>(target.rows()), [&](Index i) {
-    for (int c = 0; c < K; ++c) target(i, first + c) = block[static_cast<std::ptrdiff_t>(i) * K + c];
+    for (int c = 0; c < K; ++c)
+      target(i, first + c) = block[static_cast<std::ptrdiff_t>(i) * K + c];
   });
 }
 
@@ -165,8 +167,8 @@ double MaxRelativeResidual(const SparseMatrix& a, const double* b, const double*
 class ColumnConvergence {
  public:
   /// `squared_b`: ‖b_c‖²; `squared_residual`: ‖r_c‖² of the starting guess.
-  ColumnConvergence(int columns, const ColumnValues& squared_b, const ColumnValues& squared_residual,
-                    double tolerance);
+  ColumnConvergence(int columns, const ColumnValues& squared_b,
+                    const ColumnValues& squared_residual, double tolerance);
 
   /// Records the new ‖r_c‖² of the active columns and deactivates those that converged.
   /// Returns false if some residual is not finite or grew by more than kDivergenceFactor over
@@ -187,8 +189,8 @@ class ColumnConvergence {
  private:
   int columns_;
   double tolerance_;
-  ColumnValues scale_{};            ///< ‖b_c‖² (1 for a zero column).
-  ColumnValues start_{};            ///< ‖r_c‖² at the start.
+  ColumnValues scale_{};  ///< ‖b_c‖² (1 for a zero column).
+  ColumnValues start_{};  ///< ‖r_c‖² at the start.
   ColumnValues squared_residual_{};
   std::array<bool, kMaxBlockColumns> active_{};
 };

@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/spectral_bounds.h"
 
+#include <Spectra/SymEigsShiftSolver.h>
+#include <Spectra/SymEigsSolver.h>
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
-#include <Spectra/SymEigsShiftSolver.h>
-#include <Spectra/SymEigsSolver.h>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -98,18 +98,17 @@ std::unique_ptr<LinearSolver> FactorCholesky(const SparseMatrix& a, const Contex
   return solver;
 }
 
-Eigen::Index BasisSize(const EigenSolverOptions& options, Eigen::Index n) {
-  return std::clamp<Eigen::Index>(options.lanczos_vectors, 3, n);
+Eigen::Index BasisSize(int vectors, Eigen::Index n) {
+  return std::clamp<Eigen::Index>(vectors, 3, n);
 }
 
 /// Largest eigenvalue of S A S by Lanczos. Without convergence the best Ritz value is still an
 /// inner estimate (≤ λ_max); Spectra only reports converged values, so then one more cycle with
 /// an infinite tolerance reads it.
-double LanczosLargest(const ScaledProduct& op, const EigenSolverOptions& options,
-                      bool& converged) {
+double LanczosLargest(const ScaledProduct& op, const EigenSolverOptions& options, bool& converged) {
   const Spectra::SortRule selection = Spectra::SortRule::LargestAlge;
   Spectra::SymEigsSolver<ScaledProduct> eigs(const_cast<ScaledProduct&>(op), 1,
-                                             BasisSize(options, op.rows()));
+                                             BasisSize(options.lanczos_vectors, op.rows()));
   eigs.init();
   eigs.compute(selection, options.max_restarts, options.tolerance);
   if (eigs.info() == Spectra::CompInfo::Successful) return eigs.eigenvalues()[0];
@@ -123,8 +122,8 @@ double LanczosLargest(const ScaledProduct& op, const EigenSolverOptions& options
 /// Smallest eigenvalue of S A S by shift-invert with the factored A.
 double ShiftInvertSmallest(const ScaledInverse& op, const EigenSolverOptions& options,
                            bool& converged) {
-  Spectra::SymEigsShiftSolver<ScaledInverse> eigs(const_cast<ScaledInverse&>(op), 1,
-                                                  BasisSize(options, op.rows()), 0.0);
+  Spectra::SymEigsShiftSolver<ScaledInverse> eigs(
+      const_cast<ScaledInverse&>(op), 1, BasisSize(options.shift_invert_vectors, op.rows()), 0.0);
   eigs.init();
   eigs.compute(Spectra::SortRule::LargestMagn, options.max_restarts, options.tolerance);
   if (eigs.info() == Spectra::CompInfo::Successful) return eigs.eigenvalues()[0];
@@ -162,8 +161,7 @@ ExtremeEigenvalues ComputeExtremeEigenvalues(const SparseMatrix& a_in, SpectrumS
                                              SmallestEigenvalue smallest,
                                              const EigenSolverOptions& options,
                                              const Context& context) {
-  HARAP_CHECK(a_in.rows() == a_in.cols(), "matrix is {}×{}, not square", a_in.rows(),
-              a_in.cols());
+  HARAP_CHECK(a_in.rows() == a_in.cols(), "matrix is {}×{}, not square", a_in.rows(), a_in.cols());
   const Stopwatch clock;
   const SparseMatrix a = iterative::CompressedCopy(a_in);
   const Eigen::VectorXd s = ScalingVector(a, scaling);
@@ -194,8 +192,7 @@ ExtremeEigenvalues ComputeExtremeEigenvalues(const SparseMatrix& a_in, SpectrumS
 
 SystemSpectrum AnalyzeSystemSpectrum(const SparseMatrix& a_in, const EigenSolverOptions& options,
                                      const Context& context) {
-  HARAP_CHECK(a_in.rows() == a_in.cols(), "matrix is {}×{}, not square", a_in.rows(),
-              a_in.cols());
+  HARAP_CHECK(a_in.rows() == a_in.cols(), "matrix is {}×{}, not square", a_in.rows(), a_in.cols());
   const Stopwatch clock;
   SystemSpectrum spectrum;
   const SparseMatrix a = iterative::CompressedCopy(a_in);

@@ -2,7 +2,6 @@
 // The [solver.small_systems] rule of the component factory, the per-level solve statistics and
 // the --diagnostics spectra in the report.
 #include <catch2/catch.hpp>
-
 #include <nlohmann/json.hpp>
 
 #include "experiments/builtins.h"
@@ -53,9 +52,8 @@ TEST_CASE("solver.small_systems is validated when the factory is made", "[experi
   const Registries registries = MakeBuiltinRegistries();
   CHECK_THROWS_WITH(Factory(registries, "[solver.small_systems]\ntype = \"eigen_ldlt\"\n"),
                     Catch::Contains("max_unknowns"));
-  CHECK_THROWS_WITH(
-      Factory(registries, "[solver.small_systems]\nmax_unknowns = -5\n"),
-      Catch::Contains("max_unknowns") && Catch::Contains("-5"));
+  CHECK_THROWS_WITH(Factory(registries, "[solver.small_systems]\nmax_unknowns = -5\n"),
+                    Catch::Contains("max_unknowns") && Catch::Contains("-5"));
   CHECK_THROWS_WITH(
       Factory(registries,
               "[solver]\ntype = \"cg\"\n[solver.small_systems]\nmax_unknowns = 10\nmode = 3\n"
@@ -64,8 +62,7 @@ TEST_CASE("solver.small_systems is validated when the factory is made", "[experi
   CHECK_THROWS_WITH(
       Factory(registries, "[solver.small_systems]\nmax_unknowns = 10\ntype = \"nope\"\n"),
       Catch::Contains("nope") && Catch::Contains("eigen_ldlt"));
-  CHECK_THROWS_AS(Factory(registries, "[solver]\ntype = \"cg\"\nsmall_systems = 5\n"),
-                  ConfigError);
+  CHECK_THROWS_AS(Factory(registries, "[solver]\ntype = \"cg\"\nsmall_systems = 5\n"), ConfigError);
   // An option of the large-system solver is still checked with the rule present.
   CHECK_THROWS_WITH(Factory(registries,
                             "[solver]\ntype = \"cg\"\nsweeps = 3\n[solver.small_systems]\n"
@@ -94,9 +91,9 @@ TEST_CASE("RunDeform reports solve statistics and, with diagnostics, level spect
   REQUIRE(levels.size() >= 2);
   for (const auto& level : levels) {
     INFO(level.dump());
-    for (const char* key : {"unknowns", "solver", "solves", "solver_iterations",
-                            "max_relative_residual", "last_relative_residual", "solve_seconds",
-                            "spectrum"}) {
+    for (const char* key :
+         {"unknowns", "solver", "solves", "solver_iterations", "max_relative_residual",
+          "last_relative_residual", "solve_seconds", "spectrum"}) {
       CHECK(level.contains(key));
     }
     const bool direct = level["unknowns"].get<int>() <= 800;

@@ -14,33 +14,16 @@ using namespace harap::testing;
 
 namespace {
 
-// A long tube (≈ 4000 vertices) with its bottom ring fixed and its top ring turned and shifted.
-struct BentTube {
-  static constexpr int kRings = 100, kSegments = 40;
-  Mesh mesh = Tube(kRings, kSegments);
-  DeformationProblem problem;
-  BentTube() {
-    mesh.vertices.col(2) *= 4.0;  // height 4, radius 0.25
-    problem.mesh = &mesh;
-    const Eigen::Matrix3d turn =
-        Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    for (int s = 0; s < kSegments; ++s) problem.constraints.indices.push_back(s);
-    for (int s = 0; s < kSegments; ++s) {
-      problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
-    }
-    problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
-    for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-      Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
-      if (k >= kSegments) p = turn * p + Eigen::Vector3d(0.0, 1.0, -1.5);
-      problem.constraints.targets.row(k) = p.transpose();
-    }
-  }
+// A long tube (≈ 4000 vertices, height 4, radius 0.25) with its bottom ring fixed and its top
+// ring turned and shifted.
+struct LongBentTube : BentTube {
+  LongBentTube() : BentTube(100, 40, 4.0, M_PI / 2, Eigen::Vector3d(0.0, 1.0, -1.5)) {}
 };
 
 }  // namespace
 
 TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n");
   TestSetup hierarchical(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmax_levels = 1\n");
@@ -100,7 +83,7 @@ TEST_CASE("hierarchical: a stop requested on a coarse level still finishes the f
 TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints exact, levels "
           "reported",
           "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   for (const char* upsampler : {"rotations", "positions", "smoothed_rotations"}) {
     DYNAMIC_SECTION("upsampler " << upsampler) {
       // Fixed coarse targets (update_constraints = false) make each level a plain local/global
@@ -132,7 +115,7 @@ TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints ex
 
 TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend",
           "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-6\n");
   TestSetup hierarchical("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
                          "[hierarchy]\nmin_vertices = 100\n");
@@ -144,7 +127,7 @@ TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend
 
 TEST_CASE("coarse targets of a rigidly moved handle are the rigid motion of the coarse positions",
           "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   const Registries registries = MakeBuiltinRegistries();
   ConfigNode options = ConfigNode::Parse("min_vertices = 100\n", "test");
   const MeshHierarchy hierarchy =

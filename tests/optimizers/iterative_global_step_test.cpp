@@ -3,7 +3,6 @@
 // decreases, and the per-level solve statistics are reported.
 #include <catch2/catch.hpp>
 
-
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -12,27 +11,10 @@ using namespace harap::testing;
 
 namespace {
 
-// A tube (≈ 1400 vertices) with its bottom ring fixed and its top ring turned and shifted.
-struct BentTube {
-  static constexpr int kRings = 60, kSegments = 24;
-  Mesh mesh = Tube(kRings, kSegments);
-  DeformationProblem problem;
-  BentTube() {
-    mesh.vertices.col(2) *= 3.0;
-    problem.mesh = &mesh;
-    const Eigen::Matrix3d turn =
-        Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    for (int s = 0; s < kSegments; ++s) problem.constraints.indices.push_back(s);
-    for (int s = 0; s < kSegments; ++s) {
-      problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
-    }
-    problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
-    for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-      Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
-      if (k >= kSegments) p = turn * p + Eigen::Vector3d(0.0, 0.8, -1.0);
-      problem.constraints.targets.row(k) = p.transpose();
-    }
-  }
+// A tube (1440 vertices, height 3) with its bottom ring fixed and its top ring turned and shifted.
+constexpr int kRings = 60, kSegments = 24;
+struct SmallBentTube : BentTube {
+  SmallBentTube() : BentTube(kRings, kSegments, 3.0, M_PI / 2, Eigen::Vector3d(0.0, 0.8, -1.0)) {}
 };
 
 const char* const kSolvers[] = {"gauss_seidel", "cg", "chebyshev", "eigen_ldlt"};
@@ -40,12 +22,13 @@ const char* const kSolvers[] = {"gauss_seidel", "cg", "chebyshev", "eigen_ldlt"}
 }  // namespace
 
 TEST_CASE("classic ARAP with each solver: the energy decreases monotonically", "[optimizers]") {
-  BentTube tube;
+  SmallBentTube tube;
   for (const char* solver : kSolvers) {
     DYNAMIC_SECTION(solver) {
-      TestSetup setup(fmt::format("[optimizer]\ntype = \"classic\"\ntolerance = 0\n"
-                                  "max_iterations = 40\n[solver]\ntype = \"{}\"\n",
-                                  solver));
+      TestSetup setup(
+          fmt::format("[optimizer]\ntype = \"classic\"\ntolerance = 0\n"
+                      "max_iterations = 40\n[solver]\ntype = \"{}\"\n",
+                      solver));
       EnergyTrace trace;
       const OptimizeResult result = OptimizeWithTrace(setup, tube.problem, trace);
       const std::vector<double>& energies = trace[0];
@@ -56,7 +39,7 @@ TEST_CASE("classic ARAP with each solver: the energy decreases monotonically", "
       CHECK(energies.front() > 1.5 * energies.back());
       REQUIRE(result.levels.size() == 1);
       const LevelResult& level = result.levels[0];
-      CHECK(level.unknowns == tube.mesh.num_vertices() - 2 * BentTube::kSegments);
+      CHECK(level.unknowns == tube.mesh.num_vertices() - 2 * kSegments);
       CHECK(level.linear_solves.solves == 40);
       CHECK(level.linear_solves.seconds > 0.0);
       if (std::string(solver) != "eigen_ldlt") {
@@ -73,7 +56,7 @@ TEST_CASE("classic ARAP with each solver: the energy decreases monotonically", "
 
 TEST_CASE("hierarchical ARAP with each solver: the energy decreases on every level",
           "[optimizers]") {
-  BentTube tube;
+  SmallBentTube tube;
   for (const char* solver : kSolvers) {
     DYNAMIC_SECTION(solver) {
       // Fixed coarse targets make each level a plain local/global run, which must be monotone.
@@ -96,14 +79,14 @@ TEST_CASE("hierarchical ARAP with each solver: the energy decreases on every lev
 }
 
 TEST_CASE("the per-level solver rule picks the small-system solver by size", "[optimizers]") {
-  BentTube tube;
+  SmallBentTube tube;
   // Levels up to 600 unknowns are factored, larger ones use CG.
   TestSetup setup(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmin_vertices = 100\n"
       "[solver]\ntype = \"cg\"\n[solver.small_systems]\nmax_unknowns = 600\n"
       "type = \"eigen_ldlt\"\n");
-  const OptimizeResult result = setup.MakeOptimizer()->Optimize(tube.problem, setup.factory,
-                                                                Context());
+  const OptimizeResult result =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context());
   REQUIRE(result.levels.size() >= 3);
   bool saw_direct = false, saw_iterative = false;
   for (const LevelResult& level : result.levels) {

@@ -229,8 +229,8 @@ TEST_CASE("spectral bounds: Spectra's extreme eigenvalues match a dense eigensol
       CHECK(GershgorinUpperBound(a, scaling) >= lambda_max);
     }
     DYNAMIC_SECTION((jacobi ? "D^-1/2 A D^-1/2" : "A") << ", largest only") {
-      const ExtremeEigenvalues e = ComputeExtremeEigenvalues(
-          a, scaling, SmallestEigenvalue::kSkip, EigenSolverOptions{}, context);
+      const ExtremeEigenvalues e = ComputeExtremeEigenvalues(a, scaling, SmallestEigenvalue::kSkip,
+                                                             EigenSolverOptions{}, context);
       CHECK(e.solves == 0);
       CHECK(e.smallest == 0.0);
       // A Ritz value never lies outside the spectrum.
@@ -249,9 +249,9 @@ TEST_CASE("spectral bounds: Spectra's extreme eigenvalues match a dense eigensol
   }
   SECTION("small matrices are solved densely") {
     const SparseMatrix small = PinnedGridLaplacian(8, 8, 46);
-    const ExtremeEigenvalues e = ComputeExtremeEigenvalues(
-        small, SpectrumScaling::kNone, SmallestEigenvalue::kShiftInvert,
-        EigenSolverOptions{}, context);
+    const ExtremeEigenvalues e =
+        ComputeExtremeEigenvalues(small, SpectrumScaling::kNone, SmallestEigenvalue::kShiftInvert,
+                                  EigenSolverOptions{}, context);
     const Eigen::VectorXd dense = DenseEigenvalues(small, false);
     CHECK(e.dense);
     CHECK(e.smallest == Approx(dense[0]).epsilon(1e-12));

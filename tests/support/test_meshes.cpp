@@ -115,6 +115,25 @@ Mesh Jittered(Mesh mesh, int n, double amount, unsigned seed) {
   return mesh;
 }
 
+BentTube::BentTube(int rings, int segments, double height, double angle,
+                   const Eigen::Vector3d& shift)
+    : mesh(Tube(rings, segments)) {
+  mesh.vertices.col(2) *= height;
+  problem.mesh = &mesh;
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  for (int s = 0; s < segments; ++s) problem.constraints.indices.push_back(s);
+  for (int s = 0; s < segments; ++s) {
+    problem.constraints.indices.push_back((rings - 1) * segments + s);
+  }
+  problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
+  for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
+    Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
+    if (k >= static_cast<size_t>(segments)) p = turn * p + shift;
+    problem.constraints.targets.row(k) = p.transpose();
+  }
+}
+
 Mesh Icosphere(int subdivisions) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
