@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "energies/register_energies.h"
 
+#include "energies/smooth_arap_energy.h"
 #include "energies/spokes_and_rims_energy.h"
 #include "energies/spokes_energy.h"
 
@@ -15,6 +16,11 @@ void RegisterEnergies(Registry<Energy>& registry) {
                "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
                "½(cot α + cot β) [Sorkine & Alexa 2007]",
                &SpokesEnergy::Create);
+  registry.Add(std::string(SmoothArapEnergy::kName),
+               "smooth ARAP: (1−λ)·spokes_and_rims + rigidly rotated Laplacian vectors (weight "
+               "λ), a bi-Laplacian blend without spikes at handles [Oehri et al. 2025] (the "
+               "paper's Fig. 10)",
+               &SmoothArapEnergy::Create);
 }
 
 }  // namespace harap

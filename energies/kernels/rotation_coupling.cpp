@@ -15,15 +15,21 @@ namespace {
 
 constexpr Index kGrain = 2048;
 
-// M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest).
-inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positions& u, Index s) {
+// M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest), c_sj = coefficients[p] (site-major).
+inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling,
+                                  const std::vector<Eigen::Vector3d>& coefficients,
+                                  const Positions& u, Index s) {
   Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
   for (Index p = coupling.site_offsets[s]; p < coupling.site_offsets[s + 1]; ++p) {
     const Index j = coupling.site_vertices[p];
     const Eigen::Vector3d uj(u(j, 0), u(j, 1), u(j, 2));
-    m.noalias() += uj * coupling.site_coefficients[p].transpose();
+    m.noalias() += uj * coefficients[p].transpose();
   }
   return m;
+}
+
+inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positions& u, Index s) {
+  return Covariance(coupling, coupling.site_coefficients, u, s);
 }
 
 // tr(uᵀ A u), A symmetric in full storage.
@@ -77,19 +83,25 @@ RotationCoupling MakeVertexSiteCoupling(const SparseMatrix& pattern,
 }
 
 double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,
-                           const Positions& u, Rotations& rotations, const Context& context) {
+                           const Positions& u, Rotations& rotations, const Context& context,
+                           const std::vector<Eigen::Vector3d>* fit_coefficients) {
   HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
               "{} rotations for {} sites", rotations.size(), coupling.num_sites);
   HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
               coupling.num_vertices);
+  HARAP_CHECK(!fit_coefficients || fit_coefficients->size() == coupling.site_coefficients.size(),
+              "{} fit coefficients for {} coupling entries", fit_coefficients->size(),
+              coupling.site_coefficients.size());
   return context.Run([&] {
     const double alignment = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, coupling.num_sites, kGrain), 0.0,
         [&](const tbb::blocked_range<Index>& range, double sum) {
           for (Index s = range.begin(); s != range.end(); ++s) {
             const Eigen::Matrix3d m = Covariance(coupling, u, s);
-            rotations[s] = coupling.planar ? ClosestPlanarRotation(m)
-                                           : ClosestRotation(m, rotations[s]);
+            const Eigen::Matrix3d fit =
+                fit_coefficients ? Covariance(coupling, *fit_coefficients, u, s) : m;
+            rotations[s] = coupling.planar ? ClosestPlanarRotation(fit)
+                                           : ClosestRotation(fit, rotations[s]);
             sum += rotations[s].cwiseProduct(m).sum();
           }
           return sum;
@@ -140,7 +152,8 @@ double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatri
 
 double CoupledQuadraticEnergy::FitRotations(const Positions& u, Rotations& rotations,
                                             const Context& context) const {
-  return FitCoupledRotations(coupling_, a_, u, rotations, context);
+  return FitCoupledRotations(coupling_, a_, u, rotations, context,
+                             fit_coefficients_.empty() ? nullptr : &fit_coefficients_);
 }
 
 void CoupledQuadraticEnergy::AssembleRhs(const Rotations& rotations, Positions& rhs,
