@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include "energies/kernels/cotangent_weights.h"
+#include "energies/kernels/triangle_stencil.h"
 #include "framework/error.h"
 
 namespace harap {
@@ -100,6 +101,19 @@ SparseMatrix AddWeightedBiLaplacian(const SparseMatrix& face_terms,
   return result;
 }
 
+// Mean mixed Voronoi area over the vertices that have area (0 if none has).
+double MeanVertexArea(const Eigen::VectorXd& areas) {
+  double total = 0.0;
+  Index with_area = 0;
+  for (Index i = 0; i < areas.size(); ++i) {
+    if (areas[i] > 0.0) {
+      total += areas[i];
+      ++with_area;
+    }
+  }
+  return with_area > 0 ? total / with_area : 0.0;
+}
+
 }  // namespace
 
 SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode& node) {
@@ -113,6 +127,11 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
       "= fit to the spokes-and-rims part only, as the published code (may increase the energy)");
   options.rotation_fit =
       fit == "energy" ? RotationFit::kWholeEnergy : RotationFit::kSpokesAndRims;
+  options.normalize_mass_on_input =
+      node.GetChoice("mass_normalization", "input", {"input", "level"},
+                     "rescale the mass matrix to mean 1 over the input mesh (input: every "
+                     "hierarchy level approximates the same energy) or over each level's own mesh "
+                     "(level)") == "input";
   node.RejectUnknownKeys();
   if (!(options.lambda >= 0.0 && options.lambda < 1.0)) {
     throw ConfigError(fmt::format("{}: lambda must be in [0, 1), got {}", node.Where("lambda"),
@@ -123,6 +142,12 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
 
 std::unique_ptr<Energy> SmoothArapEnergy::Create(const ConfigNode& node) {
   return std::make_unique<SmoothArapEnergy>(Options::FromConfig(node));
+}
+
+void SmoothArapEnergy::SetInputMesh(const Mesh& input, const Context& context) {
+  RequireTriangleMesh(input, kName);
+  input_mean_area_ = context.Run(
+      [&] { return MeanVertexArea(MixedVoronoiAreas(input.vertices, input.elements)); });
 }
 
 void SmoothArapEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
@@ -154,19 +179,14 @@ void SmoothArapEnergy::AddNonFaceTerms(const RestGeometry& geometry, const Conte
     }
   }
 
-  // M: mixed Voronoi areas rescaled to mean 1 over the vertices that have area. Vertices without
-  // area have an empty row of L; they get no λ-term (inverse mass 0).
+  // M: mixed Voronoi areas rescaled to mean 1 over the vertices that have area, those of the input
+  // mesh if given (so that a coarse level approximates the input's energy). Vertices without area
+  // have an empty row of L; they get no λ-term (inverse mass 0).
   const Eigen::VectorXd areas = MixedVoronoiAreas(rest.vertices, rest.elements);
-  double total_area = 0.0;
-  Index with_area = 0;
-  for (Index i = 0; i < n; ++i) {
-    if (areas[i] > 0.0) {
-      total_area += areas[i];
-      ++with_area;
-    }
-  }
-  if (with_area == 0) return;  // only degenerate triangles: every weight is zero anyway
-  const double mean_area = total_area / with_area;
+  const double mean_area = options_.normalize_mass_on_input && input_mean_area_ > 0.0
+                               ? input_mean_area_
+                               : MeanVertexArea(areas);
+  if (mean_area == 0.0) return;  // only degenerate triangles: every weight is zero anyway
   Eigen::VectorXd inverse_mass(n);
   for (Index i = 0; i < n; ++i) inverse_mass[i] = areas[i] > 0.0 ? mean_area / areas[i] : 0.0;
 

@@ -19,6 +19,11 @@ namespace harap {
 /// (L_ij = −½(cot α_ij + cot β_ij)), M the mixed Voronoi mass matrix (MixedVoronoiAreas) rescaled
 /// so that its diagonal has mean 1 over the vertices with non-zero area, λ ∈ [0, 1).
 ///
+/// The rescaling makes the λ-term depend on the resolution (≈ total area / #vertices times
+/// ∫‖ΔU − RΔV̄‖²). On a coarse hierarchy level M is therefore rescaled with the factor of the
+/// input mesh (Energy::SetInputMesh), so every level approximates the same energy;
+/// `mass_normalization = "level"` rescales on each level's own mesh instead (for comparison).
+///
 /// This is 3 × the publication's E_SR/3 · (1 − λ) + λ/2 · Σ_i ‖…‖² / M_ii (its code weights the
 /// spokes-and-rims edges by ½cot/3): the constant factor changes no minimizer and no iterate, it
 /// keeps λ's meaning of the publication, and it makes λ = 0 *identical* to `spokes_and_rims`
@@ -44,9 +49,12 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   };
 
   struct Options {
-    /// Weight of the Laplacian term, in [0, 1). 0.99: the published interactive default.
+    /// Weight of the Laplacian term, in [0, 1) (default as issue 7 asks).
     double lambda = 0.99;
     RotationFit rotation_fit = RotationFit::kWholeEnergy;
+    /// M has mean 1 over the input mesh (true: the same energy on every hierarchy level) or over
+    /// the mesh it is precomputed on (false: "level").
+    bool normalize_mass_on_input = true;
     static Options FromConfig(const ConfigNode& node);
   };
 
@@ -54,12 +62,16 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
       : CotangentArapEnergy(kName), options_(options) {}
   static std::unique_ptr<Energy> Create(const ConfigNode& node);
 
+  void SetInputMesh(const Mesh& input, const Context& context) override;
+
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                double& constant) const override;
   void AddNonFaceTerms(const RestGeometry& geometry, const Context& context) override;
 
   Options options_;
+  /// Mean mixed Voronoi area of the input mesh's vertices with area (0: not given).
+  double input_mean_area_ = 0.0;
 };
 
 }  // namespace harap

@@ -10,11 +10,12 @@ namespace harap {
 
 LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
                                      const ComponentFactory& factory, int level,
-                                     const Context& context)
+                                     const Context& context, const Mesh* input_mesh)
     : level_(level) {
   Stopwatch clock;
   ordering_ = LocalityOrdering(mesh);
   energy_ = factory.MakeEnergy();
+  if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
 

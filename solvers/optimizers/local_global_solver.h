@@ -30,8 +30,11 @@ struct LocalGlobalOptions {
 class LocalGlobalSolver {
  public:
   /// `constrained`: vertex indices whose positions are prescribed (their rows of `u` at Run()).
+  /// `input_mesh`: the mesh of the whole problem when `mesh` is a level of a hierarchy (handed to
+  /// Energy::SetInputMesh before the precomputation).
   LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
-                    const ComponentFactory& factory, int level, const Context& context);
+                    const ComponentFactory& factory, int level, const Context& context,
+                    const Mesh* input_mesh = nullptr);
 
   /// What the level's run did.
   struct RunResult {

@@ -284,3 +284,29 @@ TEST_CASE("smooth_arap options are validated", "[energies]") {
   CHECK_THROWS_AS(registries.energies.Create(typo.Child("energy"), "spokes_and_rims"),
                   ConfigError);
 }
+
+TEST_CASE("smooth_arap normalizes coarse levels like the input mesh", "[energies]") {
+  // The same sphere at two resolutions (162 and 2562 vertices) and the same smooth deformation:
+  // the energy approximates one integral, so the coarse mesh given the fine input mesh must report
+  // about the fine energy; normalized on its own, its Laplacian term is ~16× too strong.
+  const Mesh fine = Icosphere(4), coarse = Icosphere(2);
+  const Context context;
+  auto fitted_energy = [&](const Mesh& mesh, const Mesh* input, const char* normalization) {
+    SmoothArapEnergy::Options options;
+    options.normalize_mass_on_input = std::string(normalization) == "input";
+    SmoothArapEnergy energy(options);
+    if (input) energy.SetInputMesh(*input, context);
+    energy.Precompute(mesh, context);
+    Rotations rotations(mesh.num_vertices(), Rotation::Identity());
+    return energy.FitRotations(SmoothlyDeformed(mesh.vertices, 1.0), rotations, context);
+  };
+  const double reference = fitted_energy(fine, nullptr, "input");
+  // On the input mesh itself the call changes nothing.
+  CHECK(fitted_energy(fine, &fine, "input") == reference);
+  const double consistent = fitted_energy(coarse, &fine, "input");
+  const double per_level = fitted_energy(coarse, &fine, "level");
+  INFO("fine " << reference << ", coarse with the input's mass scale " << consistent
+               << ", coarse with its own " << per_level);
+  CHECK(std::abs(consistent / reference - 1.0) < 0.15);
+  CHECK(per_level / reference > 3.0);
+}
