@@ -74,30 +74,31 @@ SparseMatrix AddWeightedBiLaplacian(const SparseMatrix& face_terms,
   SparseMatrix result(n, n);
   result.resizeNonZeros(counts[n]);
   std::copy(counts.begin(), counts.end(), result.outerIndexPtr());
-  tbb::parallel_for(
-      tbb::blocked_range<Index>(0, n, kGrain), [&](const tbb::blocked_range<Index>& range) {
-        Scratch& s = scratch.local();
-        for (Index c = range.begin(); c != range.end(); ++c) {
-          collect(s, c);
-          for (Index j : s.rows) s.sum[j] = s.base[j] = 0.0;
-          for (Index p = outer[c]; p < outer[c + 1]; ++p) s.base[inner[p]] = face_values[p];
-          for (Index p = outer[c]; p < outer[c + 1]; ++p) {
-            const Index i = inner[p];
-            const double m = inverse_mass[i];
-            if (m == 0.0) continue;
-            for (Index q = outer[i]; q < outer[i + 1]; ++q) {
-              s.sum[inner[q]] += (laplacian[q] * laplacian[p]) * m;
-            }
-          }
-          std::sort(s.rows.begin(), s.rows.end());
-          Index out = counts[c];
-          for (Index j : s.rows) {
-            result.innerIndexPtr()[out] = j;
-            result.valuePtr()[out] = scale * s.sum[j] + s.base[j];
-            ++out;
-          }
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, kGrain),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      Scratch& s = scratch.local();
+                      for (Index c = range.begin(); c != range.end(); ++c) {
+                        collect(s, c);
+                        for (Index j : s.rows) s.sum[j] = s.base[j] = 0.0;
+                        for (Index p = outer[c]; p < outer[c + 1]; ++p)
+                          s.base[inner[p]] = face_values[p];
+                        for (Index p = outer[c]; p < outer[c + 1]; ++p) {
+                          const Index i = inner[p];
+                          const double m = inverse_mass[i];
+                          if (m == 0.0) continue;
+                          for (Index q = outer[i]; q < outer[i + 1]; ++q) {
+                            s.sum[inner[q]] += (laplacian[q] * laplacian[p]) * m;
+                          }
+                        }
+                        std::sort(s.rows.begin(), s.rows.end());
+                        Index out = counts[c];
+                        for (Index j : s.rows) {
+                          result.innerIndexPtr()[out] = j;
+                          result.valuePtr()[out] = scale * s.sum[j] + s.base[j];
+                          ++out;
+                        }
+                      }
+                    });
   return result;
 }
 
@@ -125,8 +126,7 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
       "rotation_fit", "energy", {"energy", "spokes_and_rims"},
       "local step: energy = minimize the whole energy per rotation (monotone); spokes_and_rims "
       "= fit to the spokes-and-rims part only, as the published code (may increase the energy)");
-  options.rotation_fit =
-      fit == "energy" ? RotationFit::kWholeEnergy : RotationFit::kSpokesAndRims;
+  options.rotation_fit = fit == "energy" ? RotationFit::kWholeEnergy : RotationFit::kSpokesAndRims;
   options.normalize_mass_on_input =
       node.GetChoice("mass_normalization", "input", {"input", "level"},
                      "rescale the mass matrix to mean 1 over the input mesh (input: every "
@@ -134,8 +134,8 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
                      "(level)") == "input";
   node.RejectUnknownKeys();
   if (!(options.lambda >= 0.0 && options.lambda < 1.0)) {
-    throw ConfigError(fmt::format("{}: lambda must be in [0, 1), got {}", node.Where("lambda"),
-                                  options.lambda));
+    throw ConfigError(
+        fmt::format("{}: lambda must be in [0, 1), got {}", node.Where("lambda"), options.lambda));
   }
   return options;
 }
@@ -205,9 +205,9 @@ void SmoothArapEnergy::AddNonFaceTerms(const RestGeometry& geometry, const Conte
                       }
                     });
 
-  // k Σ_i m_i ‖(L U)_i − R_i ℓ_i‖² = k tr(Uᵀ L M⁻¹ L U) − 2 Σ_i ⟨R_i, Σ_j u_j c_ijᵀ⟩ + k Σ_i m_i ‖ℓ_i‖²
-  // with c_ij = k m_i L_ij ℓ_i on the 1-ring: the coupling keeps its pattern. Both layouts share
-  // it: entry p of column c, row r is c_{c r} by site and c_{r c} by vertex (L_rc = L_cr).
+  // k Σ_i m_i ‖(L U)_i − R_i ℓ_i‖² = k tr(Uᵀ L M⁻¹ L U) − 2 Σ_i ⟨R_i, Σ_j u_j c_ijᵀ⟩ + k Σ_i m_i
+  // ‖ℓ_i‖² with c_ij = k m_i L_ij ℓ_i on the 1-ring: the coupling keeps its pattern. Both layouts
+  // share it: entry p of column c, row r is c_{c r} by site and c_{r c} by vertex (L_rc = L_cr).
   const double k = 1.5 * options_.lambda;
   HARAP_CHECK(coupling_.site_coefficients.size() == laplacian.size(),
               "coupling has {} entries, the adjacency pattern {}",

@@ -44,8 +44,8 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   static constexpr std::string_view kName = "smooth_arap";
 
   enum class RotationFit {
-    kWholeEnergy,     ///< "energy": minimize E over R_i (monotone; default)
-    kSpokesAndRims,   ///< "spokes_and_rims": the published code's fit of the E_SR part only
+    kWholeEnergy,    ///< "energy": minimize E over R_i (monotone; default)
+    kSpokesAndRims,  ///< "spokes_and_rims": the published code's fit of the E_SR part only
   };
 
   struct Options {

@@ -4,12 +4,11 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Eigenvalues>
-#include <map>
 #include <random>
 
 #include "experiments/builtins.h"
 #include "framework/error.h"
-#include "tests/support/test_factory.h"
+#include "tests/support/bent_tube.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
@@ -133,54 +132,23 @@ TEST_CASE("every energy: the local step never increases the energy", "[energies]
 }
 
 TEST_CASE("every energy: a hierarchical run decreases the energy on every level", "[energies]") {
-  // A tube (1152 vertices) with its bottom ring fixed and its top ring turned and shifted.
-  constexpr int kRings = 48, kSegments = 24;
-  Mesh tube = Tube(kRings, kSegments);
-  tube.vertices.col(2) *= 2.0;
-  DeformationProblem problem;
-  problem.mesh = &tube;
-  const Eigen::Matrix3d turn =
-      Eigen::AngleAxisd(M_PI / 3, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  for (int s = 0; s < kSegments; ++s) {
-    problem.constraints.indices.push_back(s);
-    problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
-  }
-  problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
-  for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-    Eigen::Vector3d p = tube.vertices.row(problem.constraints.indices[k]);
-    if (k % 2 == 1) p = turn * p + Eigen::Vector3d(0.0, 0.6, -0.4);
-    problem.constraints.targets.row(k) = p.transpose();
-  }
+  // 1152 vertices, the top ring turned by 60° and shifted.
+  const BentTube tube(48, 24, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.6, -0.4));
   for (const auto& name : MakeBuiltinRegistries().energies.Names()) {
     DYNAMIC_SECTION(name) {
-      // Fixed coarse targets (update_constraints = false) make every level a plain local/global
-      // run on that level's own energy (its own weights and matrices), which must be monotone.
-      TestSetup setup(fmt::format(
-          "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
-          "[hierarchy]\nmin_vertices = 80\n[energy]\ntype = \"{}\"\n",
-          name));
-      std::map<int, std::vector<double>> energies;
-      Context context;
-      context.iteration_callback = [&](const IterationSummary& s) {
-        energies[s.level].push_back(s.energy);
-        return CallbackAction::kContinue;
-      };
-      const OptimizeResult result =
-          setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
+      // Every level runs on that level's own energy (its own weights and matrices).
+      LevelEnergies energies;
+      const OptimizeResult result = energies.RunHierarchicalWithFixedTargets(
+          tube.problem, 80, fmt::format("[energy]\ntype = \"{}\"\n", name));
       REQUIRE(result.levels.size() >= 3);
-      CHECK(energies.size() == result.levels.size());
-      for (const auto& [level, trace] : energies) {
-        INFO("level " << level);
-        for (size_t i = 1; i < trace.size(); ++i) {
-          CHECK(trace[i] <= trace[i - 1] * (1.0 + 1e-12) + 1e-15);
-        }
-      }
+      CHECK(energies.by_level.size() == result.levels.size());
+      CHECK(energies.MonotonePerLevel());
       CHECK(result.converged);
       CHECK(std::isfinite(result.energy));
       CHECK(result.energy == result.levels[0].energy);
-      for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-        CHECK(result.positions.row(problem.constraints.indices[k]) ==
-              problem.constraints.targets.row(k));
+      const Constraints& constraints = tube.problem.constraints;
+      for (size_t k = 0; k < constraints.indices.size(); ++k) {
+        CHECK(result.positions.row(constraints.indices[k]) == constraints.targets.row(k));
       }
     }
   }

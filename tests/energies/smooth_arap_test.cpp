@@ -3,13 +3,13 @@
 // cotangents, own Voronoi cells from circumcentres), λ = 0 against spokes_and_rims, the published
 // rotation fit, the mass matrix and the 2-ring system matrix.
 #include <catch2/catch.hpp>
-
 #include <map>
 
 #include "energies/kernels/cotangent_weights.h"
 #include "energies/smooth_arap_energy.h"
 #include "energies/spokes_and_rims_energy.h"
 #include "framework/error.h"
+#include "tests/support/bent_tube.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -95,36 +95,14 @@ double ReferenceEnergy(const Mesh& mesh, double lambda, const Positions& u, cons
   return (1.0 - lambda) * spokes_and_rims + 1.5 * lambda * laplacian_term;
 }
 
-SmoothArapEnergy::Options SmoothOptions(double lambda, SmoothArapEnergy::RotationFit fit =
-                                                           SmoothArapEnergy::RotationFit::kWholeEnergy) {
+SmoothArapEnergy::Options SmoothOptions(
+    double lambda,
+    SmoothArapEnergy::RotationFit fit = SmoothArapEnergy::RotationFit::kWholeEnergy) {
   SmoothArapEnergy::Options options;
   options.lambda = lambda;
   options.rotation_fit = fit;
   return options;
 }
-
-// A tube (≈ 1000 vertices) with its bottom ring fixed and its top ring turned and shifted.
-struct BentTube {
-  static constexpr int kRings = 40, kSegments = 24;
-  Mesh mesh = Tube(kRings, kSegments);
-  DeformationProblem problem;
-  BentTube() {
-    mesh.vertices.col(2) *= 2.0;
-    problem.mesh = &mesh;
-    const Eigen::Matrix3d turn =
-        Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    for (int s = 0; s < kSegments; ++s) {
-      problem.constraints.indices.push_back(s);
-      problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
-    }
-    problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
-    for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-      Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
-      if (k % 2 == 1) p = turn * p + Eigen::Vector3d(0.0, 0.8, -0.8);
-      problem.constraints.targets.row(k) = p.transpose();
-    }
-  }
-};
 
 }  // namespace
 
@@ -141,10 +119,11 @@ TEST_CASE("mixed Voronoi areas match circumcentre cells and add up to the mesh a
     CHECK((areas - reference).cwiseAbs().maxCoeff() < 1e-12 * reference.maxCoeff());
     double total = 0.0;
     for (Index f = 0; f < mesh.num_elements(); ++f) {
-      total += 0.5 * (Row(mesh.vertices, mesh.elements(f, 1)) - Row(mesh.vertices, mesh.elements(f, 0)))
-                         .cross(Row(mesh.vertices, mesh.elements(f, 2)) -
-                                Row(mesh.vertices, mesh.elements(f, 0)))
-                         .norm();
+      total +=
+          0.5 * (Row(mesh.vertices, mesh.elements(f, 1)) - Row(mesh.vertices, mesh.elements(f, 0)))
+                    .cross(Row(mesh.vertices, mesh.elements(f, 2)) -
+                           Row(mesh.vertices, mesh.elements(f, 0)))
+                    .norm();
     }
     CHECK(areas.sum() == Approx(total).epsilon(1e-12));
   }
@@ -202,7 +181,7 @@ TEST_CASE("smooth_arap system matrix is the exactly symmetric 2-ring blend", "[e
 }
 
 TEST_CASE("smooth_arap at lambda 0 is spokes_and_rims exactly", "[energies]") {
-  BentTube tube;
+  const BentTube tube(40, 24, 2.0, M_PI / 2, Eigen::Vector3d(0.0, 0.8, -0.8));
   for (const char* optimizer : {"classic", "hierarchical"}) {
     DYNAMIC_SECTION(optimizer) {
       const std::string common = fmt::format(
@@ -256,12 +235,12 @@ TEST_CASE("smooth_arap rotation_fit = spokes_and_rims fits rotations as the publ
   CHECK(e_published == Approx(whole.Evaluate(u, r_published, context)).epsilon(1e-12));
   CHECK(e_whole < e_published);
   // The published fit of a finished run is visible in a classic run too: it converges.
-  BentTube tube;
+  const BentTube tube(40, 24, 2.0, M_PI / 2, Eigen::Vector3d(0.0, 0.8, -0.8));
   TestSetup setup(
       "[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n"
       "[energy]\ntype = \"smooth_arap\"\nrotation_fit = \"spokes_and_rims\"\n");
-  const OptimizeResult result = setup.MakeOptimizer()->Optimize(tube.problem, setup.factory,
-                                                                Context());
+  const OptimizeResult result =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context());
   CHECK(result.converged);
   CHECK(std::isfinite(result.energy));
 }
@@ -269,8 +248,8 @@ TEST_CASE("smooth_arap rotation_fit = spokes_and_rims fits rotations as the publ
 TEST_CASE("smooth_arap options are validated", "[energies]") {
   const Registries registries = MakeBuiltinRegistries();
   for (const char* bad : {"lambda = 1.0", "lambda = -0.1", "lambda = nan"}) {
-    ConfigNode config = ConfigNode::Parse(
-        fmt::format("[energy]\ntype = \"smooth_arap\"\n{}\n", bad), "test.toml");
+    ConfigNode config =
+        ConfigNode::Parse(fmt::format("[energy]\ntype = \"smooth_arap\"\n{}\n", bad), "test.toml");
     // NaN is already refused by ConfigNode ("must be a finite number").
     CHECK_THROWS_WITH(registries.energies.Create(config.Child("energy"), "spokes_and_rims"),
                       Catch::Contains("lambda") && Catch::Contains("test.toml:3") &&
@@ -281,8 +260,7 @@ TEST_CASE("smooth_arap options are validated", "[energies]") {
   CHECK_THROWS_WITH(registries.energies.Create(config.Child("energy"), "spokes_and_rims"),
                     Catch::Contains("rotation_fit") && Catch::Contains("spokes_and_rims"));
   ConfigNode typo = ConfigNode::Parse("[energy]\ntype = \"smooth_arap\"\nlamda = 0.5\n", "t");
-  CHECK_THROWS_AS(registries.energies.Create(typo.Child("energy"), "spokes_and_rims"),
-                  ConfigError);
+  CHECK_THROWS_AS(registries.energies.Create(typo.Child("energy"), "spokes_and_rims"), ConfigError);
 }
 
 TEST_CASE("smooth_arap normalizes coarse levels like the input mesh", "[energies]") {

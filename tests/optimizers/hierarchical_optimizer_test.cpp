@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
 
-#include <map>
-
 #include "solvers/optimizers/coarse_constraints.h"
+#include "tests/support/bent_tube.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -12,33 +11,15 @@ using namespace harap::testing;
 
 namespace {
 
-// A long tube (≈ 4000 vertices) with its bottom ring fixed and its top ring turned and shifted.
-struct BentTube {
-  static constexpr int kRings = 100, kSegments = 40;
-  Mesh mesh = Tube(kRings, kSegments);
-  DeformationProblem problem;
-  BentTube() {
-    mesh.vertices.col(2) *= 4.0;  // height 4, radius 0.25
-    problem.mesh = &mesh;
-    const Eigen::Matrix3d turn =
-        Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    for (int s = 0; s < kSegments; ++s) problem.constraints.indices.push_back(s);
-    for (int s = 0; s < kSegments; ++s) {
-      problem.constraints.indices.push_back((kRings - 1) * kSegments + s);
-    }
-    problem.constraints.targets.resize(problem.constraints.indices.size(), 3);
-    for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
-      Eigen::Vector3d p = mesh.vertices.row(problem.constraints.indices[k]);
-      if (k >= kSegments) p = turn * p + Eigen::Vector3d(0.0, 1.0, -1.5);
-      problem.constraints.targets.row(k) = p.transpose();
-    }
-  }
-};
+// A long tube (4000 vertices) with its bottom ring fixed and its top ring turned and shifted.
+BentTube LongBentTube() {
+  return BentTube(100, 40, 4.0, M_PI / 2, Eigen::Vector3d(0.0, 1.0, -1.5));
+}
 
 }  // namespace
 
 TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", "[optimizers]") {
-  BentTube tube;
+  const BentTube tube = LongBentTube();
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n");
   TestSetup hierarchical(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmax_levels = 1\n");
@@ -54,30 +35,15 @@ TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", 
 TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints exact, levels "
           "reported",
           "[optimizers]") {
-  BentTube tube;
+  const BentTube tube = LongBentTube();
   for (const char* upsampler : {"rotations", "positions", "smoothed_rotations"}) {
     DYNAMIC_SECTION("upsampler " << upsampler) {
-      // Fixed coarse targets (update_constraints = false) make each level a plain local/global
-      // run, which must be monotone.
-      TestSetup setup(fmt::format(
-          "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
-          "[hierarchy]\nmin_vertices = 100\n[upsampler]\ntype = \"{}\"\n",
-          upsampler));
-      std::map<int, std::vector<double>> energies;
-      Context context;
-      context.iteration_callback = [&](const IterationSummary& s) {
-        energies[s.level].push_back(s.energy);
-        return CallbackAction::kContinue;
-      };
-      const OptimizeResult result =
-          setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+      LevelEnergies energies;
+      const OptimizeResult result = energies.RunHierarchicalWithFixedTargets(
+          tube.problem, 100, fmt::format("[upsampler]\ntype = \"{}\"\n", upsampler));
       REQUIRE(result.levels.size() >= 3);
-      CHECK(energies.size() == result.levels.size());
-      for (const auto& [level, trace] : energies) {
-        for (size_t i = 1; i < trace.size(); ++i) {
-          CHECK(trace[i] <= trace[i - 1] * (1.0 + 1e-12) + 1e-15);
-        }
-      }
+      CHECK(energies.by_level.size() == result.levels.size());
+      CHECK(energies.MonotonePerLevel());
       for (size_t l = 1; l < result.levels.size(); ++l) {
         CHECK(result.levels[l].vertices < result.levels[l - 1].vertices);
         CHECK(result.levels[l].level == static_cast<int>(l));
@@ -96,7 +62,7 @@ TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints ex
 
 TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend",
           "[optimizers]") {
-  BentTube tube;
+  const BentTube tube = LongBentTube();
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-6\n");
   TestSetup hierarchical("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
                          "[hierarchy]\nmin_vertices = 100\n");
@@ -108,7 +74,7 @@ TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend
 
 TEST_CASE("coarse targets of a rigidly moved handle are the rigid motion of the coarse positions",
           "[optimizers]") {
-  BentTube tube;
+  const BentTube tube = LongBentTube();
   const Registries registries = MakeBuiltinRegistries();
   ConfigNode options = ConfigNode::Parse("min_vertices = 100\n", "test");
   const MeshHierarchy hierarchy =
