@@ -114,6 +114,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   const double diagonal = BoundingBoxDiagonal(mesh);
   LevelState state;
   bool start_with_global_step = false;
+  std::vector<std::string> target_notes;
   for (int l = coarsest; l >= 0; --l) {
     const HierarchyLevel& level = hierarchy.levels[l];
     if (l < coarsest) {
@@ -150,6 +151,12 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
       }
     }
     const auto run = solver.Run(state, start_with_global_step, options, diagonal, context, update);
+    if (run.update_stopped_at > 0) {
+      target_notes.push_back(fmt::format(
+          "level {}: coarse constraint targets stopped following the rotations after iteration "
+          "{}, which increased the energy",
+          l, run.update_stopped_at));
+    }
     level_seconds[l] += level_clock.Seconds();
     result.total_iterations += run.iterations;
     result.levels.push_back(LevelResult{l, level.mesh.num_vertices(), level.mesh.num_elements(),
@@ -183,6 +190,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   result.positions = std::move(state.positions);
   result.constraints = solvers[0]->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);
+  result.notes.insert(result.notes.end(), target_notes.begin(), target_notes.end());
   result.timings.total = total.Seconds();
   return result;
 }

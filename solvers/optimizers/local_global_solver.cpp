@@ -2,6 +2,7 @@
 #include "solvers/optimizers/local_global_solver.h"
 
 #include <cmath>
+#include <limits>
 
 #include "framework/config.h"
 #include "framework/error.h"
@@ -76,8 +77,15 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     result.converged = true;
     return result;
   }
+  // Targets that follow the rotations feed the local step back into the constraints. For
+  // spokes-and-rims ARAP this has never raised the energy on the shared scenarios, but energies
+  // whose rotations react strongly to vertex positions (smooth_arap's Laplacian term) can cycle
+  // forever; the first increase freezes the targets (see the header).
+  bool follow_targets = static_cast<bool>(update_fixed);
+  double previous_energy =
+      start_with_global_step ? std::numeric_limits<double>::infinity() : energy;
   while (result.iterations < options.max_iterations) {
-    if (update_fixed) {
+    if (follow_targets) {
       update_fixed(state.rotations, state.positions);
       system_->SetFixedPositions(state.positions);
     }
@@ -100,6 +108,11 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
                                        energy, level_, result.iterations));
     }
+    if (follow_targets && energy > previous_energy * (1.0 + 1e-12)) {
+      follow_targets = false;
+      result.update_stopped_at = result.iterations;
+    }
+    previous_energy = energy;
     if (context.iteration_callback) {
       IterationSummary summary_for_callback{level_, result.iterations, energy, displacement,
                                             context.run_clock.Seconds()};

@@ -42,6 +42,9 @@ class LocalGlobalSolver {
     double energy = 0.0;  ///< E(u, R) with R fitted to the final u.
     bool converged = false;
     bool stopped_by_callback = false;
+    /// The iteration after which `update_fixed` was no longer called because that iteration
+    /// increased the energy (0: never).
+    int update_stopped_at = 0;
   };
 
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
@@ -52,7 +55,9 @@ class LocalGlobalSolver {
   /// `update_fixed`, if set, is called before every global step with the current rotations and
   /// may move constrained vertices in the positions (coarse constraint targets that follow the
   /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
-  /// Both arrays are in the internal numbering of ordering().
+  /// Both arrays are in the internal numbering of ordering(). Moving targets make the iteration
+  /// non-monotone in principle: after the first iteration that increases the energy, the targets
+  /// stay where they are and the run continues as a plain, monotone local/global iteration.
   using FixedPositionUpdate = std::function<void(const Rotations&, Positions&)>;
   RunResult Run(LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
                 double diagonal, const Context& context,
