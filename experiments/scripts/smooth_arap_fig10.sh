@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # The smooth ARAP measurement of docs/results.md ("Smooth ARAP (issue 7, Fig. 10)"): classic vs
 # hierarchical with smooth_arap next to spokes_and_rims, on the shared armadillo-bend (173K
-# vertices) and cylinder-bend (built-in cylinder, 480K vertices) scenarios, plus pictures.
+# vertices) and cylinder-bend (built-in cylinder, 480K vertices) scenarios and the repository's
+# 20K cylinder-bend, plus pictures.
 #
 #   experiments/scripts/smooth_arap_fig10.sh [OUT_DIR [REPEATS]]
 #
@@ -28,13 +29,22 @@ run() {
   done
 }
 
-for s in armadillo-bend cylinder-bend; do
-  scenario=$shared/scenarios/$s.toml
+scenarios=(
+  "armadillo-bend=$shared/scenarios/armadillo-bend.toml"
+  "cylinder-bend=$shared/scenarios/cylinder-bend.toml"
+  "cylinder-bend-20k=$repo/experiments/scenarios/cylinder-bend.toml"
+)
+for entry in "${scenarios[@]}"; do
+  s=${entry%%=*}
+  scenario=${entry#*=}
   for energy in spokes_and_rims smooth_arap; do
     for optimizer in classic hierarchical; do
       run "$s.$energy.$optimizer" "$scenario" --optimizer "$optimizer" --energy "$energy"
     done
   done
+  # The published code's local step: rotations fitted to the spokes-and-rims part only.
+  run "$s.smooth_arap.classic-published-fit" "$scenario" --optimizer classic \
+    --energy smooth_arap --set energy.rotation_fit=spokes_and_rims
   # Each level's mass matrix rescaled to mean 1 on its own mesh instead of the input mesh's scale.
   run "$s.smooth_arap.hierarchical-level-mass" "$scenario" --optimizer hierarchical \
     --energy smooth_arap --set energy.mass_normalization=level
@@ -65,8 +75,10 @@ if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
   titles=("ARAP, classic" "ARAP, hierarchical" "smooth ARAP, classic" "smooth ARAP, hierarchical")
   /usr/bin/python3 "$render" "$out"/armadillo-bend.{spokes_and_rims,smooth_arap}.{classic,hierarchical}.ply \
     --titles "${titles[@]}" --up y --view 10 -75 --out "$out/armadillo-bend.png"
-  /usr/bin/python3 "$render" "$out"/cylinder-bend.{spokes_and_rims,smooth_arap}.{classic,hierarchical}.ply \
-    --titles "${titles[@]}" --view 5 0 --panel 2.6 --out "$out/cylinder-bend.png"
+  for s in cylinder-bend cylinder-bend-20k; do
+    /usr/bin/python3 "$render" "$out"/$s.{spokes_and_rims,smooth_arap}.{classic,hierarchical}.ply \
+      --titles "${titles[@]}" --view 5 0 --panel 2.6 --out "$out/$s.png"
+  done
 else
   echo "python3-matplotlib not installed: no pictures" >&2
 fi
