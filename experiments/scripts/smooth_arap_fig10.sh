@@ -6,6 +6,7 @@
 # 20K cylinder-bend, plus pictures.
 #
 #   experiments/scripts/smooth_arap_fig10.sh [OUT_DIR [REPEATS]]
+#   experiments/scripts/smooth_arap_fig10.sh --table OUT_DIR...   # the table over several runs
 #
 # Writes OUT_DIR/<scenario>.<energy>.<run>.<repeat>.json (harap reports) and .ply (last repeat),
 # prints a markdown table (total time: the minimum over the repeats) and renders
@@ -13,6 +14,36 @@
 # installed. Needs a Release build in build/ and the shared data beside the repository.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/../.." && pwd)
+
+# table DIR...: one row per run name, total time the minimum over every report of that name.
+table() {
+  python3 - "$@" <<'EOF'
+import glob, json, os, sys
+runs = {}
+for folder in sys.argv[1:]:
+    for path in sorted(glob.glob(os.path.join(folder, "*.json"))):
+        name = os.path.basename(path).rsplit(".", 2)[0]
+        runs.setdefault(name, []).append(json.load(open(path)))
+print("| scenario | V | energy | method | P | C | S | T (min) | T (all runs) | E | iterations per level (finest first) |")
+print("|---|---:|---|---|---:|---:|---:|---:|---|---:|---|")
+for name in sorted(runs):
+    reports = runs[name]
+    scenario, energy, method = name.split(".")
+    best = min(reports, key=lambda r: r["timings"]["total"])
+    t = best["timings"]
+    levels = ", ".join(str(l["iterations"]) for l in best["levels"])
+    totals = " / ".join(f'{r["timings"]["total"]:.1f}' for r in reports)
+    print(f'| {scenario} | {best["levels"][0]["vertices"]} | {energy} | {method} | '
+          f'{t["precompute"]:.2f} | {t["constrain"]:.2f} | {t["solve"]:.2f} | {t["total"]:.2f} | '
+          f'{totals} | {best["energy"]:.5g} | {levels} |')
+EOF
+}
+if [ "${1:-}" = "--table" ]; then
+  shift
+  table "$@"
+  exit 0
+fi
+
 harap=$repo/build/harap
 shared=${HARAP_SHARED_DIR:-$repo/../shared}
 out=${1:-smooth-arap-fig10}
@@ -50,25 +81,7 @@ for entry in "${scenarios[@]}"; do
     --energy smooth_arap --set energy.mass_normalization=level
 done
 
-python3 - "$out" <<'EOF'
-import glob, json, os, sys
-out = sys.argv[1]
-runs = {}
-for path in sorted(glob.glob(os.path.join(out, "*.json"))):
-    name = os.path.basename(path).rsplit(".", 2)[0]
-    runs.setdefault(name, []).append(json.load(open(path)))
-print("| scenario | V | energy | method | P | C | S | T (min) | T (all repeats) | E | iterations per level (finest first) |")
-print("|---|---:|---|---|---:|---:|---:|---:|---|---:|---|")
-for name, reports in runs.items():
-    scenario, energy, method = name.split(".")
-    best = min(reports, key=lambda r: r["timings"]["total"])
-    t = best["timings"]
-    levels = ", ".join(str(l["iterations"]) for l in best["levels"])
-    totals = " / ".join(f'{r["timings"]["total"]:.1f}' for r in reports)
-    print(f'| {scenario} | {best["levels"][0]["vertices"]} | {energy} | {method} | '
-          f'{t["precompute"]:.2f} | {t["constrain"]:.2f} | {t["solve"]:.2f} | {t["total"]:.2f} | '
-          f'{totals} | {best["energy"]:.5g} | {levels} |')
-EOF
+table "$out"
 
 if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
   render=$repo/experiments/scripts/render_ply.py
