@@ -77,9 +77,9 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     } else {
       constraints[l] = MapConstraints(hierarchy, l, problem.constraints);
     }
-    // Every level's energy is normalized like the input mesh's (Energy::SetInputMesh).
+    // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
     solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices, factory,
-                                                     l, context, &mesh);
+                                                     l, context, l > 0 ? &mesh : nullptr);
     if (l > 0 && solvers[l]->energy().rotation_site() == RotationSite::kElement) {
       auto& incident = constraints[l].incident_elements;
       incident.assign(constraints[l].vertices.size(), {});

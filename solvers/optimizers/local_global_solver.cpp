@@ -78,7 +78,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     return result;
   }
   // Targets that follow the rotations feed the local step back into the constraints. For
-  // spokes-and-rims ARAP this has never raised the energy on the shared scenarios, but energies
+  // spokes-and-rims ARAP this raised the energy on none of the shared scenarios tried, but energies
   // whose rotations react strongly to vertex positions (smooth_arap's Laplacian term) can cycle
   // forever; the first increase freezes the targets (see the header).
   bool follow_targets = static_cast<bool>(update_fixed);
