@@ -2,6 +2,7 @@
 #include "energies/register_energies.h"
 
 #include "energies/element_arap_energy.h"
+#include "energies/smooth_arap_energy.h"
 #include "energies/spokes_and_rims_energy.h"
 #include "energies/spokes_energy.h"
 
@@ -20,6 +21,11 @@ void RegisterEnergies(Registry<Energy>& registry) {
                "per-element ARAP, one rotation per tetrahedron or per triangle of a planar mesh, "
                "cotangent weights (the paper's Eqs. 8, 9); reports energy_wrapd = E/2",
                &ElementArapEnergy::Create);
+  registry.Add(std::string(SmoothArapEnergy::kName),
+               "smooth ARAP: (1−λ)·spokes_and_rims + rigidly rotated Laplacian vectors (weight "
+               "λ), a bi-Laplacian blend without spikes at handles [Oehri et al. 2025] (the "
+               "paper's Fig. 10)",
+               &SmoothArapEnergy::Create);
 }
 
 }  // namespace harap

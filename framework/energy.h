@@ -43,6 +43,14 @@ class Energy {
   /// energy does not support (e.g. tetrahedra for a surface energy).
   virtual void Precompute(const Mesh& rest, const Context& context) = 0;
 
+  /// The mesh being deformed, given before Precompute() when `rest` will be a coarser level of a
+  /// hierarchy. Energies whose definition depends on the mesh resolution (smooth_arap rescales its
+  /// mass matrix to mean 1 over the vertices of the mesh) take their normalization from it, so that
+  /// every level approximates the same energy. Without the call an energy uses the mesh it is
+  /// precomputed on, which is the same thing on the input mesh. Implementations keep only the
+  /// global quantities they need, not a reference; the default ignores it.
+  virtual void SetInputMesh(const Mesh& /*input*/, const Context& /*context*/) {}
+
   virtual RotationSite rotation_site() const = 0;
   /// Number of rotations: #V for per-vertex energies, #elements for per-element energies.
   virtual Index num_rotations() const = 0;
@@ -52,7 +60,10 @@ class Energy {
   virtual const SparseMatrix& system_matrix() const = 0;
 
   /// Local step: replaces `rotations` (size num_rotations(); the input is a warm start) by the
-  /// minimizers of E(u, ·), and returns E(u, rotations) for the new rotations.
+  /// minimizers of E(u, ·), and returns E(u, rotations) for the new rotations. (An energy may
+  /// offer an option that reproduces a published variant fitting the rotations to a part of the
+  /// energy, e.g. smooth_arap's rotation_fit; the returned value is then still E(u, rotations),
+  /// which need not decrease. Defaults always minimize.)
   virtual double FitRotations(const Positions& u, Rotations& rotations,
                               const Context& context) const = 0;
 

@@ -25,7 +25,33 @@ void CotangentArapEnergy::Precompute(const Mesh& rest, const Context& context) {
       AddFace(face, a_.valuePtr(), coefficient.data(), constant);
     }
     coupling_ = MakeVertexSiteCoupling(a_, std::move(coefficient), constant);
+    AddNonFaceTerms(RestGeometry{rest, half_cot, entry}, context);
   });
+}
+
+void CotangentArapEnergy::AddSpokesAndRimsFace(const Face& face, double scale, double* a_values,
+                                               Eigen::Vector3d* coefficients, double& constant) {
+  // g_x = Σ over the face's edges (x, y) of w·(v̄_x − v̄_y): the coefficient of u_x in the cross
+  // term of every rotation of the face (Eq. 1 expanded).
+  Eigen::Vector3d g[3] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                          Eigen::Vector3d::Zero()};
+  const auto& at = face.positions;
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    const double w = scale * face.half_cot[a];
+    const Eigen::Vector3d edge = face.rest[b] - face.rest[c];
+    g[b] += w * edge;
+    g[c] -= w * edge;
+    // Each face edge is seen by the three rotations of the face: A = 3·L.
+    a_values[at[3 * b + b]] += 3.0 * w;
+    a_values[at[3 * c + c]] += 3.0 * w;
+    a_values[at[3 * b + c]] -= 3.0 * w;
+    a_values[at[3 * c + b]] -= 3.0 * w;
+    constant += 3.0 * w * edge.squaredNorm();
+  }
+  for (int site = 0; site < 3; ++site) {
+    for (int x = 0; x < 3; ++x) coefficients[at[3 * x + site]] += g[x];
+  }
 }
 
 }  // namespace harap

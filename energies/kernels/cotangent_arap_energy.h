@@ -3,15 +3,16 @@
 
 #include <array>
 #include <string_view>
+#include <vector>
 
 #include "energies/kernels/rotation_coupling.h"
 
 namespace harap {
 
 /// Shared precomputation of the per-vertex cotangent ARAP energies on triangle meshes (spokes,
-/// spokes-and-rims): ½cot weights with degenerate triangles zeroed, the adjacency pattern, and a
-/// loop over faces in which the concrete energy adds its face's contributions to A, to the
-/// coupling coefficients and to the constant.
+/// spokes-and-rims, smooth ARAP): ½cot weights with degenerate triangles zeroed, the adjacency
+/// pattern, a loop over faces in which the concrete energy adds its face's contributions to A, to
+/// the coupling coefficients and to the constant, and a hook for terms beyond per-face sums.
 class CotangentArapEnergy : public CoupledQuadraticEnergy {
  public:
   void Precompute(const Mesh& rest, const Context& context) final;
@@ -35,6 +36,24 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
   /// entry (row x, column s) (`coefficients`), and to the constant.
   virtual void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                        double& constant) const = 0;
+
+  /// The spokes-and-rims terms of one face (Eq. 1), every weight multiplied by `scale`: the
+  /// AddFace of `spokes_and_rims` (scale 1) and of energies that contain it as a part.
+  static void AddSpokesAndRimsFace(const Face& face, double scale, double* a_values,
+                                   Eigen::Vector3d* coefficients, double& constant);
+
+  /// What the face loop was built from, for AddNonFaceTerms.
+  struct RestGeometry {
+    const Mesh& rest;
+    const Eigen::Matrix<double, Eigen::Dynamic, 3>& half_cot;  ///< HalfCotangents(), #F×3
+    /// TriangleEntryPositions() in the adjacency pattern (a_'s pattern when the hook is called).
+    const std::vector<std::array<Index, 9>>& entry;
+  };
+  /// Called once at the end of Precompute(), when a_ and coupling_ hold the face terms on the
+  /// adjacency pattern. Energies with terms that are not sums over faces (smooth_arap's Laplacian
+  /// term) add them here; a_ may be replaced by a matrix with a larger pattern (coupling_ keeps
+  /// its own). Runs inside the context's arena.
+  virtual void AddNonFaceTerms(const RestGeometry& /*geometry*/, const Context& /*context*/) {}
 
  private:
   std::string_view name_;

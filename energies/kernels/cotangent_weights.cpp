@@ -2,6 +2,7 @@
 #include "energies/kernels/cotangent_weights.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -11,6 +12,28 @@
 namespace harap {
 
 namespace {
+
+// One triangle's edges (edge a is opposite corner a and runs from corner a+1 to a+2), twice its
+// area, and whether it is degenerate (area ≤ kDegenerateTriangleRatio · longest edge²).
+struct TriangleGeometry {
+  TriangleGeometry(const Positions& vertices, const Elements& triangles, Index f) {
+    const Eigen::RowVector3d p[3] = {vertices.row(triangles(f, 0)), vertices.row(triangles(f, 1)),
+                                     vertices.row(triangles(f, 2))};
+    edge[0] = p[2] - p[1];
+    edge[1] = p[0] - p[2];
+    edge[2] = p[1] - p[0];
+    double_area = edge[0].cross(edge[1]).norm();
+    const double longest = std::max({edge[0].squaredNorm(), edge[1].squaredNorm(),
+                                      edge[2].squaredNorm()});
+    degenerate = !(double_area > kDegenerateTriangleRatio * longest);
+  }
+  // −e_b · e_c = |e_b| |e_c| cos(angle at a), e_b and e_c the two edges at corner a.
+  double CornerDot(int a) const { return -edge[(a + 1) % 3].dot(edge[(a + 2) % 3]); }
+
+  Eigen::RowVector3d edge[3];
+  double double_area;
+  bool degenerate;
+};
 
 /// Fills one row of weights per element in parallel: `fill(e)` writes row e and returns false if
 /// the element is degenerate (its row then zeroed). Returns the number of degenerate elements,
@@ -41,19 +64,10 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> HalfCotangents(const Positions& vertice
                                                         const Elements& triangles,
                                                         Index* num_degenerate) {
   auto fill = [&](auto& weights, Index f) {
-    const Eigen::RowVector3d p[3] = {vertices.row(triangles(f, 0)), vertices.row(triangles(f, 1)),
-                                     vertices.row(triangles(f, 2))};
-    // Edge opposite corner a runs from corner a+1 to a+2.
-    const Eigen::RowVector3d e[3] = {p[2] - p[1], p[0] - p[2], p[1] - p[0]};
-    const double double_area = e[0].cross(e[1]).norm();
-    const double longest = std::max({e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()});
-    if (!(double_area > kDegenerateTriangleRatio * longest)) return false;
-    // cot(angle at a) = (e_b · e_c) / |e_b × e_c| with e_b, e_c the other two edges
-    // pointing away from a: −e_b · e_c / (2·area).
-    for (int a = 0; a < 3; ++a) {
-      const int b = (a + 1) % 3, c = (a + 2) % 3;
-      weights(f, a) = 0.5 * (-e[b].dot(e[c])) / double_area;
-    }
+    const TriangleGeometry triangle(vertices, triangles, f);
+    if (triangle.degenerate) return false;
+    // cot(angle at a) = cos / sin = (−e_b · e_c) / (2·area).
+    for (int a = 0; a < 3; ++a) weights(f, a) = 0.5 * triangle.CornerDot(a) / triangle.double_area;
     return true;
   };
   return ElementWeights<3>(static_cast<Index>(triangles.rows()), num_degenerate, fill);
@@ -87,6 +101,45 @@ Eigen::Matrix<double, Eigen::Dynamic, 6> TetrahedronCotangentWeights(const Posit
     return true;
   };
   return ElementWeights<6>(static_cast<Index>(tetrahedra.rows()), num_degenerate, fill);
+}
+
+Eigen::VectorXd MixedVoronoiAreas(const Positions& vertices, const Elements& triangles) {
+  const Index num_faces = static_cast<Index>(triangles.rows());
+  // Corner areas per face in parallel, then a serial scatter (vertices are shared by faces).
+  Eigen::Matrix<double, Eigen::Dynamic, 3> corner(num_faces, 3);
+  tbb::parallel_for(
+      tbb::blocked_range<Index>(0, num_faces, 4096), [&](const tbb::blocked_range<Index>& range) {
+        for (Index f = range.begin(); f != range.end(); ++f) {
+          const TriangleGeometry triangle(vertices, triangles, f);
+          if (triangle.degenerate) {
+            corner.row(f).setZero();
+            continue;
+          }
+          double cot[3], squared[3];
+          int obtuse = -1;
+          for (int a = 0; a < 3; ++a) {
+            const double dot = triangle.CornerDot(a);  // negative at an obtuse corner
+            cot[a] = dot / triangle.double_area;
+            squared[a] = triangle.edge[a].squaredNorm();
+            if (dot < 0.0) obtuse = a;
+          }
+          const double area = 0.5 * triangle.double_area;
+          for (int a = 0; a < 3; ++a) {
+            if (obtuse >= 0) {
+              corner(f, a) = a == obtuse ? 0.5 * area : 0.25 * area;
+            } else {
+              // The two edges at corner a are e_b and e_c (opposite corners b and c).
+              const int b = (a + 1) % 3, c = (a + 2) % 3;
+              corner(f, a) = 0.125 * (squared[b] * cot[b] + squared[c] * cot[c]);
+            }
+          }
+        }
+      });
+  Eigen::VectorXd areas = Eigen::VectorXd::Zero(vertices.rows());
+  for (Index f = 0; f < num_faces; ++f) {
+    for (int a = 0; a < 3; ++a) areas(triangles(f, a)) += corner(f, a);
+  }
+  return areas;
 }
 
 }  // namespace harap

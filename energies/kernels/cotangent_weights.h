@@ -39,4 +39,12 @@ inline constexpr std::array<std::pair<int, int>, 6> kTetrahedronEdges = {
 Eigen::Matrix<double, Eigen::Dynamic, 6> TetrahedronCotangentWeights(
     const Positions& vertices, const Elements& tetrahedra, Index* num_degenerate = nullptr);
 
+/// Mixed Voronoi area of each vertex [Meyer, Desbrun, Schröder, Barr 2003], the lumped mass
+/// matrix of libigl's MASSMATRIX_TYPE_VORONOI: in a non-obtuse triangle each corner gets its
+/// Voronoi region, ⅛ Σ over its two edges of |e|²·cot(angle opposite e); in an obtuse triangle
+/// the obtuse corner gets half the triangle's area and the other two a quarter each. The areas
+/// add up to the mesh area. Degenerate triangles (same test as HalfCotangents) contribute nothing,
+/// so a vertex used only by degenerate triangles (or by none) has area 0.
+Eigen::VectorXd MixedVoronoiAreas(const Positions& vertices, const Elements& triangles);
+
 }  // namespace harap

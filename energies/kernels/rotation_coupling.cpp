@@ -15,15 +15,21 @@ namespace {
 
 constexpr Index kGrain = 2048;
 
-// M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest).
-inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positions& u, Index s) {
+// M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest), c_sj = coefficients[p] (site-major).
+inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling,
+                                  const std::vector<Eigen::Vector3d>& coefficients,
+                                  const Positions& u, Index s) {
   Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
   for (Index p = coupling.site_offsets[s]; p < coupling.site_offsets[s + 1]; ++p) {
     const Index j = coupling.site_vertices[p];
     const Eigen::Vector3d uj(u(j, 0), u(j, 1), u(j, 2));
-    m.noalias() += uj * coupling.site_coefficients[p].transpose();
+    m.noalias() += uj * coefficients[p].transpose();
   }
   return m;
+}
+
+inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling, const Positions& u, Index s) {
+  return Covariance(coupling, coupling.site_coefficients, u, s);
 }
 
 // tr(uᵀ A u), A symmetric in full storage.
@@ -113,13 +119,27 @@ RotationCoupling MakeElementSiteCoupling(Index num_vertices, const Elements& ele
 }
 
 double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,
-                           const Positions& u, Rotations& rotations, const Context& context) {
+                           const Positions& u, Rotations& rotations, const Context& context,
+                           const std::vector<Eigen::Vector3d>* fit_coefficients) {
   HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
               "{} rotations for {} sites", rotations.size(), coupling.num_sites);
   HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
               coupling.num_vertices);
+  HARAP_CHECK(!fit_coefficients || fit_coefficients->size() == coupling.site_coefficients.size(),
+              "{} fit coefficients for {} coupling entries", fit_coefficients->size(),
+              coupling.site_coefficients.size());
+  // Fits site s's rotation (to M_s(u), or to the covariance of `fit_coefficients` when given)
+  // and returns tr(R_sᵀ M_s).
   const auto fit = [&](Index s, const Eigen::Matrix3d& m) {
-    rotations[s] = coupling.planar ? ClosestPlanarRotation(m) : ClosestRotation(m, rotations[s]);
+    const auto closest = [&](const Eigen::Matrix3d& target) {
+      rotations[s] =
+          coupling.planar ? ClosestPlanarRotation(target) : ClosestRotation(target, rotations[s]);
+    };
+    if (fit_coefficients) {
+      closest(Covariance(coupling, *fit_coefficients, u, s));
+    } else {
+      closest(m);
+    }
     return rotations[s].cwiseProduct(m).sum();
   };
   return context.Run([&] {
@@ -202,7 +222,8 @@ double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatri
 
 double CoupledQuadraticEnergy::FitRotations(const Positions& u, Rotations& rotations,
                                             const Context& context) const {
-  return FitCoupledRotations(coupling_, a_, u, rotations, context);
+  return FitCoupledRotations(coupling_, a_, u, rotations, context,
+                             fit_coefficients_.empty() ? nullptr : &fit_coefficients_);
 }
 
 void CoupledQuadraticEnergy::AssembleRhs(const Rotations& rotations, Positions& rhs,

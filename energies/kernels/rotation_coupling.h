@@ -57,8 +57,14 @@ RotationCoupling MakeElementSiteCoupling(Index num_vertices, const Elements& ele
 
 /// Local step: rotations[s] = argmax_R ⟨R, M_s(u)⟩ (warm-started from rotations[s]); returns
 /// E(u, rotations) with the fitted rotations.
+///
+/// With `fit_coefficients` (site-major, same layout as coupling.site_coefficients) the rotations
+/// are fitted to the covariances Σ_j u_j f_sjᵀ of those coefficients instead — a part of the
+/// energy, as some published methods do — and the returned value is still the whole energy
+/// E(u, rotations), which then need not be minimal (nor decrease).
 double FitCoupledRotations(const RotationCoupling& coupling, const SparseMatrix& a,
-                           const Positions& u, Rotations& rotations, const Context& context);
+                           const Positions& u, Rotations& rotations, const Context& context,
+                           const std::vector<Eigen::Vector3d>* fit_coefficients = nullptr);
 
 /// rhs_j = Σ_s R_s c_sj.
 void AssembleCoupledRhs(const RotationCoupling& coupling, const Rotations& rotations,
@@ -89,6 +95,10 @@ class CoupledQuadraticEnergy : public Energy {
   RotationSite site_;
   SparseMatrix a_;
   RotationCoupling coupling_;
+  /// Empty: the local step minimizes the whole energy (the default for every energy). Otherwise
+  /// the coefficients the rotations are fitted to (see FitCoupledRotations), for options that
+  /// reproduce a published variant.
+  std::vector<Eigen::Vector3d> fit_coefficients_;
 };
 
 }  // namespace harap

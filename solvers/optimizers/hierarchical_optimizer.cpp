@@ -36,7 +36,16 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(const 
       node.Get("overlap_setup", options.overlap_setup,
                "set up (precompute, factor) finer levels on another thread while coarser levels "
                "are solved; phase times then overlap");
+  options.iterations.freeze_targets_after = node.Get(
+      "freeze_targets_after", options.iterations.freeze_targets_after,
+      "with update_constraints: keep a level's coarse targets fixed after this many iterations "
+      "raised its energy (0: never; moving targets can make the energy cycle)");
   node.RejectUnknownKeys();
+  if (options.iterations.freeze_targets_after < 0) {
+    throw ConfigError(fmt::format("{}: freeze_targets_after must be >= 0, got {}",
+                                  node.Where("freeze_targets_after"),
+                                  options.iterations.freeze_targets_after));
+  }
   if (options.level_step < 1) {
     throw ConfigError(fmt::format("{}: level_step must be >= 1, got {}", node.Where("level_step"),
                                   options.level_step));
@@ -87,8 +96,10 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     } else {
       constraints[l] = MapConstraints(hierarchy, l, problem.constraints);
     }
+    // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
     solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices,
-                                                     serialized_factory, l, context);
+                                                     serialized_factory, l, context,
+                                                     l > 0 ? &mesh : nullptr);
     if (l > 0 && solvers[l]->energy().rotation_site() == RotationSite::kElement) {
       auto& incident = constraints[l].incident_elements;
       incident.assign(constraints[l].vertices.size(), {});

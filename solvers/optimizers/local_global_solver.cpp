@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "framework/config.h"
 #include "framework/error.h"
@@ -11,11 +12,12 @@ namespace harap {
 
 LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
                                      const ComponentFactory& factory, int level,
-                                     const Context& context)
+                                     const Context& context, const Mesh* input_mesh)
     : level_(level) {
   Stopwatch clock;
   ordering_ = LocalityOrdering(mesh);
   energy_ = factory.MakeEnergy();
+  if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
 
@@ -98,13 +100,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     result.converged = true;
     return result;
   }
-  // Moving constraint targets (coarse levels following their cluster rotations) make an iteration
-  // no longer a descent step, and the energy can cycle instead of converging (seen on coarse
-  // levels of tetrahedral meshes and of edge-collapse hierarchies). A few increases are a normal
-  // transient while the targets swing into place; after the third one the targets stay where
-  // they are for the rest of the level, so the remaining iterations are plain local/global
-  // steps: monotone and convergent.
-  constexpr int kEnergyIncreasesBeforeFreezing = 3;
+  // Moving constraint targets make an iteration no longer a descent step and the energy can cycle
+  // (see LocalGlobalOptions::freeze_targets_after); after that many increases the remaining
+  // iterations are plain local/global steps: monotone and convergent.
   int energy_increases = 0;
   bool targets_frozen = false;
   double previous_energy = energy;
@@ -133,8 +131,8 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
                                        energy, level_, result.iterations));
     }
-    if (update_fixed && !targets_frozen && result.iterations > 1 && energy > previous_energy &&
-        ++energy_increases == kEnergyIncreasesBeforeFreezing) {
+    if (update_fixed && !targets_frozen && result.iterations > 1 && energy > previous_energy * (1.0 + 1e-12) &&
+        ++energy_increases == options.freeze_targets_after) {
       targets_frozen = true;
       result.targets_frozen_at = result.iterations;
     }

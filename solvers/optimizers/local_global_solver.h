@@ -19,6 +19,12 @@ struct LocalGlobalOptions {
   /// Section 5.1; 1e-6 in its experiments). 0 runs to max_iterations.
   double tolerance = 1e-6;
   int max_iterations = 1000;  ///< Cap on local/global iterations on the level.
+  /// With moving constraint targets (Run's `update_fixed`): after this many iterations that
+  /// raised the energy, the targets stay where they are for the rest of the run (0: never).
+  /// Moving targets make an iteration no longer a descent step; a few increases are a normal
+  /// transient while they swing into place, but some levels cycle forever (tetrahedral meshes,
+  /// edge-collapse hierarchies, smooth_arap). Set by hierarchical's `freeze_targets_after`.
+  int freeze_targets_after = 3;
 };
 
 /// Local/global ARAP iterations on one mesh level with a fixed constraint set: owns the level's
@@ -32,8 +38,11 @@ struct LocalGlobalOptions {
 class LocalGlobalSolver {
  public:
   /// `constrained`: vertex indices whose positions are prescribed (their rows of `u` at Run()).
+  /// `input_mesh`: the mesh of the whole problem when `mesh` is a level of a hierarchy (handed to
+  /// Energy::SetInputMesh before the precomputation).
   LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
-                    const ComponentFactory& factory, int level, const Context& context);
+                    const ComponentFactory& factory, int level, const Context& context,
+                    const Mesh* input_mesh = nullptr);
 
   /// What the level's run did.
   struct RunResult {
@@ -55,7 +64,9 @@ class LocalGlobalSolver {
   /// `update_fixed`, if set, is called before every global step with the current rotations and
   /// may move constrained vertices in the positions (coarse constraint targets that follow the
   /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
-  /// Both arrays are in the internal numbering of ordering().
+  /// Both arrays are in the internal numbering of ordering(). Moving targets make the iteration
+  /// non-monotone in principle: after the first iteration that increases the energy, the targets
+  /// stay where they are and the run continues as a plain, monotone local/global iteration.
   using FixedPositionUpdate = std::function<void(const Rotations&, Positions&)>;
   RunResult Run(LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
                 double diagonal, const Context& context,

@@ -38,7 +38,7 @@ TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", 
 
 TEST_CASE("hierarchical: setting finer levels up in the background changes no result",
           "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   const auto run = [&](bool overlap, int threads) {
     TestSetup setup(std::string("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n"
                                 "overlap_setup = ") +
@@ -65,7 +65,7 @@ TEST_CASE("hierarchical: setting finer levels up in the background changes no re
 
 TEST_CASE("hierarchical: a stop requested on a coarse level still finishes the finest level",
           "[optimizers]") {
-  BentTube tube;
+  LongBentTube tube;
   TestSetup setup(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmin_vertices = 200\n");
   Context context = Context::WithThreads(2);
