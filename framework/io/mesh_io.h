@@ -2,6 +2,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <string_view>
 
 #include "framework/mesh.h"
 
@@ -15,6 +17,11 @@ namespace harap {
 /// Throws InputError naming the file and what is wrong (missing, unreadable, unknown format,
 /// non-finite coordinates, indices out of range, no faces).
 Mesh ReadMesh(const std::filesystem::path& file);
+
+/// Parses mesh data held in memory, as ReadMesh does a file's contents: `name` (a file name) picks
+/// the format by its extension (a trailing `.xz` means `data` is xz-compressed) and names the
+/// data in error messages. For data that arrive without a file (and the fuzz harnesses).
+Mesh ParseMesh(std::string_view data, const std::filesystem::path& name);
 
 /// Writes binary little-endian PLY with double-precision coordinates (`property double x`) and
 /// int triangle indices, in the given vertex order, so results can be compared exactly.
