@@ -57,7 +57,7 @@ std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const Con
 }
 
 void ValidateRunConfig(const ConfigNode& root) {
-  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
+  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler", "mesh"}) {
     root.Child(table);
   }
   root.RejectUnknownKeys();
