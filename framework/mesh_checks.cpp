@@ -421,39 +421,33 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
     }
   }
 
-  // Actions, for the report and the summary.
+  // Actions, for the report and the summary (short: they are printed one line per finding).
   const char* element = triangles ? "face" : "tetrahedron";
   checks_.non_finite_vertices.action = "rejected";
-  checks_.unreferenced_vertices.action =
-      "not solved for: they keep their initial positions in the output";
+  checks_.unreferenced_vertices.action = "not solved for, kept at their initial positions";
   checks_.duplicate_vertices.action =
-      welded > 0 ? fmt::format("welded: each is merged into the earlier vertex and gets its "
-                               "result{}",
-                               collapsed > 0 ? fmt::format("; {} {}s that welding collapsed are "
-                                                           "left out of the solve",
-                                                           collapsed, element)
-                                             : std::string())
-                 : "kept as separate vertices: the surface is not connected through them and "
-                   "may open there; set mesh.weld_duplicates = true (--set "
-                   "mesh.weld_duplicates=true) to merge them";
-  checks_.degenerate_elements.action =
-      "zero weight in the energy: they neither resist nor transmit deformation";
+      welded > 0
+          ? fmt::format("welded into the earlier vertex, which both follow{}",
+                        collapsed > 0 ? fmt::format("; {} {}s collapsed by welding left out",
+                                                    collapsed, element)
+                                      : std::string())
+          : "kept separate, so the surface may open there; --set mesh.weld_duplicates=true "
+            "merges them";
+  checks_.degenerate_elements.action = "zero weight in the energy";
   checks_.duplicate_elements.action =
       options.drop_duplicate_elements
-          ? fmt::format("{} repeated copies left out of the solve (set "
-                        "mesh.drop_duplicate_elements = false to keep them)",
+          ? fmt::format("{} copies left out of the solve (mesh.drop_duplicate_elements = false "
+                        "keeps them)",
                         dropped)
-          : "kept: every copy adds its energy again";
-  checks_.boundary_edges.action = "none needed: open surfaces are fine";
+          : "kept: each copy adds its energy";
+  checks_.boundary_edges.action = "fine: open surfaces are allowed";
   const char* no_manifold_needed =
-      "none needed: the energy is a sum over elements and needs no manifold connectivity "
-      "(only `refine` does, and it rejects such meshes)";
+      "fine: the energy needs no manifold connectivity (only `refine` does)";
   checks_.non_manifold_edges.action = no_manifold_needed;
   checks_.non_manifold_vertices.action = no_manifold_needed;
   checks_.inconsistent_orientation.action =
-      triangles ? "none needed: cotangent weights and rotation fitting do not depend on the "
-                  "orientation of faces"
-                : "none: reported for information";
+      triangles ? "fine: cotangent weights and rotation fitting ignore face orientation"
+                : "reported only";
 
   changed_ = welded > 0 || collapsed > 0 || dropped > 0;
   if (!changed_) return;
@@ -538,18 +532,19 @@ std::vector<std::string> PreparedProblem::Summary() const {
     if (finding->count == 0) continue;
     std::string name = finding->name;
     std::replace(name.begin(), name.end(), '_', ' ');
-    lines.push_back(fmt::format("{}: {} (e.g. {}); {}", name, finding->count,
+    if (name.rfind("non manifold", 0) == 0) name[3] = '-';
+    lines.push_back(fmt::format("{} {} (e.g. {}): {}", name, finding->count,
                                 DescribeExample(*finding, checks_), finding->action));
   }
   const auto& components = checks_.components;
   if (components.size() > 1 || checks_.components_without_constraints > 0) {
-    std::string line = fmt::format("components: {}", components.size());
+    std::string line = fmt::format("components {}", components.size());
     if (checks_.components_without_constraints > 0) {
       const auto free = std::find_if(components.begin(), components.end(),
                                      [](const auto& c) { return c.constrained_vertices == 0; });
       line += fmt::format(
-          ", {} without a handle (e.g. the one with {} {}, {} {}s); one vertex of each is pinned "
-          "at its initial position, so they stay in place (free to rotate and deform)",
+          ", {} without a handle (e.g. the one with {} {}, {} {}s): pinned in place by one "
+          "vertex each, free to rotate and deform",
           checks_.components_without_constraints,
           checks_.kind == ElementKind::kTriangle ? "face" : "tetrahedron", free->first_element,
           free->elements, checks_.kind == ElementKind::kTriangle ? "face" : "tetrahedron");
