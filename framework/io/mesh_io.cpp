@@ -808,6 +808,11 @@ RawMesh ParsePly(std::string_view data, const std::string& what) {
   int coordinate_slot[3] = {-1, -1, -1};
   int index_slot = -1;
   for (const PlyElement& element : header.elements) {
+    // A second 'vertex' or 'face' element would leave the slots below pointing into the first
+    // one's property list (found by fuzzing: a heap overflow); no writer produces one.
+    if ((element.name == "vertex" && vertex_element) || (element.name == "face" && face_element)) {
+      Fail(what, fmt::format("PLY header declares the element '{}' twice", element.name));
+    }
     if (element.name == "vertex") {
       vertex_element = &element;
       for (size_t p = 0; p < element.properties.size(); ++p) {

@@ -90,6 +90,12 @@ def main():
           "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
           "property float z\nelement face 1\nproperty list uchar float vertex_indices\n"
           "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    # Found by fuzzing (a heap overflow before the fix): a second 'face' element.
+    write("ply_two_face_elements.ply",
+          "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty uchar flags\n"
+          "property list uchar int vertex_indices\nelement face 1\nproperty uchar flags\n"
+          "end_header\n0 0 0\n1 0 0\n0 1 0\n0 3 0 1 2\n0\n")
     write("ply_missing_z.ply",
           "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
           "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0\n1 0\n0 1\n"
