@@ -6,10 +6,11 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Keep every input cheap: big built-in meshes and deep refinement are legitimate requests
-  // that only cost time and memory, not bugs.
+  // that only cost time and memory, not bugs. (With 100K elements, a refined plane took 13 s
+  // under ASan and coverage instrumentation on a loaded machine: a libFuzzer timeout.)
   harap::ScenarioLimits limits;
-  limits.max_builtin_vertices = 20000;
-  limits.max_elements = 100000;
+  limits.max_builtin_vertices = 5000;
+  limits.max_elements = 20000;
   try {
     const harap::Scenario scenario =
         harap::ParseScenario(harap::fuzzing::AsText(data, size), "fuzz.toml",
