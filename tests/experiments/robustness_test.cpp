@@ -72,7 +72,7 @@ double LargestSeamGap(const Positions& positions,
   return gap;
 }
 
-TEST_CASE("RunDeform: an unwelded seam opens; mesh.weld_duplicates closes it", "[robustness]") {
+TEST_CASE("RunDeform: an unwelded seam opens, mesh.weld_duplicates closes it", "[robustness]") {
   const Registries registries = MakeBuiltinRegistries();
   std::vector<std::pair<Index, Index>> seam;
   const Scenario scenario = SeamScenario(seam);
