@@ -104,7 +104,7 @@ std::vector<OptionInfo> DescribeSmallSystemsOptions() {
 }
 
 void ValidateRunConfig(const ConfigNode& root) {
-  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
+  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler", "mesh"}) {
     root.Child(table);
   }
   root.RejectUnknownKeys();

@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "framework/error.h"
+
 #include "experiments/component_factory.h"
 #include "framework/error.h"
 
@@ -20,6 +22,7 @@ long long PeakMemoryBytes() {
 DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
                         const ConfigNode& config, const DeformOptions& options) {
   ValidateRunConfig(config);
+  const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config.Child("mesh"));
   DefaultComponents defaults;
   if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
   // Tetrahedral and planar meshes have the per-element energy (FORMAT.md: "Its energy is the
@@ -55,8 +58,25 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   problem.mesh = &scenario.mesh;
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
+  Stopwatch check_clock;
+  const PreparedProblem prepared = [&] {
+    try {
+      return PreparedProblem(problem, mesh_options);
+    } catch (const InputError& error) {
+      throw InputError(fmt::format("{}: {}", scenario.mesh_source, error.what()));
+    }
+  }();
+  outcome.mesh_check_seconds = check_clock.Seconds();
+  outcome.mesh_checks = prepared.checks();
+  outcome.mesh_summary = prepared.Summary();
+  outcome.mesh_repaired = prepared.changed();
+  outcome.solved_vertices = prepared.problem().mesh->num_vertices();
+  outcome.solved_elements = prepared.problem().mesh->num_elements();
+
   context.run_clock.Restart();
-  outcome.result = context.Run([&] { return optimizer->Optimize(problem, factory, context); });
+  outcome.result =
+      context.Run([&] { return optimizer->Optimize(prepared.problem(), factory, context); });
+  outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
   for (const LevelResult& level : outcome.result.levels) {
     outcome.level_solvers.push_back(factory.solver_name_for(level.unknowns));
   }
@@ -66,6 +86,43 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   }
   return outcome;
 }
+
+namespace {
+
+nlohmann::json MeshChecksJson(const DeformOutcome& outcome) {
+  using nlohmann::json;
+  const MeshCheckReport& checks = outcome.mesh_checks;
+  json result;
+  for (const MeshFinding* finding : checks.Findings()) {
+    result[finding->name] = {{"count", finding->count},
+                             {"examples", finding->examples},
+                             {"example_kind", finding->example_kind},
+                             {"action", finding->action}};
+  }
+  // The largest components, enough to see the main body and a few stray pieces.
+  constexpr size_t kListed = 20;
+  json listed = json::array();
+  for (size_t c = 0; c < std::min(kListed, checks.components.size()); ++c) {
+    const MeshComponentInfo& component = checks.components[c];
+    listed.push_back({{"first_element", component.first_element},
+                      {"elements", component.elements},
+                      {"vertices", component.vertices},
+                      {"constrained_vertices", component.constrained_vertices}});
+  }
+  result["components"] = {{"count", checks.components.size()},
+                          {"with_handles",
+                           checks.components.size() - checks.components_without_constraints},
+                          {"without_handles", checks.components_without_constraints},
+                          {"largest", listed}};
+  result["repaired"] = outcome.mesh_repaired;
+  result["solved_vertices"] = outcome.solved_vertices;
+  result["solved_elements"] = outcome.solved_elements;
+  result["seconds"] = outcome.mesh_check_seconds;
+  result["summary"] = outcome.mesh_summary;
+  return result;
+}
+
+}  // namespace
 
 std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outcome,
                              bool include_trace) {
@@ -80,6 +137,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                                          ? "tetrahedron"
                                          : "triangle"},
                     {"planar", scenario.mesh.planar}};
+  report["mesh_checks"] = MeshChecksJson(outcome);
   report["optimizer"] = outcome.optimizer;
   report["energy_type"] = outcome.energy_type;
   report["solver"] = outcome.solver;

@@ -8,6 +8,7 @@
 
 #include "framework/config.h"
 #include "framework/io/scenario.h"
+#include "framework/mesh_checks.h"
 #include "framework/optimizer.h"
 #include "framework/registries.h"
 #include "solvers/spectral_bounds.h"
@@ -44,10 +45,18 @@ struct DeformOutcome {
   std::vector<TraceEntry> trace;
   std::string resolved_config;  ///< The run's config as TOML.
   std::map<int, SystemSpectrum> spectra;  ///< With diagnostics: per solved level.
+  MeshCheckReport mesh_checks;  ///< The input mesh's checks, with the action taken for each.
+  std::vector<std::string> mesh_summary;  ///< One line per finding (PreparedProblem::Summary).
+  double mesh_check_seconds = 0.0;
+  bool mesh_repaired = false;  ///< Welded or dropped something: the solved mesh differs.
+  Index solved_vertices = 0;
+  Index solved_elements = 0;
 };
 
 /// Solves the scenario's deformation with the pieces named in `config` (tables `optimizer`,
-/// `energy`, `solver`, `hierarchy`, `upsampler`; each with `type` and options).
+/// `energy`, `solver`, `hierarchy`, `upsampler`; each with `type` and options; `mesh` with the
+/// MeshRepairOptions). Checks the mesh first (CheckMesh), repairs what `mesh` asks for, and
+/// returns positions for every input vertex in the input's order.
 DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
                         const ConfigNode& config, const DeformOptions& options);
 

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 // The `harap` command line: `harap deform SCENARIO.toml ...`, `harap list`, `harap hierarchy`,
 // `harap run CONFIG.toml` (experiment sweeps) and `harap report DIR`.
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
@@ -53,6 +55,13 @@ int List() {
   fmt::print("\n");
   ListRegistry(registries.hierarchies);
   ListRegistry(registries.upsamplers);
+  const ConfigNode describing = ConfigNode::Describing();
+  MeshRepairOptions::FromConfig(describing.Child("mesh"));
+  fmt::print("mesh (run config [mesh] table, applied before solving):\n");
+  for (const auto& option : describing.Child("mesh").Options()) {
+    fmt::print("      mesh.{} = {}\n          {}\n", option.key, option.default_value, option.help);
+  }
+  fmt::print("\n");
   fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
   for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
   fmt::print("volumetric twins of surfaces (scenario: mesh = {{ tetrahedralize = FILE or "
@@ -137,6 +146,14 @@ void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
                  spectrum.jacobi.largest, spectrum.jacobi.condition_number(), spectrum.seconds);
     }
   }
+  if (outcome.mesh_summary.empty()) fmt::print("checks      no findings\n");
+  for (const auto& line : outcome.mesh_summary) fmt::print("checks      {}\n", line);
+  if (outcome.mesh_repaired) {
+    fmt::print("solved on   {} vertices, {} {} (results written for all {} input vertices)\n",
+               outcome.solved_vertices, outcome.solved_elements,
+               scenario.mesh.kind() == ElementKind::kTetrahedron ? "tetrahedra" : "faces",
+               scenario.mesh.num_vertices());
+  }
   for (const auto& note : r.notes) fmt::print("note        {}\n", note);
 }
 
@@ -167,10 +184,15 @@ ConfigNode BuildRunConfig(const DeformArguments& args) {
   return config;
 }
 
+// What the command is doing, for the out-of-memory message (std::bad_alloc carries no context).
+std::string_view current_stage = "starting";
+
 int Deform(const DeformArguments& args) {
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = BuildRunConfig(args);
+  current_stage = "reading the scenario and its mesh";
   const Scenario scenario = LoadScenario(args.scenario);
+  current_stage = "checking the mesh and solving (precomputation, factorization, iterations)";
   ProgressLine progress(!args.quiet);
   DeformOptions options;
   options.threads = args.threads;
@@ -179,6 +201,7 @@ int Deform(const DeformArguments& args) {
   const DeformOutcome outcome = RunDeform(registries, scenario, config, options);
   progress.Finish();
 
+  current_stage = "writing the results";
   if (!args.out.empty()) WritePly(args.out, outcome.result.positions, scenario.mesh.elements);
   if (!args.out_rest.empty()) WritePly(args.out_rest, scenario.mesh.vertices, scenario.mesh.elements);
   if (!args.out_handles.empty()) {
@@ -201,7 +224,9 @@ int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = BuildRunConfig(args);
   ValidateRunConfig(config);
+  current_stage = "reading the scenario and its mesh";
   const Scenario scenario = LoadScenario(args.scenario);
+  current_stage = "building the hierarchy";
   auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
   Context context = Context::WithThreads(args.threads);
   Stopwatch clock;
@@ -300,9 +325,32 @@ int Report(const ReportArguments& args) {
   return 0;
 }
 
+// OpenBLAS and libgomp (both used inside CHOLMOD) handle failed allocations badly: OpenBLAS's
+// worker threads retry forever when their 128 MiB work buffer cannot be allocated (the process
+// then hangs at exit), and libgomp ends the process ("libgomp: Thread creation failed") when it
+// cannot create a thread. Allocations really fail only under an address-space limit
+// (`ulimit -v`); there harap runs both single-threaded, so that running out of memory ends in
+// harap's own error message: it re-executes itself once with OPENBLAS_NUM_THREADS=1 and
+// OMP_THREAD_LIMIT=1 (CHOLMOD asks for 4 OpenMP threads with num_threads(), which only the
+// thread limit caps; values the user set are kept). TBB's threads, which do harap's own parallel
+// work, are unaffected. Measured in docs/robustness.md.
+void SingleThreadedNativeLibrariesUnderMemoryLimit(char** argv) {
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return;
+  if (std::getenv("HARAP_REEXECUTED_FOR_MEMORY_LIMIT") != nullptr) return;
+  if (std::getenv("OPENBLAS_NUM_THREADS") != nullptr && std::getenv("OMP_THREAD_LIMIT") != nullptr) {
+    return;
+  }
+  setenv("HARAP_REEXECUTED_FOR_MEMORY_LIMIT", "1", 1);
+  setenv("OPENBLAS_NUM_THREADS", "1", 0);
+  setenv("OMP_THREAD_LIMIT", "1", 0);
+  execv("/proc/self/exe", argv);  // returns only if it failed: carry on as we are
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
   CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
   app.require_subcommand(1);
 
@@ -386,7 +434,12 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "harap: error: {}\n", error.what());
     return 1;
   } catch (const std::bad_alloc&) {
-    fmt::print(stderr, "harap: error: out of memory (try a smaller mesh or an iterative solver)\n");
+    fmt::print(stderr,
+               "harap: error: out of memory while {}. The run needs more memory than this "
+               "process may use (see `ulimit -v`). Try an iterative solver, which needs no "
+               "factorization (--solver cg or --solver gauss_seidel), fewer threads, or a smaller "
+               "mesh.\n",
+               current_stage);
     return 1;
   } catch (const std::exception& error) {
     fmt::print(stderr, "harap: internal error: {}\n", error.what());

@@ -101,6 +101,10 @@ std::string ConfigNode::Where(std::string_view key) const {
   return state_->source;
 }
 
+void ConfigNode::Fail(std::string_view key, std::string_view problem) const {
+  throw ConfigError(fmt::format("{}: option '{}' {}", Where(key), FullKey(key), problem));
+}
+
 namespace {
 
 template <class T>

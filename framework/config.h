@@ -74,6 +74,9 @@ class ConfigNode {
 
   /// Where `key` of this table was written: "file:line:column" (or the file alone).
   std::string Where(std::string_view key) const;
+  /// Throws ConfigError "<where key was written>: option '<dotted key>' <problem>", e.g.
+  /// node.Fail("tolerance", "must be >= 0, got -1") in an implementation's option validation.
+  [[noreturn]] void Fail(std::string_view key, std::string_view problem) const;
   /// The dotted path of this table from the document root ("" for the root).
   const std::string& path() const { return path_; }
   /// The document's source name (file path or "<command line>").

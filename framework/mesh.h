@@ -8,6 +8,11 @@
 
 namespace harap {
 
+/// A triangle with 2·area ≤ kDegenerateTriangleRatio · (longest edge)² has no well-defined angles
+/// (its cotangents would be ±inf or NaN): the energies give it zero weight, so it contributes
+/// nothing to the energy, and the mesh checks report it as degenerate. See docs/energies.md.
+inline constexpr double kDegenerateTriangleRatio = 1e-12;
+
 enum class ElementKind { kTriangle, kTetrahedron };
 
 /// The rest state of a simplicial mesh: positions and elements, nothing derived. Triangles in 3D

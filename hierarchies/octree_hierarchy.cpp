@@ -822,11 +822,12 @@ OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& 
                                 "at most this many levels, the input included (>= 0; 0 = no "
                                 "limit)");
   node.RejectUnknownKeys();
-  try {
-    options.Validate();
-  } catch (const ConfigError& error) {
-    const std::string table = node.path().empty() ? std::string() : " [" + node.path() + "]";
-    throw ConfigError(fmt::format("{}{}: {}", node.source(), table, error.what()));
+  // The same conditions as Validate(), reported where each value was written.
+  if (options.min_vertices < 0) {
+    node.Fail("min_vertices", fmt::format("is {}, must be >= 0", options.min_vertices));
+  }
+  if (options.max_levels < 0) {
+    node.Fail("max_levels", fmt::format("is {}, must be >= 0", options.max_levels));
   }
   return options;
 }

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -184,6 +185,40 @@ std::string OutOfMemoryMessage(std::string_view stage, const cholmod_common& com
       less_fill);
 }
 
+// OpenBLAS (Debian's BLAS for CHOLMOD) allocates a work buffer of 128 MiB of address space on a
+// thread's first BLAS call and, if that allocation fails, retries forever. CHOLMOD's supernodal
+// factorization makes its first BLAS call (dpotrf) only after allocating the factor, i.e. when
+// memory may be nearly exhausted: under an address-space limit (`ulimit -v`) running out of
+// memory then hung instead of failing (measured: built-in 200K-vertex cylinder, `ulimit -v`
+// 525000–650000 kB; docs/robustness.md). So before the first supernodal factorization on a
+// thread, probe whether twice that much can still be allocated and, if so, factor a 1×1 matrix
+// supernodally: OpenBLAS allocates its buffer then, and keeps it for later calls. If the probe
+// fails, the caller reports out of memory instead of entering OpenBLAS.
+constexpr size_t kBlasBufferProbeBytes = size_t{256} << 20;
+
+bool EnsureBlasWorkBuffer() {
+  thread_local bool ready = false;
+  if (ready) return true;
+  void* probe = std::malloc(kBlasBufferProbeBytes);
+  if (probe == nullptr) return false;
+  std::free(probe);
+  cholmod_common common;
+  cholmod_start(&common);
+  common.print = 0;
+  common.error_handler = nullptr;
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  cholmod_sparse* one = cholmod_speye(1, 1, CHOLMOD_REAL, &common);
+  if (one != nullptr) {
+    one->stype = -1;
+    cholmod_factor* factor = cholmod_analyze(one, &common);
+    if (factor != nullptr) ready = cholmod_factorize(one, factor, &common) != 0;
+    cholmod_free_factor(&factor, &common);
+    cholmod_free_sparse(&one, &common);
+  }
+  cholmod_finish(&common);
+  return ready;
+}
+
 }  // namespace
 
 struct CholmodSolver::Impl {
@@ -348,7 +383,10 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
   return options;
 }
 
-CholmodSolver::CholmodSolver(const Options& options) : impl_(std::make_unique<Impl>(options)) {}
+CholmodSolver::CholmodSolver(const Options& options) : impl_(std::make_unique<Impl>(options)) {
+  // Early, while memory is likely still free (see EnsureBlasWorkBuffer); Factorize checks again.
+  if (options.mode != Mode::kSimplicial) EnsureBlasWorkBuffer();
+}
 
 CholmodSolver::~CholmodSolver() = default;
 
@@ -384,6 +422,14 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   // pivot check.
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "cholmod");
 
+  if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) {
+    throw NumericalError(fmt::format(
+        "cholmod: out of memory before the supernodal factorization of a {}×{} matrix: less "
+        "than {} MiB of address space is left for BLAS's work buffer. Try mode = \"simplicial\" "
+        "(no BLAS), or {}.",
+        a.rows(), a.cols(), kBlasBufferProbeBytes >> 20,
+        solver_checks::kOutOfMemoryAdvice.substr(4)));  // "an iterative solver ..."
+  }
   cholmod_sparse view = LowerTriangleView(a);
   impl.factor = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);

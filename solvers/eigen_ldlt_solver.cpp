@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <new>
 #include <string>
 
 #include "framework/error.h"
@@ -32,7 +33,15 @@ void EigenLdltSolver::Factorize(const SparseMatrix& a, const Context& /*context*
   }
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "eigen_ldlt");
 
-  ldlt_.compute(a);
+  try {
+    ldlt_.compute(a);
+  } catch (const std::bad_alloc&) {
+    // Eigen reports failed allocations (the factor's fill) with std::bad_alloc.
+    throw NumericalError(fmt::format(
+        "eigen_ldlt: out of memory during the factorization of a {}×{} matrix with {} nonzeros. "
+        "{}, solver \"cholmod\" (less fill), or a coarser mesh.",
+        a.rows(), a.cols(), a.nonZeros(), solver_checks::kOutOfMemoryAdvice));
+  }
   if (ldlt_.info() == Eigen::InvalidInput) {
     throw InternalError("eigen_ldlt: Eigen rejected the matrix as invalid input");
   }

@@ -4,14 +4,12 @@
 #include <array>
 #include <utility>
 
+#include "framework/mesh.h"
 #include "framework/types.h"
 
 namespace harap {
 
-/// A triangle whose area is below this fraction of its longest edge squared has no well-defined
-/// angles (its cotangents would be ±inf or NaN); its weights are set to zero, i.e. it contributes
-/// nothing to the energy. See docs/energies.md.
-inline constexpr double kDegenerateTriangleRatio = 1e-12;
+// kDegenerateTriangleRatio (framework/mesh.h): triangles below it get zero weights.
 
 /// ½·cot of the interior angle at each corner of each triangle (#F×3): column a belongs to the
 /// edge opposite corner a (the Pinkall–Polthier / Chao et al. weight w_{f,jk}). Degenerate

@@ -88,6 +88,10 @@ std::string ReadWholeFile(const std::filesystem::path& file) {
   const auto status = std::filesystem::status(file, error);
   if (!std::filesystem::exists(status)) Fail(what, "file not found");
   if (std::filesystem::is_directory(status)) Fail(what, "is a directory, not a file");
+  // Devices such as /dev/zero or /dev/urandom never end; pipes (e.g. <(xz -dc ...)) do.
+  if (!std::filesystem::is_regular_file(status) && !std::filesystem::is_fifo(status)) {
+    Fail(what, "is not a regular file (a device or socket) and cannot be read as one");
+  }
   std::ifstream stream(file, std::ios::binary);
   if (!stream) Fail(what, "cannot open the file for reading");
   std::string data;
@@ -98,11 +102,15 @@ std::string ReadWholeFile(const std::filesystem::path& file) {
   return data;
 }
 
-std::string DecompressXz(const std::string& compressed, const std::string& what) {
+std::string DecompressXz(std::string_view compressed, const std::string& what) {
   if (compressed.empty()) Fail(what, "not xz-compressed data: the file is empty");
   lzma_stream stream = LZMA_STREAM_INIT;
+  // The decoder's memory is set by the dictionary size the file's headers declare (64 MiB for
+  // `xz -9`, up to 1.5 GiB for custom settings), so a 100-byte file could make it allocate that
+  // much. No mesh file needs more than this limit; a larger request is a corrupt header.
+  constexpr uint64_t kDecoderMemoryLimit = uint64_t{512} << 20;
   // LZMA_CONCATENATED: `xz` itself accepts several concatenated streams in one file.
-  lzma_ret ret = lzma_stream_decoder(&stream, UINT64_MAX, LZMA_CONCATENATED);
+  lzma_ret ret = lzma_stream_decoder(&stream, kDecoderMemoryLimit, LZMA_CONCATENATED);
   if (ret != LZMA_OK) Fail(what, fmt::format("cannot start the xz decoder (liblzma error {})",
                                              static_cast<int>(ret)));
   struct Guard {
@@ -141,6 +149,10 @@ std::string DecompressXz(const std::string& compressed, const std::string& what)
                                stream.total_in));
       case LZMA_MEM_ERROR:
         Fail(what, "out of memory while decompressing xz data");
+      case LZMA_MEMLIMIT_ERROR:
+        Fail(what, fmt::format("the xz headers ask for {} MiB of decoder memory (dictionary "
+                               "size), more than the {} MiB any mesh file needs: corrupt xz data",
+                               lzma_memusage(&stream) >> 20, kDecoderMemoryLimit >> 20));
       case LZMA_OPTIONS_ERROR:
         Fail(what, "unsupported xz compression options");
       default:
@@ -161,6 +173,16 @@ struct RawMesh {
   // Per triangle: where it came from, for error messages ("line 12", "face 7").
   std::vector<int64_t> origin;
   const char* origin_kind = "line";
+  // Optionally, per triangle, where its face starts in the file (PLY: the line, or the byte
+  // offset in binary files), when `origin` is a face number.
+  std::vector<int64_t> location;
+  const char* location_kind = "";
+
+  std::string Origin(size_t triangle) const {
+    if (location.size() <= triangle) return fmt::format("{} {}", origin_kind, origin[triangle]);
+    return fmt::format("{} {}: {} {}", location_kind, location[triangle], origin_kind,
+                       origin[triangle]);
+  }
 
   void AddPolygon(const std::vector<int64_t>& polygon, int64_t where) {
     // Fan triangulation (v0, vi, vi+1): exact for the triangles and convex polygons real files
@@ -208,14 +230,14 @@ Mesh BuildMesh(const RawMesh& raw, const std::string& what) {
     for (int a = 0; a < 3; ++a) {
       const int64_t v = raw.corners[3 * t + a];
       if (v < 0 || v >= num_vertices) {
-        Fail(what, fmt::format("{} {}: vertex index out of range: {} (0-based), but the file has "
+        Fail(what, fmt::format("{}: vertex index out of range: {} (0-based), but the file has "
                                "{} vertices",
-                               raw.origin_kind, raw.origin[t], v, num_vertices));
+                               raw.Origin(t), v, num_vertices));
       }
       for (int b = 0; b < a; ++b) {
         if (raw.corners[3 * t + b] == v) {
-          Fail(what, fmt::format("{} {}: degenerate face: it uses vertex {} (0-based) twice",
-                                 raw.origin_kind, raw.origin[t], v));
+          Fail(what, fmt::format("{}: degenerate face: it uses vertex {} (0-based) twice",
+                                 raw.Origin(t), v));
         }
       }
       mesh.elements(t, a) = static_cast<Index>(v);
@@ -468,6 +490,7 @@ struct PlyHeader {
   PlyFormat format = PlyFormat::kAscii;
   std::vector<PlyElement> elements;
   size_t data_offset = 0;  // first byte after end_header's line
+  size_t data_lines = 0;   // lines up to and including end_header
 };
 
 PlyHeader ParsePlyHeader(std::string_view data, const std::string& what) {
@@ -478,10 +501,8 @@ PlyHeader ParsePlyHeader(std::string_view data, const std::string& what) {
     Fail(what, "not a PLY file (it does not start with the line \"ply\")");
   }
   bool have_format = false;
-  size_t consumed = data.find('\n') + 1;
   while (true) {
     if (!lines.Next(line)) Fail(what, "PLY header has no end_header line");
-    consumed += line.size() + 1;
     std::string_view rest = line;
     const std::string_view keyword = NextToken(rest);
     const size_t number = lines.line_number();
@@ -537,62 +558,141 @@ PlyHeader ParsePlyHeader(std::string_view data, const std::string& what) {
     }
   }
   if (!have_format) Fail(what, "PLY header has no format line");
-  header.data_offset = std::min(consumed, data.size());
+  header.data_offset = lines.position();
+  header.data_lines = lines.line_number();
   return header;
 }
 
-// Sequential access to the body of a binary PLY file with bounds checks.
-class BinaryCursor {
+// Reads the values of a PLY body one by one, ASCII or binary, with bounds checks, and says where
+// it is for error messages ("line 12" in ASCII, "byte 345" in binary; both count from the start
+// of the file).
+class PlyBodyReader {
  public:
-  BinaryCursor(std::string_view data, bool big_endian, const std::string& what)
-      : data_(data), swap_(big_endian != (std::endian::native == std::endian::big)), what_(what) {}
+  PlyBodyReader(std::string_view data, const PlyHeader& header, const std::string& what)
+      : data_(data),
+        position_(header.data_offset),
+        line_(header.data_lines + 1),
+        binary_(header.format != PlyFormat::kAscii),
+        swap_(binary_ && (header.format == PlyFormat::kBinaryBigEndian) !=
+                             (std::endian::native == std::endian::big)),
+        what_(what) {}
 
-  size_t remaining() const { return data_.size() - position_; }
+  bool binary() const { return binary_; }
 
-  [[noreturn]] void Truncated(const PlyElement& element, int64_t item) const {
-    Fail(what_, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
-                            "{})",
-                            element.name, item, element.count));
+  // Where the next value starts.
+  std::string Where() {
+    if (binary_) return fmt::format("byte {}", position_);
+    SkipSpace();
+    return fmt::format("line {}", line_);
   }
+  int64_t Location() {
+    if (binary_) return static_cast<int64_t>(position_);
+    SkipSpace();
+    return static_cast<int64_t>(line_);
+  }
+  const char* location_kind() const { return binary_ ? "byte" : "line"; }
 
-  // Reads one scalar of `type`; false at the end of the data.
-  bool Read(PlyType type, double& as_double, int64_t& as_integer) {
-    const size_t size = PlyTypeSize(type);
-    if (remaining() < size) return false;
-    unsigned char bytes[8];
-    std::memcpy(bytes, data_.data() + position_, size);
-    position_ += size;
-    if (swap_) std::reverse(bytes, bytes + size);
-    switch (type) {
-      case PlyType::kInt8: as_integer = static_cast<int8_t>(bytes[0]); break;
-      case PlyType::kUInt8: as_integer = bytes[0]; break;
-      case PlyType::kInt16: as_integer = Load<int16_t>(bytes); break;
-      case PlyType::kUInt16: as_integer = Load<uint16_t>(bytes); break;
-      case PlyType::kInt32: as_integer = Load<int32_t>(bytes); break;
-      case PlyType::kUInt32: as_integer = Load<uint32_t>(bytes); break;
-      case PlyType::kFloat32: as_double = Load<float>(bytes); return true;
-      case PlyType::kFloat64: as_double = Load<double>(bytes); return true;
+  // Each returns false at the end of the data and fails on a malformed ASCII token.
+  bool ReadInteger(PlyType type, int64_t& value) {
+    if (binary_) return ReadBinary(type, value);
+    const std::string_view token = NextToken();
+    if (token.empty()) return false;
+    if (!ParseInteger(token, value)) {
+      Fail(what_, fmt::format("line {}: {} is not an integer", line_, Quote(token)));
     }
-    as_double = static_cast<double>(as_integer);
     return true;
   }
-
-  bool Skip(size_t bytes) {
-    if (remaining() < bytes) return false;
-    position_ += bytes;
+  bool ReadDouble(PlyType type, double& value) {
+    if (binary_) {
+      int64_t integer = 0;
+      if (type == PlyType::kFloat32 || type == PlyType::kFloat64) return ReadBinaryFloat(type, value);
+      if (!ReadBinary(type, integer)) return false;
+      value = static_cast<double>(integer);
+      return true;
+    }
+    const std::string_view token = NextToken();
+    if (token.empty()) return false;
+    if (!ParseDouble(token, value)) {
+      Fail(what_, fmt::format("line {}: vertex coordinate {} is not a number", line_,
+                              Quote(token)));
+    }
+    return true;
+  }
+  bool Skip(PlyType type, uint64_t count = 1) {
+    if (!binary_) {
+      for (uint64_t i = 0; i < count; ++i) {
+        if (NextToken().empty()) return false;
+      }
+      return true;
+    }
+    const uint64_t bytes = count * PlyTypeSize(type);  // count < 2^32, size ≤ 8: no overflow
+    if (data_.size() - position_ < bytes) return false;
+    position_ += static_cast<size_t>(bytes);
     return true;
   }
 
  private:
+  void SkipSpace() {
+    while (position_ < data_.size()) {
+      const char c = data_[position_];
+      if (c == '\n' || (c == '\r' && (position_ + 1 == data_.size() ||
+                                      data_[position_ + 1] != '\n'))) {
+        ++line_;  // "\n", "\r\n" (counted at its "\n") or a lone "\r"
+      } else if (!IsSpace(c)) {
+        break;
+      }
+      ++position_;
+    }
+  }
+  std::string_view NextToken() {
+    SkipSpace();
+    const size_t start = position_;
+    while (position_ < data_.size() && !IsSpace(data_[position_]) && data_[position_] != '\n') {
+      ++position_;
+    }
+    return data_.substr(start, position_ - start);
+  }
+  bool Load(PlyType type, unsigned char* bytes) {
+    const size_t size = PlyTypeSize(type);
+    if (data_.size() - position_ < size) return false;
+    std::memcpy(bytes, data_.data() + position_, size);
+    position_ += size;
+    if (swap_) std::reverse(bytes, bytes + size);
+    return true;
+  }
   template <class T>
-  static T Load(const unsigned char* bytes) {
+  static T As(const unsigned char* bytes) {
     T value;
     std::memcpy(&value, bytes, sizeof(T));
     return value;
   }
+  bool ReadBinary(PlyType type, int64_t& value) {
+    unsigned char bytes[8];
+    if (!Load(type, bytes)) return false;
+    switch (type) {
+      case PlyType::kInt8: value = static_cast<int8_t>(bytes[0]); break;
+      case PlyType::kUInt8: value = bytes[0]; break;
+      case PlyType::kInt16: value = As<int16_t>(bytes); break;
+      case PlyType::kUInt16: value = As<uint16_t>(bytes); break;
+      case PlyType::kInt32: value = As<int32_t>(bytes); break;
+      case PlyType::kUInt32: value = As<uint32_t>(bytes); break;
+      case PlyType::kFloat32:
+      case PlyType::kFloat64:
+        HARAP_CHECK(false, "integer read of a floating-point PLY property");
+    }
+    return true;
+  }
+  bool ReadBinaryFloat(PlyType type, double& value) {
+    unsigned char bytes[8];
+    if (!Load(type, bytes)) return false;
+    value = type == PlyType::kFloat32 ? As<float>(bytes) : As<double>(bytes);
+    return true;
+  }
 
   std::string_view data_;
-  size_t position_ = 0;
+  size_t position_;
+  size_t line_;
+  bool binary_;
   bool swap_;
   const std::string& what_;
 };
@@ -608,6 +708,11 @@ RawMesh ParsePly(std::string_view data, const std::string& what) {
   int coordinate_slot[3] = {-1, -1, -1};
   int index_slot = -1;
   for (const PlyElement& element : header.elements) {
+    // A second 'vertex' or 'face' element would leave the slots below pointing into the first
+    // one's property list (found by fuzzing: a heap overflow); no writer produces one.
+    if ((element.name == "vertex" && vertex_element) || (element.name == "face" && face_element)) {
+      Fail(what, fmt::format("PLY header declares the element '{}' twice", element.name));
+    }
     if (element.name == "vertex") {
       vertex_element = &element;
       for (size_t p = 0; p < element.properties.size(); ++p) {
@@ -648,15 +753,15 @@ RawMesh ParsePly(std::string_view data, const std::string& what) {
   }
 
   // A lower bound on the bytes each item needs, so that a corrupt count fails before it makes us
-  // reserve gigabytes.
+  // reserve gigabytes. (ASCII: one character per value and a separator between values.)
   for (const PlyElement& element : header.elements) {
     size_t min_bytes = 0;
     for (const PlyProperty& property : element.properties) {
       min_bytes += binary ? PlyTypeSize(property.is_list ? property.count_type : property.type)
-                          : 2;  // "0 " in ASCII
+                          : 2;
     }
-    if (min_bytes > 0 &&
-        static_cast<uint64_t>(element.count) > body.size() / std::max<size_t>(min_bytes, 1)) {
+    const size_t available = binary ? body.size() : body.size() + 1;
+    if (min_bytes > 0 && static_cast<uint64_t>(element.count) > available / min_bytes) {
       Fail(what, fmt::format("truncated PLY data: the header declares {} '{}' items, more than "
                              "the {} bytes after the header can hold",
                              element.count, element.name, body.size()));
@@ -669,125 +774,67 @@ RawMesh ParsePly(std::string_view data, const std::string& what) {
   raw.corners.reserve(static_cast<size_t>(face_element->count) * 3);
   raw.origin.reserve(static_cast<size_t>(face_element->count));
   std::vector<int64_t> polygon;
-
-  if (binary) {
-    BinaryCursor cursor(body, header.format == PlyFormat::kBinaryBigEndian, what);
-    bool vertices_done = false;
-    for (const PlyElement& element : header.elements) {
-      const bool is_vertex = &element == vertex_element;
-      const bool is_face = &element == face_element;
-      if (element.properties.empty()) continue;  // nothing stored per item
-      for (int64_t item = 0; item < element.count; ++item) {
-        double xyz[3] = {0.0, 0.0, 0.0};
-        for (size_t p = 0; p < element.properties.size(); ++p) {
-          const PlyProperty& property = element.properties[p];
-          double as_double = 0.0;
-          int64_t as_integer = 0;
-          if (!property.is_list) {
-            if (!cursor.Read(property.type, as_double, as_integer)) cursor.Truncated(element, item);
-            if (is_vertex) {
-              for (int d = 0; d < 3; ++d) {
-                if (coordinate_slot[d] == static_cast<int>(p)) xyz[d] = as_double;
-              }
-            }
-            continue;
-          }
-          if (!cursor.Read(property.count_type, as_double, as_integer)) {
-            cursor.Truncated(element, item);
-          }
-          const int64_t count = as_integer;
-          if (count < 0) {
-            Fail(what, fmt::format("PLY element '{}' item {}: negative list length {}",
-                                   element.name, item, count));
-          }
-          if (is_face && static_cast<int>(p) == index_slot) {
-            if (count < 3) {
-              Fail(what, fmt::format("face {}: face has {} vertices (at least 3 are needed)", item,
-                                     count));
-            }
-            polygon.clear();
-            for (int64_t i = 0; i < count; ++i) {
-              if (!cursor.Read(property.type, as_double, as_integer)) {
-                cursor.Truncated(element, item);
-              }
-              polygon.push_back(as_integer);
-            }
-            raw.AddPolygon(polygon, item);
-          } else if (!cursor.Skip(static_cast<size_t>(count) * PlyTypeSize(property.type))) {
-            cursor.Truncated(element, item);
-          }
+  PlyBodyReader reader(data, header, what);
+  raw.location_kind = reader.location_kind();
+  auto truncated = [&](const PlyElement& element, int64_t item) {
+    Fail(what, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
+                           "{}, at {})",
+                           element.name, item, element.count, reader.Where()));
+  };
+  bool vertices_done = false;
+  for (const PlyElement& element : header.elements) {
+    const bool is_vertex = &element == vertex_element;
+    const bool is_face = &element == face_element;
+    if (element.properties.empty()) continue;  // nothing stored per item
+    for (int64_t item = 0; item < element.count; ++item) {
+      const int64_t item_location = reader.Location();
+      double xyz[3] = {0.0, 0.0, 0.0};
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        if (!property.is_list) {
+          int slot = -1;
+          for (int d = 0; d < 3; ++d) slot = coordinate_slot[d] == static_cast<int>(p) ? d : slot;
+          const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
+                                                 : reader.Skip(property.type);
+          if (!ok) truncated(element, item);
+          continue;
         }
-        if (is_vertex) raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
-      }
-      vertices_done = vertices_done || is_vertex;
-      if (is_face && vertices_done) break;  // later elements hold nothing we use
-    }
-  } else {
-    TokenCursor cursor(body, 0, /*skip_comments=*/false);
-    auto line_of = [&](size_t body_line) {
-      // Lines in messages count from the top of the file.
-      return body_line + 1 + static_cast<size_t>(std::count(
-                                 data.begin(), data.begin() + header.data_offset, '\n'));
-    };
-    auto truncated = [&](const PlyElement& element, int64_t item) {
-      Fail(what, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
-                             "{})",
-                             element.name, item, element.count));
-    };
-    bool vertices_done = false;
-    for (const PlyElement& element : header.elements) {
-      const bool is_vertex = &element == vertex_element;
-      const bool is_face = &element == face_element;
-      if (element.properties.empty()) continue;  // nothing stored per item
-      for (int64_t item = 0; item < element.count; ++item) {
-        double xyz[3] = {0.0, 0.0, 0.0};
-        for (size_t p = 0; p < element.properties.size(); ++p) {
-          const PlyProperty& property = element.properties[p];
-          if (!property.is_list) {
-            const std::string_view token = cursor.Next();
-            if (token.empty()) truncated(element, item);
-            if (is_vertex) {
-              for (int d = 0; d < 3; ++d) {
-                if (coordinate_slot[d] != static_cast<int>(p)) continue;
-                if (!ParseDouble(token, xyz[d])) {
-                  Fail(what, fmt::format("line {}: vertex coordinate {} is not a number",
-                                         line_of(cursor.line()), Quote(token)));
-                }
-              }
-            }
-            continue;
-          }
-          const std::string_view count_token = cursor.Next();
-          if (count_token.empty()) truncated(element, item);
-          int64_t count = 0;
-          if (!ParseInteger(count_token, count) || count < 0) {
-            Fail(what, fmt::format("line {}: list length {} is not a non-negative integer",
-                                   line_of(cursor.line()), Quote(count_token)));
-          }
-          const bool indices = is_face && static_cast<int>(p) == index_slot;
-          if (indices && count < 3) {
-            Fail(what, fmt::format("line {}: face has {} vertices (at least 3 are needed)",
-                                   line_of(cursor.line()), count));
-          }
-          polygon.clear();
-          for (int64_t i = 0; i < count; ++i) {
-            const std::string_view token = cursor.Next();
-            if (token.empty()) truncated(element, item);
-            if (!indices) continue;
-            int64_t index = 0;
-            if (!ParseInteger(token, index)) {
-              Fail(what, fmt::format("line {}: face vertex index {} is not an integer",
-                                     line_of(cursor.line()), Quote(token)));
-            }
-            polygon.push_back(index);
-          }
-          if (indices) raw.AddPolygon(polygon, item);
+        const std::string count_where = reader.Where();
+        int64_t count = 0;
+        if (!reader.ReadInteger(property.count_type, count)) truncated(element, item);
+        if (count < 0) {
+          Fail(what, fmt::format("{}: PLY element '{}' item {}: negative list length {}",
+                                 count_where, element.name, item, count));
         }
-        if (is_vertex) raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+        if (!is_face || static_cast<int>(p) != index_slot) {
+          if (!reader.Skip(property.type, static_cast<uint64_t>(count))) truncated(element, item);
+          continue;
+        }
+        if (count < 3) {
+          Fail(what, fmt::format("{}: face {}: face has {} vertices (at least 3 are needed)",
+                                 count_where, item, count));
+        }
+        polygon.clear();
+        for (int64_t i = 0; i < count; ++i) {
+          int64_t index = 0;
+          if (!reader.ReadInteger(property.type, index)) truncated(element, item);
+          polygon.push_back(index);
+        }
+        raw.AddPolygon(polygon, item);
+        raw.location.resize(raw.origin.size(), item_location);
       }
-      vertices_done = vertices_done || is_vertex;
-      if (is_face && vertices_done) break;  // later elements hold nothing we use
+      if (is_vertex) {
+        if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
+          Fail(what, fmt::format("{} {}: non-finite coordinate: vertex {} (0-based) is ({}, {}, "
+                                 "{})",
+                                 raw.location_kind, item_location, item, xyz[0], xyz[1],
+                                 xyz[2]));
+        }
+        raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+      }
     }
+    vertices_done = vertices_done || is_vertex;
+    if (is_face && vertices_done) break;  // later elements hold nothing we use
   }
   return raw;
 }
@@ -891,9 +938,9 @@ bool PrevalidateStl(std::string_view data, const std::string& what) {
               value = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(value)));
             }
             if (!std::isfinite(value)) {
-              Fail(what, fmt::format("non-finite coordinate in triangle {} (0-based) of the "
-                                     "binary STL data",
-                                     t));
+              Fail(what, fmt::format("byte {}: non-finite coordinate {} in triangle {} (0-based) "
+                                     "of the binary STL data",
+                                     84 + 50 * t + 12 + 12 * corner + 4 * d, value, t));
             }
           }
         }
@@ -977,17 +1024,23 @@ std::string ReadFileMaybeXz(const std::filesystem::path& file) {
   return data;
 }
 
-Mesh ReadMesh(const std::filesystem::path& file, std::vector<std::string>* notes) {
-  const std::string what = file.string();
-  const FileFormat format = DetectFormat(file);
+namespace {
+
+bool IsTetrahedralFormat(const FileFormat& format) {
+  return format.extension == "node" || format.extension == "ele" || format.extension == "mesh";
+}
+
+// Fails unless `format` is a surface format ParseMeshData reads.
+void CheckSurfaceFormat(const FileFormat& format, const std::string& what) {
   const std::string& extension = format.extension;
-  if (extension == "node" || extension == "ele") return ReadTetGenMesh(file, notes);
-  if (extension == "mesh") return ReadMeditMesh(file, notes);
   if (extension != "obj" && extension != "ply" && extension != "off" && extension != "stl") {
     Fail(what, fmt::format("unknown mesh file extension '{}{}'; supported: {}",
                            extension.empty() ? "" : ".", extension, kSupportedFormats));
   }
-  const std::string data = ReadFileMaybeXz(file);
+}
+
+Mesh ParseMeshData(std::string_view data, const FileFormat& format, const std::string& what) {
+  const std::string& extension = format.extension;
   RawMesh raw;
   if (extension == "obj") {
     raw = ParseObj(data, what);
@@ -996,9 +1049,31 @@ Mesh ReadMesh(const std::filesystem::path& file, std::vector<std::string>* notes
   } else if (extension == "off") {
     raw = ParseOff(data, what);
   } else {
-    raw = ParseStl(data, what);
+    raw = ParseStl(std::string(data), what);
   }
   return BuildMesh(raw, what);
+}
+
+}  // namespace
+
+Mesh ReadMesh(const std::filesystem::path& file, std::vector<std::string>* notes) {
+  const std::string what = file.string();
+  const FileFormat format = DetectFormat(file);
+  if (format.extension == "node" || format.extension == "ele") return ReadTetGenMesh(file, notes);
+  if (format.extension == "mesh") return ReadMeditMesh(file, notes);
+  CheckSurfaceFormat(format, what);  // before reading: a wrong name costs no read
+  return ParseMeshData(ReadFileMaybeXz(file), format, what);
+}
+
+Mesh ParseMesh(std::string_view data, const std::filesystem::path& name) {
+  const std::string what = name.string();
+  const FileFormat format = DetectFormat(name);
+  if (IsTetrahedralFormat(format)) {
+    Fail(what, "tetrahedral formats (.node/.ele, .mesh) are read from files only (ReadMesh)");
+  }
+  CheckSurfaceFormat(format, what);
+  if (format.xz) return ParseMeshData(DecompressXz(data, what), format, what);
+  return ParseMeshData(data, format, what);
 }
 
 Positions ReadMeshVertices(const std::filesystem::path& file) {

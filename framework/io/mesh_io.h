@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+#include <string_view>
 
 #include "framework/mesh.h"
 
@@ -26,6 +27,11 @@ Mesh ReadMesh(const std::filesystem::path& file, std::vector<std::string>* notes
 /// for a TetGen `.node` file the `.ele` file is not needed, and the tetrahedra of a MEDIT `.mesh`
 /// file may be inverted or flat (a deformed state). Other formats as ReadMesh.
 Positions ReadMeshVertices(const std::filesystem::path& file);
+
+/// Parses mesh data held in memory, as ReadMesh does a file's contents: `name` (a file name) picks
+/// the format by its extension (a trailing `.xz` means `data` is xz-compressed) and names the
+/// data in error messages. For data that arrive without a file (and the fuzz harnesses).
+Mesh ParseMesh(std::string_view data, const std::filesystem::path& name);
 
 /// Writes binary little-endian PLY with double-precision coordinates (`property double x`) and
 /// int triangle indices, in the given vertex order, so results can be compared exactly.

@@ -28,7 +28,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -75,8 +74,8 @@ struct HandleSpec {
 
 class Parser {
  public:
-  Parser(std::string source, std::filesystem::path base)
-      : source_(std::move(source)), base_(std::move(base)) {}
+  Parser(std::string source, std::filesystem::path base, const ScenarioLimits& limits)
+      : source_(std::move(source)), base_(std::move(base)), limits_(limits) {}
 
   std::string Where(const toml::source_region& region) const {
     if (region.begin.line == 0) return source_;
@@ -429,6 +428,14 @@ class Parser {
     Scenario scenario;
     const toml::node* refine_node = root.get("refine");
     if (const toml::table* table = mesh_node->as_table()) {
+      if (const toml::node* vertices = table->get("vertices")) {
+        const auto* count = vertices->as_integer();
+        if (count && count->get() > limits_.max_builtin_vertices) {
+          Fail(Where(*vertices), "",
+               fmt::format("mesh.vertices = {} exceeds the limit of {} vertices", count->get(),
+                           limits_.max_builtin_vertices));
+        }
+      }
       // ConfigNode carries the line numbers and the unknown-key check into MakeBuiltinMesh.
       const ConfigNode parameters = ConfigNode::Parse(toml_text, source_).Child("mesh");
       if (const toml::node* source = table->get("tetrahedralize")) {
@@ -558,10 +565,10 @@ class Parser {
     }
     const double growth = std::pow(4.0, refine);
     if (static_cast<double>(scenario.mesh.num_elements()) * growth >
-        static_cast<double>(std::numeric_limits<Index>::max())) {
+        static_cast<double>(limits_.max_elements)) {
       Fail(Where(*refine_node), "",
            fmt::format("refine = {} would make more than {} triangles from {}", refine,
-                       std::numeric_limits<Index>::max(), scenario.mesh.num_elements()));
+                       limits_.max_elements, scenario.mesh.num_elements()));
     }
     try {
       scenario.mesh = LoopSubdivide(scenario.mesh, refine);
@@ -682,6 +689,7 @@ class Parser {
 
   std::string source_;
   std::filesystem::path base_;
+  ScenarioLimits limits_;
 };
 
 }  // namespace
@@ -711,8 +719,9 @@ Constraints Scenario::MergedConstraints() const {
 }
 
 Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,
-                       const std::filesystem::path& base_directory) {
-  return Parser(source_name, base_directory).Parse(toml_text);
+                       const std::filesystem::path& base_directory,
+                       const ScenarioLimits& limits) {
+  return Parser(source_name, base_directory, limits).Parse(toml_text);
 }
 
 Scenario LoadScenario(const std::filesystem::path& file) {
@@ -720,11 +729,10 @@ Scenario LoadScenario(const std::filesystem::path& file) {
   if (!std::filesystem::exists(file, error)) {
     throw InputError(fmt::format("{}: scenario file not found", file.string()));
   }
-  std::ifstream stream(file, std::ios::binary);
-  if (!stream) throw InputError(fmt::format("{}: cannot open the scenario file", file.string()));
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  Scenario scenario = ParseScenario(buffer.str(), file.string(), file.parent_path());
+  // Refuses directories and devices with a message (an ifstream would read them as empty or
+  // forever); `.toml.xz` works as for meshes.
+  const std::string text = ReadFileMaybeXz(file);
+  Scenario scenario = ParseScenario(text, file.string(), file.parent_path());
   scenario.file = file;
   return scenario;
 }

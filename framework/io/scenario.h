@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,12 +35,23 @@ struct Scenario {
   Constraints MergedConstraints() const;
 };
 
+/// Upper bounds on what a scenario may make the program build, for callers that parse untrusted
+/// text (the fuzz harness). Exceeding one is a ConfigError naming the key. Default: no bound
+/// beyond the index type.
+struct ScenarioLimits {
+  /// `vertices` of a built-in mesh.
+  Index max_builtin_vertices = std::numeric_limits<Index>::max();
+  /// Elements after `refine` (each Loop step multiplies them by 4).
+  Index max_elements = std::numeric_limits<Index>::max();
+};
+
 /// Loads a scenario file. Mesh paths are relative to the scenario file. Throws ConfigError or
 /// InputError naming the file, the handle and the problem.
 Scenario LoadScenario(const std::filesystem::path& file);
 
 /// Same from TOML text; relative paths are resolved against `base_directory`.
 Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,
-                       const std::filesystem::path& base_directory);
+                       const std::filesystem::path& base_directory,
+                       const ScenarioLimits& limits = {});
 
 }  // namespace harap

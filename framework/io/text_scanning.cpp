@@ -72,10 +72,16 @@ std::string Quote(std::string_view token) {
 
 bool LineReader::Next(std::string_view& line) {
   if (position_ >= data_.size()) return false;
-  const size_t end = data_.find('\n', position_);
+  // A line ends at "\n", "\r\n" or a lone "\r" (classic Mac OS), so files with mixed line
+  // endings keep every line separate and the numbers in messages match what an editor shows.
+  const size_t end = data_.find_first_of("\r\n", position_);
   const size_t stop = end == std::string_view::npos ? data_.size() : end;
   line = data_.substr(position_, stop - position_);
   position_ = stop + 1;
+  if (stop < data_.size() && data_[stop] == '\r' && position_ < data_.size() &&
+      data_[position_] == '\n') {
+    ++position_;
+  }
   ++line_number_;
   return true;
 }

@@ -36,7 +36,8 @@ std::string_view StripComment(std::string_view line);
 /// The token in single quotes for messages: at most 40 characters, non-printable ones as '?'.
 std::string Quote(std::string_view token);
 
-/// Iterates over the lines of a text buffer, counting them (1-based).
+/// Iterates over the lines of a text buffer, counting them (1-based). A line ends at "\n",
+/// "\r\n" or a lone "\r".
 class LineReader {
  public:
   explicit LineReader(std::string_view data) : data_(data) {}
@@ -45,6 +46,8 @@ class LineReader {
   /// The next line with content, `#` comments stripped and blank lines skipped; false at the end.
   bool NextContent(std::string_view& line);
   size_t line_number() const { return line_number_; }
+  /// Offset of the first byte after the last line returned (and its line ending).
+  size_t position() const { return position_ < data_.size() ? position_ : data_.size(); }
 
  private:
   std::string_view data_;

@@ -13,8 +13,7 @@ CellUpsampler::Options CellUpsampler::Options::FromConfig(const ConfigNode& node
     options.passes = node.Get("passes", options.passes,
                               "smoothing passes: average over the fine 1-ring, project to SO(3)");
     if (options.passes < 1) {
-      throw ConfigError(fmt::format("{}: upsampler.passes must be >= 1, got {}",
-                                    node.Where("passes"), options.passes));
+      node.Fail("passes", fmt::format("must be >= 1, got {}", options.passes));
     }
   }
   node.RejectUnknownKeys();

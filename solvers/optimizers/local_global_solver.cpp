@@ -208,12 +208,10 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
   options.max_iterations = node.Get("max_iterations", options.max_iterations,
                                     "cap on local/global iterations (per level)");
   if (options.tolerance < 0.0) {
-    throw ConfigError(fmt::format("{}: tolerance must be >= 0, got {}", node.Where("tolerance"),
-                                  options.tolerance));
+    node.Fail("tolerance", fmt::format("must be >= 0, got {}", options.tolerance));
   }
   if (options.max_iterations < 1) {
-    throw ConfigError(fmt::format("{}: max_iterations must be >= 1, got {}",
-                                  node.Where("max_iterations"), options.max_iterations));
+    node.Fail("max_iterations", fmt::format("must be >= 1, got {}", options.max_iterations));
   }
   return options;
 }

@@ -6,15 +6,17 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
 #include "experiments/builtins.h"
 #include "experiments/deform.h"
 #include "framework/io/mesh_io.h"
+#include "tests/support/run_harap.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
+using harap::testing::CommandResult;
+using harap::testing::RunHarap;
 namespace fs = std::filesystem;
 
 namespace {
@@ -30,23 +32,6 @@ select.slab = { axis = "z", from = 0.97, to = 1.0 }
 rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
 translate = [0.0, 0.2, -0.1]
 )";
-
-struct CommandResult {
-  int status = -1;
-  std::string output;
-};
-
-CommandResult RunHarap(const std::string& arguments) {
-  const std::string command = std::string(HARAP_EXECUTABLE) + " " + arguments + " 2>&1";
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe);
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) result.output.append(buffer, n);
-  const int status = pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
 
 fs::path TempDir() {
   fs::path dir = fs::temp_directory_path() / fmt::format("harap-test-{}", getpid());

@@ -134,6 +134,35 @@ BentTube::BentTube(int rings, int segments, double height, double angle,
   }
 }
 
+Mesh SeamedGrid(int n, std::vector<std::pair<Index, Index>>& seam) {
+  Mesh mesh = Grid(n, n);
+  const Index original_count = mesh.num_vertices();
+  std::vector<Index> copy(original_count, kNoVertex);
+  std::vector<Index> seam_vertices;
+  for (Index v = 0; v < original_count; ++v) {
+    if (mesh.vertices(v, 0) == 0.5) {
+      copy[v] = original_count + static_cast<Index>(seam_vertices.size());
+      seam_vertices.push_back(v);
+      seam.emplace_back(copy[v], v);
+    }
+  }
+  mesh.vertices.conservativeResize(original_count + static_cast<Index>(seam_vertices.size()), 3);
+  for (size_t k = 0; k < seam_vertices.size(); ++k) {
+    mesh.vertices.row(original_count + static_cast<Index>(k)) =
+        mesh.vertices.row(seam_vertices[k]).eval();
+  }
+  for (Index f = 0; f < mesh.num_elements(); ++f) {
+    double centroid_x = 0.0;
+    for (int a = 0; a < 3; ++a) centroid_x += mesh.vertices(mesh.elements(f, a), 0) / 3.0;
+    if (centroid_x < 0.5) continue;
+    for (int a = 0; a < 3; ++a) {
+      const Index v = mesh.elements(f, a);
+      if (copy[v] != kNoVertex) mesh.elements(f, a) = copy[v];
+    }
+  }
+  return mesh;
+}
+
 Mesh Icosphere(int subdivisions) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <utility>
+#include <vector>
+
 #include "framework/mesh.h"
 #include "framework/optimizer.h"
 
@@ -38,6 +41,9 @@ struct BentTube {
   Mesh mesh;
   DeformationProblem problem;
 };
+/// Grid(n, n) (n odd) cut along x = 0.5 into two halves that share positions but no vertex index,
+/// an unwelded seam as in the shared teapot. `seam` receives the (copy, original) vertex pairs.
+Mesh SeamedGrid(int n, std::vector<std::pair<Index, Index>>& seam);
 
 /// Two meshes side by side in one (vertex indices of `b` shifted).
 Mesh Concatenate(const Mesh& a, const Mesh& b);
