@@ -7,26 +7,13 @@
 
 #include <numeric>
 
+#include "framework/disjoint_sets.h"
 #include "framework/error.h"
 
 namespace harap {
 
 namespace {
 
-// Union–find with path halving, for the connected components of A's graph.
-struct DisjointSets {
-  explicit DisjointSets(Index n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  Index Find(Index x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void Unite(Index a, Index b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the lowest index
-  }
-  std::vector<Index> parent;
-};
 
 }  // namespace
 
@@ -42,7 +29,7 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
   report_.constrained_vertices = static_cast<Index>(constrained.size());
 
   // Components over non-zero off-diagonal couplings; vertices with an empty row are isolated.
-  DisjointSets sets(n);
+  DisjointSets<Index> sets(n);  // connected components of A's graph
   std::vector<unsigned char> coupled(n, 0);
   for (Index col = 0; col < n; ++col) {
     for (SparseMatrix::InnerIterator it(a, col); it; ++it) {

@@ -10,26 +10,13 @@
 #include <numeric>
 #include <utility>
 
+#include "framework/disjoint_sets.h"
 #include "framework/error.h"
 
 namespace harap {
 
 namespace {
 
-// Union–find with path halving; the root of a set is its lowest member.
-struct DisjointSets {
-  explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  size_t Find(size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void Unite(size_t a, size_t b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-  std::vector<size_t> parent;
-};
 
 void Add(MeshFinding& finding, std::vector<Index> example) {
   if (finding.examples.size() < MeshCheckReport::kMaxExamples) {
@@ -178,7 +165,7 @@ void CheckSides(const Mesh& mesh, MeshCheckReport& report) {
   const std::vector<Side> sides = CollectSides(mesh);
   // Corners (3·triangle + corner) of one vertex are joined when their triangles share an edge at
   // the vertex; a vertex whose corners end up in more than one set has more than one fan.
-  DisjointSets fans(triangles ? 3 * static_cast<size_t>(mesh.num_elements()) : 0);
+  DisjointSets<size_t> fans(triangles ? 3 * static_cast<size_t>(mesh.num_elements()) : 0);
   for (size_t begin = 0; begin < sides.size();) {
     size_t end = begin + 1;
     while (end < sides.size() && sides[end].vertices == sides[begin].vertices) ++end;
@@ -240,7 +227,7 @@ void CheckSides(const Mesh& mesh, MeshCheckReport& report) {
 void CheckComponents(const Mesh& mesh, const std::vector<bool>& referenced,
                      const std::vector<Index>& constrained, MeshCheckReport& report) {
   const Index n = mesh.num_vertices();
-  DisjointSets sets(n);
+  DisjointSets<size_t> sets(n);
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     for (int a = 1; a < mesh.simplex_size(); ++a) sets.Unite(mesh.elements(e, 0), mesh.elements(e, a));
   }

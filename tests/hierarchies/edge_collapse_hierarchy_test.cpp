@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "experiments/builtins.h"
+#include "framework/disjoint_sets.h"
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
 #include "hierarchies/octree_hierarchy.h"
@@ -44,21 +45,6 @@ std::vector<Index> LevelCounts(const MeshHierarchy& h) {
   return counts;
 }
 
-/// Smallest-root union–find for the small checks below.
-struct Classes {
-  std::vector<Index> parent;
-  explicit Classes(Index n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  Index Find(Index i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void Join(Index a, Index b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
-
 /// Σ over the vertices of (number of fans − 1), a fan being a set of triangles at the vertex
 /// connected through edges at the vertex (components of the vertex's link): the copies edge
 /// collapse makes of non-manifold vertices.
@@ -77,8 +63,8 @@ Index ExtraFans(const Mesh& mesh) {
       local.emplace(b, Index(local.size()));
       local.emplace(c, Index(local.size()));
     }
-    Classes classes(Index(local.size()));
-    for (const auto& [b, c] : edges) classes.Join(local[b], local[c]);
+    DisjointSets<Index> classes(Index(local.size()));
+    for (const auto& [b, c] : edges) classes.Unite(local[b], local[c]);
     Index components = 0;
     for (Index i = 0; i < Index(local.size()); ++i) components += classes.Find(i) == i;
     extra += std::max<Index>(components - 1, 0);
@@ -182,11 +168,11 @@ void CheckLevels(const Mesh& input, const MeshHierarchy& h) {
 
     // Clusters are connected through fine edges inside the cluster (on level 0, a cluster
     // holding a copy may be connected only through the copy, which is not a level-0 vertex).
-    Classes classes(n);
+    DisjointSets<Index> classes(n);
     for (Index t = 0; t < fine.num_elements(); ++t) {
       for (int k = 0; k < 3; ++k) {
         const Index a = fine.elements(t, k), b = fine.elements(t, (k + 1) % 3);
-        if (level.coarse_vertex[a] == level.coarse_vertex[b]) classes.Join(a, b);
+        if (level.coarse_vertex[a] == level.coarse_vertex[b]) classes.Unite(a, b);
       }
     }
     std::map<Index, std::set<Index>> pieces;  // coarse vertex → components of its cluster
