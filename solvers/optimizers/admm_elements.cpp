@@ -65,11 +65,13 @@ void ForElements(Index count, const Context& context, Body&& body) {
 }
 
 /// Σ of body(t) over elements, and the number of elements for which it flagged an inversion.
+/// A deterministic reduction: the same input and thread count give bit-identical energies.
+/// Deterministic reduction: the same input and thread count give bit-identical energies.
 template <class Body>
 std::pair<double, Index> SumOverElements(Index count, const Context& context, Body&& body) {
   using Sum = std::pair<double, Index>;
   return context.Run([&] {
-    return tbb::parallel_reduce(
+    return tbb::parallel_deterministic_reduce(
         tbb::blocked_range<Index>(0, count, 256), Sum{0.0, 0},
         [&](const tbb::blocked_range<Index>& range, Sum sum) {
           for (Index t = range.begin(); t < range.end(); ++t) {
