@@ -66,7 +66,6 @@ void ForElements(Index count, const Context& context, Body&& body) {
 
 /// Σ of body(t) over elements, and the number of elements for which it flagged an inversion.
 /// A deterministic reduction: the same input and thread count give bit-identical energies.
-/// Deterministic reduction: the same input and thread count give bit-identical energies.
 template <class Body>
 std::pair<double, Index> SumOverElements(Index count, const Context& context, Body&& body) {
   using Sum = std::pair<double, Index>;
