@@ -45,7 +45,8 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
 
   Context context = Context::WithThreads(options.threads);
   context.iteration_callback = [&](const IterationSummary& summary) {
-    outcome.trace.push_back({summary.seconds, summary.energy, summary.level});
+    outcome.trace.push_back(
+        {summary.seconds, summary.energy, summary.level, summary.inverted_elements});
     return options.progress ? options.progress(summary) : CallbackAction::kContinue;
   };
   std::map<int, SparseMatrix> level_matrices;
@@ -185,6 +186,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                   {"max_relative_residual", solves.max_relative_residual},
                   {"last_relative_residual", solves.last_relative_residual},
                   {"solve_seconds", solves.seconds}};
+    if (level.inverted_elements >= 0) entry["inverted_elements"] = level.inverted_elements;
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       auto describe = [](const ExtremeEigenvalues& e) {
         return json{{"lambda_min", e.smallest},
@@ -210,7 +212,9 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   if (include_trace) {
     json trace = json::array();
     for (const auto& entry : outcome.trace) {
-      trace.push_back({{"t", entry.t}, {"energy", entry.energy}, {"level", entry.level}});
+      json point = {{"t", entry.t}, {"energy", entry.energy}, {"level", entry.level}};
+      if (entry.inverted_elements >= 0) point["inverted_elements"] = entry.inverted_elements;
+      trace.push_back(point);
     }
     report["trace"] = trace;
   }

@@ -20,6 +20,7 @@ struct TraceEntry {
   double t = 0.0;  ///< Seconds since the start of the run (precomputation included).
   double energy = 0.0;
   int level = 0;
+  Index inverted_elements = -1;  ///< ADMM optimizers: det F < 0 after the iteration (−1: not counted)
 };
 
 struct DeformOptions {

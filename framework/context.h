@@ -30,6 +30,9 @@ struct IterationSummary {
   double energy = 0.0;        ///< E(U, R) after the iteration's global step, R fitted to U.
   double displacement = 0.0;  ///< Squared max-norm of the global step's displacement / diag².
   double seconds = 0.0;       ///< Wall time since the start of the run (precomputation included).
+  /// ADMM optimizers (admm_pd, wrapd): elements with det F_t < 0 after the iteration; −1 where
+  /// the optimizer does not count them (local/global).
+  Index inverted_elements = -1;
 };
 
 /// Return kStop to end the optimization after this iteration (the result reports it).

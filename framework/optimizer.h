@@ -63,6 +63,8 @@ struct LevelResult {
   bool converged = false;
   Index unknowns = 0;              ///< Rows of the level's reduced global-step matrix A_ff.
   SolveStatistics linear_solves;   ///< The level's global-step solves.
+  /// ADMM optimizers: elements with det F_t < 0 at the end of the level; −1 where not counted.
+  Index inverted_elements = -1;
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""classic and hierarchical ARAP on the WRAPD scenes, next to WRAPD's figures (issue 8).
+"""classic, hierarchical and ADMM optimizers on the WRAPD scenes, next to WRAPD's figures (issues 8, 9).
 
 Runs `harap deform SCENE --energy elements --report R.json --trace` for every scenario in the
 tetrahedral scenario folder and each optimizer, then prints a Markdown table per scene and
@@ -11,6 +11,13 @@ WRAPD's energy, iterations and wall time
 (precompute + time to stall) from BASELINE.md, with the ratio ours / WRAPD. The issue's goal:
 hierarchical reaches WRAPD's final energy in at most a third of WRAPD's wall time on at least
 eight of the eleven scenes.
+
+An optimizer may carry settings as NAME:KEY=VALUE,KEY=VALUE (passed as
+`--set optimizer.KEY=VALUE`), e.g. `hierarchical:inner=wrapd` or `wrapd:tolerance=1e-9`. After the
+time-to-energy table comes a phase table per scene and optimizer (issue 9, the paper's inset
+table of Section 7): P (hierarchy + precompute + constrain), S (solve), final E_wrapd, finest
+iterations, seconds per finest-level iteration next to WRAPD's, and inverted elements at the end
+(ADMM optimizers).
 
 Trace energies are in harap's units; the per-element energy is exactly twice WRAPD's
 (docs/energies.md), and the script takes the factor from each report (energy_wrapd / energy)
@@ -65,14 +72,28 @@ def parse_baseline(path: Path) -> dict:
     return rows
 
 
-def run(harap: Path, scenario: Path, optimizer: str, report: Path, args) -> None:
+def split_spec(spec: str):
+    """'hierarchical:inner=wrapd,tolerance=1e-9' → ('hierarchical', ['inner=wrapd', ...])."""
+    name, _, settings = spec.partition(":")
+    return name, [item for item in settings.split(",") if item]
+
+
+def report_name(scene: str, spec: str) -> str:
+    return f"{scene}-{re.sub(r'[^A-Za-z0-9_.-]+', '_', spec)}.json"
+
+
+def run(harap: Path, scenario: Path, spec: str, report: Path, args) -> None:
+    optimizer, settings = split_spec(spec)
     command = [str(harap), "deform", str(scenario), "--optimizer", optimizer, "--energy",
                "elements", "--report", str(report), "--trace", "-q", "--threads",
                str(args.threads)]
-    if args.tolerance is not None:
+    keys = {item.partition("=")[0] for item in settings}
+    if args.tolerance is not None and "tolerance" not in keys:
         command += ["--tolerance", repr(args.tolerance)]
-    if args.max_iterations is not None:
+    if args.max_iterations is not None and "max_iterations" not in keys:
         command += ["--max-iterations", str(args.max_iterations)]
+    for item in settings:
+        command += ["--set", f"optimizer.{item}"]
     command += args.extra
     print("$", " ".join(command), file=sys.stderr, flush=True)
     subprocess.run(command, check=True)
@@ -136,6 +157,11 @@ def main() -> int:
         "|---|---|--:|--:|--:|--:|" + "--:|" * len(args.slack) + "--:|--:|--:|--:|",
     ]
     goal = {optimizer: 0 for optimizer in args.optimizers}
+    phases = [
+        "| scene | optimizer | P s | S s | E_wrapd | WRAPD E | rel. diff | iterations (finest / all) "
+        "| S / finest iteration s | WRAPD s / iter | inverted at end |",
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|",
+    ]
     for scenario in scenarios:
         scene = scenario.stem
         if scene not in baseline:
@@ -144,7 +170,7 @@ def main() -> int:
         wrapd = baseline[scene]
         wrapd_seconds = wrapd["precompute"] + wrapd["stall"]
         for optimizer in args.optimizers:
-            report_path = args.out / f"{scene}-{optimizer}.json"
+            report_path = args.out / report_name(scene, optimizer)
             if not (args.reuse and report_path.exists()):
                 run(args.harap, scenario, optimizer, report_path, args)
             report = json.loads(report_path.read_text(encoding="utf-8"))
@@ -164,7 +190,23 @@ def main() -> int:
                 f"{seconds(reached)} | {within} | "
                 f"{report['timings']['total']:.2f} | {wrapd_seconds:.2f} | "
                 f"{f'{ratio:.3f}' if ratio is not None else '–'} | {report['iterations']} |")
+            timings = report["timings"]
+            precompute = timings["hierarchy"] + timings["precompute"] + timings["constrain"]
+            finest = report["levels"][0] if report["levels"] else {}
+            # Single-level runs only: a hierarchical level's seconds include its setup.
+            per_iteration = (timings["solve"] / report["iterations"]
+                             if len(report["levels"]) == 1 and report["iterations"] else None)
+            inverted = finest.get("inverted_elements", "–")
+            phases.append(
+                f"| {scene} | {optimizer} | {precompute:.2f} | {timings['solve']:.2f} | "
+                f"{report['energy_wrapd']:.6e} | {wrapd['e_final']:.6e} | "
+                f"{(report['energy_wrapd'] - wrapd['e_final']) / wrapd['e_final']:+.1e} | "
+                f"{report['iterations']} / {report['total_iterations']} | "
+                f"{f'{per_iteration:.3f}' if per_iteration is not None else '–'} | "
+                f"{wrapd['stall'] / wrapd['iterations']:.3f} | {inverted} |")
     print("\n".join(lines))
+    print()
+    print("\n".join(phases))
     print()
     for optimizer, count in goal.items():
         print(f"{optimizer}: WRAPD's final energy within a third of WRAPD's wall time on "

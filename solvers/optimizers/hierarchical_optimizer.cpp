@@ -17,7 +17,20 @@ namespace harap {
 
 HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(const ConfigNode& node) {
   Options options;
-  options.iterations = ReadLocalGlobalOptions(node);
+  const std::string inner =
+      node.GetChoice("inner", "local_global", {"local_global", "admm_pd", "wrapd"},
+                     "optimizer on each level: local_global (the paper's), admm_pd or wrapd "
+                     "(energy `elements`; tolerance and max_iterations then take their meaning)");
+  if (inner == "local_global") {
+    options.iterations = ReadLocalGlobalOptions(node);
+  } else {
+    options.inner = inner == "admm_pd" ? Inner::kAdmmPd : Inner::kWrapd;
+    options.admm = ReadAdmmOptions(node, options.inner == Inner::kAdmmPd
+                                             ? AdmmVariant::kProjectiveDynamics
+                                             : AdmmVariant::kRotationAware);
+    options.iterations.tolerance = options.admm.tolerance;
+    options.iterations.max_iterations = options.admm.max_iterations;
+  }
   options.coarse_tolerance =
       node.Get("coarse_tolerance", options.coarse_tolerance,
                "convergence tolerance on the coarse levels (negative: same as tolerance)");
@@ -83,6 +96,9 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   std::vector<LevelConstraints> constraints(hierarchy.num_levels());
   std::vector<LevelConstraints> internal_constraints(hierarchy.num_levels());  // solver numbering
   std::vector<std::unique_ptr<LocalGlobalSolver>> solvers(hierarchy.num_levels());
+  // With an ADMM inner optimizer these take the solvers' place.
+  const bool admm = options_.inner != Inner::kLocalGlobal;
+  std::vector<std::unique_ptr<AdmmLevelSolver>> admm_solvers(hierarchy.num_levels());
   std::vector<double> level_seconds(hierarchy.num_levels(), 0.0);
   std::vector<double> precompute_seconds(hierarchy.num_levels(), 0.0);
   std::vector<double> constrain_seconds(hierarchy.num_levels(), 0.0);
@@ -96,11 +112,19 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     } else {
       constraints[l] = MapConstraints(hierarchy, l, problem.constraints);
     }
-    // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-    solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices,
-                                                     serialized_factory, l, context,
-                                                     l > 0 ? &mesh : nullptr);
-    if (l > 0 && solvers[l]->energy().rotation_site() == RotationSite::kElement) {
+    if (admm) {
+      // Only the input level needs the factory's energy (final energy and measures); coarse
+      // levels drop their inverted elements (Section 7: "filtering all inverted elements").
+      admm_solvers[l] = std::make_unique<AdmmLevelSolver>(
+          level_mesh, constraints[l].vertices, serialized_factory, l, context,
+          /*with_energy=*/l == 0, /*drop_misoriented=*/l > 0, options_.admm.beta);
+    } else {
+      // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
+      solvers[l] = std::make_unique<LocalGlobalSolver>(level_mesh, constraints[l].vertices,
+                                                       serialized_factory, l, context,
+                                                       l > 0 ? &mesh : nullptr);
+    }
+    if (l > 0 && (admm || solvers[l]->energy().rotation_site() == RotationSite::kElement)) {
       auto& incident = constraints[l].incident_elements;
       incident.assign(constraints[l].vertices.size(), {});
       std::vector<Index> slot(level_mesh.num_vertices(), kNoVertex);
@@ -115,7 +139,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
         }
       }
     }
-    if (l > 0) {
+    if (l > 0 && !admm) {
       const MeshOrdering& ordering = solvers[l]->ordering();
       LevelConstraints& internal = internal_constraints[l];
       internal = constraints[l];
@@ -124,8 +148,10 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
         for (Index& e : elements) e = ordering.new_element[e];
       }
     }
-    precompute_seconds[l] = solvers[l]->precompute_seconds();
-    constrain_seconds[l] = solvers[l]->constrain_seconds();
+    precompute_seconds[l] = admm ? admm_solvers[l]->precompute_seconds()
+                                 : solvers[l]->precompute_seconds();
+    constrain_seconds[l] = admm ? admm_solvers[l]->constrain_seconds()
+                                : solvers[l]->constrain_seconds();
     level_seconds[l] = level_clock.Seconds();
   };
   // With overlap_setup, one thread sets the levels up from coarse to fine while the caller's
@@ -150,7 +176,9 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     waiting_seconds += wait_clock.Seconds();
   };
   wait_for(coarsest);
-  const RotationSite site = solvers[coarsest]->energy().rotation_site();
+  const RotationSite site =
+      admm ? RotationSite::kElement : solvers[coarsest]->energy().rotation_site();
+  std::vector<std::string> admm_notes;
   LevelState state;
   bool start_with_global_step = false;
   std::vector<std::string> frozen_target_notes;
@@ -168,6 +196,56 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
 
     wait_for(l);
     Stopwatch level_clock;
+    if (admm) {
+      AdmmLevelSolver& admm_solver = *admm_solvers[l];
+      AdmmOptions admm_options = options_.admm;
+      if (l > 0 && options_.coarse_tolerance >= 0.0) {
+        admm_options.tolerance = options_.coarse_tolerance;
+      }
+      if (l == 0 && options_.coarse_approximation && coarsest > 0) admm_options.max_iterations = 1;
+      if (l == 0) {
+        for (size_t k = 0; k < problem.constraints.indices.size(); ++k) {
+          state.positions.row(problem.constraints.indices[k]) =
+              problem.constraints.targets.row(k);
+        }
+      } else {
+        const bool have_rotations =
+            static_cast<Index>(state.rotations.size()) == level.mesh.num_elements();
+        PlaceConstrainedVertices(constraints[l], site,
+                                 have_rotations ? &state.rotations : nullptr, state.positions);
+      }
+      const auto run = setup.Isolated(
+          context, [&] { return admm_solver.Run(state.positions, admm_options, context); });
+      // The up-sampler's input: rotations of the elements' polar decompositions.
+      if (l > 0) state.rotations = admm_solver.ElementRotations(state.positions, context);
+      level_seconds[l] += level_clock.Seconds();
+      if (admm_solver.dropped_elements() > 0) {
+        admm_notes.push_back(fmt::format("level {}: {} inverted elements dropped", l,
+                                         admm_solver.dropped_elements()));
+      }
+      result.total_iterations += run.iterations;
+      LevelResult level_result{l, level.mesh.num_vertices(), level.mesh.num_elements(),
+                               run.iterations, run.energy, level_seconds[l], run.converged,
+                               admm_solver.system().num_free(), run.linear_solves};
+      level_result.inverted_elements = run.inverted_elements;
+      result.levels.push_back(level_result);
+      if (l == 0) {
+        result.iterations = run.iterations;
+        result.converged = run.converged;
+      }
+      if (run.stopped_by_callback) {
+        result.stopped_by_callback = true;
+        for (int f = l - 1; f >= 0; --f) {
+          LevelState coarse_state = std::move(state);
+          state = LevelState();
+          upsampler->Upsample(hierarchy.levels[f], hierarchy.levels[f + 1], site, coarse_state,
+                              state, context);
+        }
+        break;
+      }
+      if (l > 0) admm_solvers[l].reset();
+      continue;
+    }
     LocalGlobalSolver& solver = *solvers[l];
     LocalGlobalOptions options = options_.iterations;
     if (l > 0 && options_.coarse_tolerance >= 0.0) options.tolerance = options_.coarse_tolerance;
@@ -233,10 +311,19 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   result.timings.solve = solve_clock.Seconds() - waiting_seconds;
   std::reverse(result.levels.begin(), result.levels.end());
 
-  result.measures = solvers[0]->AuxiliaryMeasures(state, context);
+  if (admm) {
+    result.energy = admm_solvers[0]->FinalEnergy(state.positions, result.measures, context);
+    if (!result.levels.empty() && result.levels.front().level == 0) {
+      result.levels.front().energy = result.energy;
+    }
+    result.constraints = admm_solvers[0]->system().report();
+  } else {
+    result.measures = solvers[0]->AuxiliaryMeasures(state, context);
+    result.constraints = solvers[0]->system().report();
+  }
   result.positions = std::move(state.positions);
-  result.constraints = solvers[0]->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);
+  result.notes.insert(result.notes.end(), admm_notes.begin(), admm_notes.end());
   result.notes.insert(result.notes.end(), frozen_target_notes.begin(), frozen_target_notes.end());
   result.timings.total = total.Seconds();
   return result;

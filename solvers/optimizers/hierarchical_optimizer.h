@@ -6,6 +6,7 @@
 
 #include "framework/config.h"
 #include "framework/optimizer.h"
+#include "solvers/optimizers/admm_elements.h"
 #include "solvers/optimizers/local_global_solver.h"
 
 namespace harap {
@@ -21,13 +22,27 @@ namespace harap {
 /// coarse vertex's current rotation (identity at first). With `update_constraints` the targets
 /// follow R_c before every global step (Fig. 16, right).
 ///
+/// `inner` chooses the optimizer run on each level: `local_global` (the paper's), or the ADMM
+/// optimizers `admm_pd` / `wrapd` (the paper's "hierarchical WRAPD", Section 7), energy
+/// `elements` only. ADMM keeps no rotations, so a finished level hands the up-sampler the
+/// rotations of the polar decompositions of its elements (averaged to vertices by Eq. 11 and
+/// applied to the positions by Eq. 6 inside the up-sampler), the finer level starts from the
+/// up-sampled positions, and coarse levels drop their inverted (misoriented) elements.
+/// With an ADMM inner optimizer `tolerance`, `max_iterations` and `coarse_tolerance` take the
+/// ADMM meanings (relative energy change, see admm_elements.h); update_constraints and
+/// freeze_targets_after do not apply (targets are placed once per level).
+///
 /// The coarsest level starts like classic ARAP: coarse rest positions with constrained vertices at
 /// their targets, then a local step. With a one-level hierarchy the result equals `classic`.
 class HierarchicalOptimizer final : public Optimizer {
  public:
   static constexpr std::string_view kName = "hierarchical";
 
+  enum class Inner { kLocalGlobal, kAdmmPd, kWrapd };
+
   struct Options {
+    Inner inner = Inner::kLocalGlobal;  ///< the optimizer on each level
+    AdmmOptions admm;                   ///< with inner = admm_pd or wrapd (admm_elements.h)
     LocalGlobalOptions iterations;  ///< tolerance (1e-6) and max_iterations (1000), per level
     /// Tolerance on the coarse levels (l > 0); negative: the same as `tolerance`.
     double coarse_tolerance = -1.0;

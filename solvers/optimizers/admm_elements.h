@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <Eigen/Dense>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "framework/config.h"
+#include "framework/constrained_system.h"
+#include "framework/optimizer.h"
+
+namespace harap {
+
+/// Which ADMM splitting of the per-element ARAP energy a level runs.
+enum class AdmmVariant {
+  /// `admm_pd` [Overby et al. 2017, "ADMM ⊇ Projective Dynamics"]: Z_t ≈ F_t(x), rotation-unaware.
+  kProjectiveDynamics,
+  /// `wrapd` [Brown & Narain 2021], ARAP mode: Z_t ≈ S_t(x) = sym(polar(F_t(x))), rotation-aware.
+  kRotationAware,
+};
+
+/// Options of the ADMM iteration on one level (shared by `admm_pd`, `wrapd` and `hierarchical`
+/// with `inner = admm_pd | wrapd`).
+struct AdmmOptions {
+  AdmmVariant variant = AdmmVariant::kProjectiveDynamics;
+  /// ADMM weights w_t² = beta · vol_t in WRAPD's units (energy ½ vol_t ‖F_t − R_t‖²). With 1 the
+  /// proximal step is the midpoint of the rotation and the current value (WRAPD's ARAP default).
+  double beta = 1.0;
+  /// Stop when |E_{k−1} − E_k| / E_{k−1} stays below this for `patience` consecutive iterations
+  /// and no element is inverted (WRAPD's test; E the per-element ARAP energy of the iterate).
+  /// 0 runs to max_iterations.
+  double tolerance = 1e-8;
+  int patience = 3;
+  int max_iterations = 1000;
+  /// wrapd: L-BFGS iterations per global step and the number of (s, y) pairs kept.
+  int lbfgs_iterations = 10;
+  int lbfgs_history = 6;
+};
+
+/// Reads the ADMM options from an optimizer's config table (the L-BFGS keys for wrapd only).
+AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant);
+
+/// The ADMM machinery of one mesh level for the per-element ARAP energy (energy `elements`,
+/// E = Σ_t vol_t ‖F_t − R_t‖²_F on tetrahedra or planar triangles): per-element
+/// deformation-gradient operators F_t = Σ_a x_a g_{t,a}ᵀ (g the gradients of the barycentric
+/// coordinates at rest), weights, the prefactored weighted Laplacian A₀ = Σ_t w_t² D_tᵀ D_t on the
+/// free vertices (the factory's LinearSolver, constrained vertices eliminated by
+/// ConstrainedSystem), the ADMM iteration itself and inverted-element counting.
+///
+/// Construction is the P phase (operators, weights, A₀) and the C phase (elimination and
+/// factorization). Degenerate rest elements get weight 0, exactly as in `elements`. With
+/// `drop_misoriented` (coarse hierarchy levels, whose clustered elements can be turned inside out
+/// relative to the input mesh) elements whose signed rest volume has the opposite sign of the
+/// majority are dropped too: the paper's "filtering all inverted elements from the levels of the
+/// hierarchy ... extending the definition of degenerated elements to inverted elements".
+///
+/// On level 0 (`with_energy`) the factory's energy is precomputed as well; its A must be the
+/// level's unweighted Laplacian Σ_t vol_t D_tᵀ D_t (so it is the `elements` energy), else
+/// ConfigError. The final energy and its auxiliary measures (energy_wrapd) come from it, so the
+/// report uses one energy definition for every optimizer.
+class AdmmLevelSolver {
+ public:
+  AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& constrained,
+                  const ComponentFactory& factory, int level, const Context& context,
+                  bool with_energy, bool drop_misoriented, double beta);
+
+  struct RunResult {
+    int iterations = 0;
+    double energy = 0.0;  ///< Σ_t vol_t ‖F_t − R_t‖² of the final positions (`elements` units).
+    bool converged = false;
+    bool stopped_by_callback = false;
+    Index inverted_elements = 0;  ///< det F_t < 0 at the end.
+    SolveStatistics linear_solves;
+  };
+
+  /// Runs ADMM from `u` (#V×3; constrained rows already at their targets) and leaves the final
+  /// positions in it. Reports every iteration through context.iteration_callback.
+  RunResult Run(Positions& u, const AdmmOptions& options, const Context& context);
+
+  /// Per-element rotations R_t = polar(F_t(u)) (identity for elements of weight 0); the input of
+  /// the element-rotation up-sampling (Eq. 11 averages them to vertices).
+  Rotations ElementRotations(const Positions& u, const Context& context) const;
+
+  /// Energy of `u` by the factory's energy (rotations fitted), and its auxiliary measures.
+  /// Requires with_energy.
+  double FinalEnergy(const Positions& u, std::map<std::string, double>& measures,
+                     const Context& context) const;
+
+  /// Σ_t vol_t ‖F_t − R_t‖² of `u` (weight-0 elements left out) and the inverted-element count.
+  double Evaluate(const Positions& u, Index& inverted, const Context& context) const;
+
+  const ConstrainedSystem& system() const { return *system_; }
+  Index dropped_elements() const { return dropped_; }
+  double precompute_seconds() const { return precompute_seconds_; }
+  double constrain_seconds() const { return constrain_seconds_; }
+
+ private:
+  /// F_t(u) for every element into f_.
+  void DeformationGradients(const Positions& u, const Context& context);
+  /// out.row(v) = Σ_{(t, a): corner a of t is v} w_t² (m_t g_{t,a})ᵀ: the normal-equation
+  /// right-hand side of Σ_t ½ w_t² ‖F_t(x) − m_t‖² for targets m_t, and the gradient of the wrapd
+  /// global objective for m_t = its ∂/∂F_t.
+  void Gather(const std::vector<Eigen::Matrix3d>& m, Positions& out, const Context& context) const;
+  /// One linear solve A₀ x_f = rhs_f (reduced), result in x_f.
+  void SolveA0(const Eigen::MatrixXd& rhs_f, Eigen::MatrixXd& x_f, SolveStatistics& statistics,
+               const Context& context);
+  /// wrapd's global objective Σ_t ½ w_t² ‖S_t(u) − p_t‖² and, into gradient_f (#free×3), its
+  /// gradient with respect to the free positions. Fills f_ (and svd caches).
+  double WrapdObjective(const Positions& u, const std::vector<Eigen::Matrix3d>& p,
+                        Eigen::MatrixXd& gradient_f, const Context& context);
+  /// A few L-BFGS iterations on WrapdObjective from u, A₀ as the initial Hessian.
+  void WrapdGlobalStep(Positions& u, const AdmmOptions& options, SolveStatistics& statistics,
+                       const Context& context);
+
+  int level_;
+  bool planar_;
+  int simplex_size_;
+  Elements elements_;
+  std::vector<Eigen::Matrix<double, 4, 3>> gradients_;  ///< rows: ∇φ_a at rest (unused rows 0)
+  std::vector<double> volume_;         ///< rest volume (area); 0 for degenerate/dropped
+  std::vector<double> weight_;         ///< w_t² = beta · vol_t (WRAPD's units)
+  std::vector<Index> incidence_start_;  ///< CSR: vertex → (element, corner) pairs
+  std::vector<std::pair<Index, int>> incidence_;
+  Index dropped_ = 0;
+  std::unique_ptr<Energy> energy_;
+  std::unique_ptr<ConstrainedSystem> system_;
+  std::unique_ptr<LinearSolver> solver_;
+  double precompute_seconds_ = 0.0;
+  double constrain_seconds_ = 0.0;
+  // Per-iteration buffers, allocated once.
+  std::vector<Eigen::Matrix3d> f_, z_, dual_, target_, goal_;  ///< goal_ = Z − U
+  Positions rhs_;
+  Eigen::MatrixXd reduced_rhs_, reduced_x_;
+  // wrapd's L-BFGS state.
+  std::vector<Eigen::MatrixXd> lbfgs_s_, lbfgs_y_;
+  std::vector<double> lbfgs_rho_, lbfgs_alpha_;
+  Eigen::MatrixXd gradient_f_, trial_gradient_f_, direction_f_, x_f_, trial_x_f_;
+  Positions trial_u_;
+};
+
+/// The flat optimizers `admm_pd` and `wrapd`: one AdmmLevelSolver on the input mesh.
+OptimizeResult OptimizeWithAdmm(const DeformationProblem& problem, const ComponentFactory& factory,
+                                const Context& context, const AdmmOptions& options);
+
+}  // namespace harap
