@@ -202,17 +202,19 @@ int Deform(const DeformArguments& args) {
   progress.Finish();
 
   current_stage = "writing the results";
+  // The report first: it is the smallest and records the whole run, so a mesh file that cannot be
+  // written loses nothing else.
+  if (!args.report.empty()) {
+    std::ofstream file(args.report);
+    file << DeformReportJson(scenario, outcome, args.trace) << "\n";
+    if (!file) throw InputError(fmt::format("{}: cannot write the report", args.report));
+  }
   if (!args.out.empty()) WritePly(args.out, outcome.result.positions, scenario.mesh.elements);
   if (!args.out_rest.empty()) WritePly(args.out_rest, scenario.mesh.vertices, scenario.mesh.elements);
   if (!args.out_handles.empty()) {
     std::ofstream file(args.out_handles);
     file << HandlesJson(scenario) << "\n";
     if (!file) throw InputError(fmt::format("{}: cannot write the handles", args.out_handles));
-  }
-  if (!args.report.empty()) {
-    std::ofstream file(args.report);
-    file << DeformReportJson(scenario, outcome, args.trace) << "\n";
-    if (!file) throw InputError(fmt::format("{}: cannot write the report", args.report));
   }
   if (!args.quiet) PrintSummary(scenario, outcome);
   return 0;

@@ -35,6 +35,8 @@ Mesh ParseMesh(std::string_view data, const std::filesystem::path& name);
 
 /// Writes binary little-endian PLY with double-precision coordinates (`property double x`) and
 /// int triangle indices, in the given vertex order, so results can be compared exactly.
+/// Tetrahedra (4 columns) are written as their boundary triangles, oriented outwards; every
+/// vertex is still written, so the file lines up with the input vertex by vertex.
 void WritePly(const std::filesystem::path& file, const Positions& vertices,
               const Elements& elements);
 

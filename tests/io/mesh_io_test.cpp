@@ -3,6 +3,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <Eigen/Geometry>
+
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -14,6 +16,7 @@
 #include "framework/error.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
+#include "tests/support/test_meshes.h"
 
 namespace harap {
 namespace {
@@ -165,6 +168,27 @@ TEST_CASE("ReadMesh decompresses .xz in memory", "[io]") {
   CHECK(compressed.elements == plain.elements);
   CHECK(ReadFileMaybeXz(dir.path() / "tet.obj.xz") == kTetrahedronObj);
   CHECK(ReadFileMaybeXz(dir.path() / "tet.obj") == kTetrahedronObj);
+}
+
+TEST_CASE("WritePly writes a tetrahedral mesh as its outward boundary triangles", "[io]") {
+  ScratchDir dir;
+  const int n = 4;
+  const Mesh box = testing::TetBox(n, n, n);
+  const auto file = dir.path() / "box.ply";
+  WritePly(file, box.vertices, box.elements);
+  const Mesh surface = ReadMesh(file);
+  // Every vertex (interior ones too, unreferenced), and two triangles per boundary grid square.
+  REQUIRE(surface.num_vertices() == box.num_vertices());
+  REQUIRE(surface.num_elements() == 6 * 2 * (n - 1) * (n - 1));
+  // Outward orientation: the enclosed volume by the divergence theorem is the unit cube's, +1.
+  double volume = 0.0;
+  for (Index f = 0; f < surface.num_elements(); ++f) {
+    const Eigen::Vector3d a = surface.vertices.row(surface.elements(f, 0));
+    const Eigen::Vector3d b = surface.vertices.row(surface.elements(f, 1));
+    const Eigen::Vector3d c = surface.vertices.row(surface.elements(f, 2));
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  CHECK(volume == Approx(1.0));
 }
 
 TEST_CASE("WritePly then ReadMesh round-trips doubles bit-exactly", "[io]") {
