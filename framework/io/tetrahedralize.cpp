@@ -332,9 +332,16 @@ TetGenRun RunTetGen(const CompactSurface& surface, const std::string& switches,
   run.outcome = TetGenRun::Outcome::kSuccess;
   run.points.resize(static_cast<size_t>(header.num_points) * 3);
   run.indices.resize(static_cast<size_t>(header.num_indices));
-  std::memcpy(run.points.data(), data.data() + sizeof(header), run.points.size() * sizeof(double));
-  std::memcpy(run.indices.data(), data.data() + sizeof(header) + run.points.size() * sizeof(double),
-              run.indices.size() * sizeof(int));
+  // memcpy needs valid pointers even for 0 bytes, and an empty vector's data() may be null.
+  if (!run.points.empty()) {
+    std::memcpy(run.points.data(), data.data() + sizeof(header),
+                run.points.size() * sizeof(double));
+  }
+  if (!run.indices.empty()) {
+    std::memcpy(run.indices.data(),
+                data.data() + sizeof(header) + run.points.size() * sizeof(double),
+                run.indices.size() * sizeof(int));
+  }
   return run;
 }
 
