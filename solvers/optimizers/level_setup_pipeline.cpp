@@ -93,15 +93,15 @@ LevelSetupPipeline::LevelSetupPipeline(std::vector<int> levels, std::function<vo
   state_->arena = context.arena;
   context.arena->execute([&] {
     state->group.run([state, order] {
-    std::unique_lock lock(state->mutex);
-    if (state->cancelled) return;
-    state->background_running = true;
-    for (int level : order) {
-      if (state->cancelled) break;
-      state->TryRun(level, lock);
-    }
-    state->background_running = false;
-    state->changed.notify_all();
+      std::unique_lock lock(state->mutex);
+      if (state->cancelled) return;
+      state->background_running = true;
+      for (int level : order) {
+        if (state->cancelled) break;
+        state->TryRun(level, lock);
+      }
+      state->background_running = false;
+      state->changed.notify_all();
     });
   });
 }

@@ -5,7 +5,6 @@
 
 #include <Eigen/Geometry>
 
-#include "energies/element_arap_energy.h"
 #include "framework/error.h"
 #include "solvers/optimizers/local_global_solver.h"
 #include "tests/support/test_factory.h"
@@ -88,20 +87,13 @@ void CheckConstraintsExact(const DeformationProblem& problem, const Positions& u
   }
 }
 
-double FittedEnergy(const Mesh& mesh, const Positions& u) {
-  ElementArapEnergy energy({});
-  energy.Precompute(mesh, Context());
-  Rotations rotations(energy.num_rotations(), Rotation::Identity());
-  return energy.FitRotations(u, rotations, Context());
-}
-
 }  // namespace
 
 TEST_CASE("admm_pd and wrapd reach the local/global minimum of the per-element energy",
           "[optimizers][admm]") {
   const TwistedBox box(Jittered(SmallBox(), 5, 0.15, 7));
   const double minimum = ClassicMinimum(box.problem);
-  const double start = FittedEnergy(box.mesh, InitialPositions(box.problem));
+  const double start = FittedElementEnergy(box.mesh, InitialPositions(box.problem));
   REQUIRE(minimum < 0.5 * start);
   for (const char* optimizer : {"admm_pd", "wrapd"}) {
     SECTION(optimizer) {
@@ -118,7 +110,7 @@ TEST_CASE("admm_pd and wrapd reach the local/global minimum of the per-element e
       CHECK(r.energy <= minimum * (1.0 + 1e-6));
       CHECK(r.converged);
       // The reported energy is the `elements` energy of the returned positions.
-      CHECK(r.energy == Approx(FittedEnergy(box.mesh, r.positions)).epsilon(1e-12));
+      CHECK(r.energy == Approx(FittedElementEnergy(box.mesh, r.positions)).epsilon(1e-12));
       REQUIRE(r.measures.count("energy_wrapd") == 1);
       CHECK(r.measures.at("energy_wrapd") == Approx(r.energy / 2).epsilon(1e-9));
       CheckConstraintsExact(box.problem, r.positions);

@@ -5,7 +5,6 @@
 
 #include <Eigen/Geometry>
 
-#include "energies/element_arap_energy.h"
 #include "framework/error.h"
 #include "solvers/optimizers/local_global_solver.h"
 #include "tests/support/test_factory.h"
@@ -58,13 +57,6 @@ std::string RunConfig(const std::string& optimizer, const std::string& solver,
       optimizer, extra, solver);
 }
 
-double FittedEnergy(const Mesh& mesh, const Positions& u) {
-  ElementArapEnergy energy({});
-  energy.Precompute(mesh, Context());
-  Rotations rotations(energy.num_rotations(), Rotation::Identity());
-  return energy.FitRotations(u, rotations, Context());
-}
-
 }  // namespace
 
 TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every solver",
@@ -74,7 +66,7 @@ TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every so
   for (bool planar : {false, true}) {
     const BentBar bar = planar ? PlanarStrip() : TetBar();
     const Positions start = InitialPositions(bar.problem);
-    const double start_energy = FittedEnergy(bar.mesh, start);
+    const double start_energy = FittedElementEnergy(bar.mesh, start);
     std::map<std::string, OptimizeResult> reference;  // per optimizer, first solver
     for (const char* optimizer : {"classic", "hierarchical"}) {
       for (const auto& solver : solvers) {
@@ -101,7 +93,7 @@ TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every so
             if (trace[i].level != trace[i - 1].level) continue;
             CHECK(trace[i].energy <= trace[i - 1].energy * (1.0 + 1e-12));
           }
-          CHECK(result.energy == Approx(FittedEnergy(bar.mesh, result.positions)).epsilon(1e-10));
+          CHECK(result.energy == Approx(FittedElementEnergy(bar.mesh, result.positions)).epsilon(1e-10));
           REQUIRE(result.measures.count("energy_wrapd") == 1);
           CHECK(result.measures.at("energy_wrapd") == Approx(0.5 * result.energy).epsilon(1e-9));
           for (size_t k = 0; k < bar.problem.constraints.indices.size(); ++k) {
@@ -155,7 +147,7 @@ TEST_CASE("hierarchical stopped on a coarse level reports the energy of its fine
   const OptimizeResult result = setup.MakeOptimizer()->Optimize(bar.problem, setup.factory, context);
   CHECK(result.stopped_by_callback);
   REQUIRE(result.positions.rows() == bar.mesh.num_vertices());
-  CHECK(result.energy == Approx(FittedEnergy(bar.mesh, result.positions)).epsilon(1e-10));
+  CHECK(result.energy == Approx(FittedElementEnergy(bar.mesh, result.positions)).epsilon(1e-10));
   CHECK(result.measures.at("energy_wrapd") == Approx(0.5 * result.energy).epsilon(1e-9));
 }
 

@@ -24,6 +24,16 @@ struct TestSetup {
   RegistryComponentFactory factory;
 };
 
+/// The per-element (`elements`) energy of positions `u` with rotations fitted to them: what an
+/// optimizer should report for `u`.
+inline double FittedElementEnergy(const Mesh& mesh, const Positions& u) {
+  const std::unique_ptr<Energy> energy =
+      MakeBuiltinRegistries().energies.Create("elements", ConfigNode());
+  energy->Precompute(mesh, Context());
+  Rotations rotations(energy->num_rotations(), Rotation::Identity());
+  return energy->FitRotations(u, rotations, Context());
+}
+
 /// Energies reported through the iteration callback, per hierarchy level.
 using EnergyTrace = std::map<int, std::vector<double>>;
 
