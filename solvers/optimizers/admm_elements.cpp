@@ -13,6 +13,7 @@
 
 #include "framework/error.h"
 #include "framework/rotation.h"
+#include "framework/small_svd.h"
 #include "solvers/optimizers/classic_optimizer.h"
 #include "solvers/optimizers/local_global_solver.h"
 
@@ -25,33 +26,15 @@ namespace {
 // the Laplacians (AdmmLevelSolver's constructor) catches any disagreement.
 constexpr double kDegenerateRatio = 1e-12;
 
-/// F = U diag(σ) Vᵀ with U, V rotations; σ₃ < 0 for an inverted element ("signed" SVD, so that
-/// R = U Vᵀ is the closest rotation and S = V diag(σ) Vᵀ the symmetric stretch, F = R S).
-struct SignedSvd {
-  Eigen::Matrix3d u, v;
-  Eigen::Vector3d sigma;
-};
-
-SignedSvd ComputeSignedSvd(const Eigen::Matrix3d& f) {
-  const Eigen::JacobiSVD<Eigen::Matrix3d, Eigen::NoQRPreconditioner> svd(
-      f, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  SignedSvd result{svd.matrixU(), svd.matrixV(), svd.singularValues()};
-  if (result.u.determinant() < 0.0) {
-    result.u.col(2) = -result.u.col(2);
-    result.sigma(2) = -result.sigma(2);
-  }
-  if (result.v.determinant() < 0.0) {
-    result.v.col(2) = -result.v.col(2);
-    result.sigma(2) = -result.sigma(2);
-  }
-  return result;
-}
-
 /// The closest rotation to f (planar meshes: a rotation of the plane).
 Eigen::Matrix3d ClosestElementRotation(const Eigen::Matrix3d& f, bool planar) {
   if (planar) return NearestPlanarRotation(f);
-  const SignedSvd svd = ComputeSignedSvd(f);
-  return svd.u * svd.v.transpose();
+  return ClosestRotationFromSvd(f, ComputeSignedRightSvd(f));
+}
+
+/// The symmetric stretch S = V Σ Vᵀ of F = R S.
+Eigen::Matrix3d Stretch(const SignedRightSvd& svd) {
+  return svd.v * svd.sigma.asDiagonal() * svd.v.transpose();
 }
 
 template <class Body>
@@ -245,6 +228,7 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
   dual_ = f_;
   target_ = f_;
   goal_ = f_;
+  if (!planar_) svd_.assign(num_elements, SignedRightSvd{Eigen::Matrix3d::Identity(), {1.0, 1.0, 1.0}});
   rhs_.resize(num_vertices, 3);
   reduced_rhs_.resize(system_->num_free(), 3);
   reduced_x_.resize(system_->num_free(), 3);
@@ -300,9 +284,15 @@ double AdmmLevelSolver::Evaluate(const Positions& u, Index& inverted,
         for (int a = 0; a < simplex_size_; ++a) {
           f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
         }
-        if (planar_) f(2, 2) = 1.0;
-        is_inverted = f.determinant() < 0.0;
-        return volume_[t] * (f - ClosestElementRotation(f, planar_)).squaredNorm();
+        if (planar_) {
+          f(2, 2) = 1.0;
+          is_inverted = f.determinant() < 0.0;
+          return volume_[t] * (f - NearestPlanarRotation(f)).squaredNorm();
+        }
+        // ‖F − R‖² = Σ (σ_i − 1)² with σ₃ signed (small_svd.h).
+        const SignedRightSvd svd = ComputeSignedRightSvd(f);
+        is_inverted = svd.sigma(2) < 0.0;
+        return volume_[t] * (svd.sigma.array() - 1.0).square().sum();
       });
   inverted = count;
   return energy;
@@ -331,25 +321,37 @@ double AdmmLevelSolver::FinalEnergy(const Positions& u, std::map<std::string, do
   return energy;
 }
 
-double AdmmLevelSolver::WrapdObjective(const Positions& u, const std::vector<Eigen::Matrix3d>& p,
-                                       Eigen::MatrixXd& gradient_f, const Context& context) {
-  // For F = U Σ Vᵀ (signed), S = V Σ Vᵀ and P symmetric: ½‖S − P‖² = ½‖F‖² − ⟨S, P⟩ + ½‖P‖², and
-  // d⟨S, P⟩ = ⟨U Σ K Vᵀ, dF⟩ with Q = Vᵀ P V, K_ij = (Q_ij + Q_ji) / (σ_i + σ_j) (from
-  // differentiating S² = FᵀF in the V basis). So ∂/∂F = F − U Σ K Vᵀ; target_ holds it · 1.
-  const auto [objective, inverted] =
+void AdmmLevelSolver::Decompose(const Positions& u, const Context& context) {
+  const auto [energy, inverted] =
       SumOverElements(static_cast<Index>(f_.size()), context, [&](Index t, bool& is_inverted) {
-        if (weight_[t] == 0.0) {
-          target_[t].setZero();
-          return 0.0;
-        }
+        if (weight_[t] == 0.0) return 0.0;
         Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
         for (int a = 0; a < simplex_size_; ++a) {
           f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
         }
         f_[t] = f;
-        const SignedSvd svd = ComputeSignedSvd(f);
-        is_inverted = svd.sigma(2) < 0.0;
-        const Eigen::Matrix3d s = svd.v * svd.sigma.asDiagonal() * svd.v.transpose();
+        svd_[t] = ComputeSignedRightSvd(f, svd_[t].v);  // warm: the last decomposition
+        is_inverted = svd_[t].sigma(2) < 0.0;
+        return volume_[t] * (svd_[t].sigma.array() - 1.0).square().sum();  // ‖F − R‖², small_svd.h
+      });
+  decomposed_energy_ = energy;
+  decomposed_inverted_ = inverted;
+}
+
+double AdmmLevelSolver::WrapdObjective(const std::vector<Eigen::Matrix3d>& p,
+                                       Eigen::MatrixXd& gradient_f, const Context& context) {
+  // For F = U Σ Vᵀ (signed), S = V Σ Vᵀ and P symmetric: ½‖S − P‖² = ½‖F‖² − ⟨S, P⟩ + ½‖P‖², and
+  // d⟨S, P⟩ = ⟨U Σ K Vᵀ, dF⟩ with Q = Vᵀ P V, K_ij = (Q_ij + Q_ji) / (σ_i + σ_j) (from
+  // differentiating S² = FᵀF in the V basis). So ∂/∂F = F − U Σ K Vᵀ = F (I − V K Vᵀ), as
+  // U Σ = F V; target_ holds it.
+  const auto [objective, unused] =
+      SumOverElements(static_cast<Index>(f_.size()), context, [&](Index t, bool&) {
+        if (weight_[t] == 0.0) {
+          target_[t].setZero();
+          return 0.0;
+        }
+        const Eigen::Matrix3d& f = f_[t];
+        const SignedRightSvd& svd = svd_[t];
         const Eigen::Matrix3d q = svd.v.transpose() * p[t] * svd.v;
         Eigen::Matrix3d k;
         for (int i = 0; i < 3; ++i) {
@@ -362,10 +364,9 @@ double AdmmLevelSolver::WrapdObjective(const Positions& u, const std::vector<Eig
             k(i, j) = (q(i, j) + q(j, i)) / denominator;
           }
         }
-        target_[t] = f - svd.u * svd.sigma.asDiagonal() * k * svd.v.transpose();
-        return 0.5 * weight_[t] * (s - p[t]).squaredNorm();
+        target_[t] = f - (f * svd.v) * k * svd.v.transpose();
+        return 0.5 * weight_[t] * (Stretch(svd) - p[t]).squaredNorm();
       });
-  (void)inverted;
   Gather(target_, rhs_, context);
   // Only the free rows: the gradient with respect to the unknowns.
   const auto& free = system_->free_vertices();
@@ -396,8 +397,11 @@ void AdmmLevelSolver::WrapdGlobalStep(Positions& u, const AdmmOptions& options,
               [&](Index t) { goal_[t] = z_[t] - dual_[t]; });
   const std::vector<Eigen::Matrix3d>& p = goal_;
 
+  // The decomposition (f_, svd_) is that of u on entry (Run keeps it so) and of the last
+  // evaluated point during the line search.
   system_->GatherFree(u, x_f_);
-  double objective = WrapdObjective(u, p, gradient_f_, context);
+  double objective = WrapdObjective(p, gradient_f_, context);
+  bool decomposition_is_current = true;
   int stored = 0, newest = -1;
   for (int iteration = 0; iteration < options.lbfgs_iterations; ++iteration) {
     // Two-loop recursion: direction = −H g.
@@ -423,7 +427,9 @@ void AdmmLevelSolver::WrapdGlobalStep(Positions& u, const AdmmOptions& options,
     for (int halving = 0; halving < 30; ++halving) {
       trial_x_f_ = x_f_ + step * direction_f_;
       system_->ScatterFree(trial_x_f_, trial_u_);
-      trial = WrapdObjective(trial_u_, p, trial_gradient_f_, context);
+      Decompose(trial_u_, context);
+      decomposition_is_current = false;
+      trial = WrapdObjective(p, trial_gradient_f_, context);
       if (std::isfinite(trial) && trial <= objective + 1e-4 * step * slope) {
         accepted = true;
         break;
@@ -442,12 +448,14 @@ void AdmmLevelSolver::WrapdGlobalStep(Positions& u, const AdmmOptions& options,
       newest = (newest - 1 + history) % history;  // drop a pair without positive curvature
     }
     const double decrease = objective - trial;
+    decomposition_is_current = true;
     x_f_ = trial_x_f_;
     gradient_f_ = trial_gradient_f_;
     objective = trial;
     if (decrease <= 1e-14 * std::max(objective, 1e-300)) break;
   }
   system_->ScatterFree(x_f_, u);
+  if (!decomposition_is_current) Decompose(u, context);  // a rejected trial was decomposed last
 }
 
 AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions& options,
@@ -469,14 +477,16 @@ AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions&
     return result;
   }
   // Initialization [Overby et al. 2017; Brown & Narain 2021]: Z = D x (or its stretch S), U = 0.
-  DeformationGradients(u, context);
+  // wrapd keeps f_ and svd_ of the current positions from one iteration to the next (Decompose,
+  // then the global step's line search), so each iteration decomposes every element only once per
+  // line-search evaluation.
+  if (rotation_aware) {
+    Decompose(u, context);
+  } else {
+    DeformationGradients(u, context);
+  }
   ForElements(num_elements, context, [&](Index t) {
-    if (rotation_aware) {
-      const SignedSvd svd = ComputeSignedSvd(f_[t]);
-      z_[t] = svd.v * svd.sigma.asDiagonal() * svd.v.transpose();
-    } else {
-      z_[t] = f_[t];
-    }
+    z_[t] = rotation_aware ? Stretch(svd_[t]) : f_[t];
     dual_[t].setZero();
   });
   int quiet_iterations = 0;
@@ -490,11 +500,7 @@ AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions&
     //            since ‖F − R‖ = ‖S − I‖ for F = R S.
     ForElements(num_elements, context, [&](Index t) {
       if (weight_[t] == 0.0) return;
-      Eigen::Matrix3d current = f_[t];
-      if (rotation_aware) {
-        const SignedSvd svd = ComputeSignedSvd(f_[t]);
-        current = svd.v * svd.sigma.asDiagonal() * svd.v.transpose();
-      }
+      const Eigen::Matrix3d current = rotation_aware ? Stretch(svd_[t]) : f_[t];
       const Eigen::Matrix3d y = current + dual_[t];
       const Eigen::Matrix3d anchor =
           rotation_aware ? Eigen::Matrix3d::Identity() : ClosestElementRotation(y, planar_);
@@ -513,9 +519,14 @@ AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions&
       SolveA0(reduced_rhs_, reduced_x_, result.linear_solves, context);
       system_->ScatterFree(reduced_x_, u);
     }
-    DeformationGradients(u, context);
     const double previous = energy;
-    energy = Evaluate(u, result.inverted_elements, context);
+    if (rotation_aware) {
+      energy = decomposed_energy_;  // the decomposition is of the new u (WrapdGlobalStep)
+      result.inverted_elements = decomposed_inverted_;
+    } else {
+      DeformationGradients(u, context);
+      energy = Evaluate(u, result.inverted_elements, context);
+    }
     ++result.iterations;
     if (!std::isfinite(energy)) {
       throw NumericalError(fmt::format("the energy became {} on level {} at ADMM iteration {}",

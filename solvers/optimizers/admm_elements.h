@@ -10,6 +10,7 @@
 #include "framework/config.h"
 #include "framework/constrained_system.h"
 #include "framework/optimizer.h"
+#include "framework/small_svd.h"
 
 namespace harap {
 
@@ -106,10 +107,13 @@ class AdmmLevelSolver {
   /// One linear solve A₀ x_f = rhs_f (reduced), result in x_f.
   void SolveA0(const Eigen::MatrixXd& rhs_f, Eigen::MatrixXd& x_f, SolveStatistics& statistics,
                const Context& context);
+  /// wrapd: F_t(u) and its signed right SVD for every element into f_ and svd_, with the ARAP
+  /// energy Σ_t vol_t ‖F_t − R_t‖² and the inverted-element count of u as by-products.
+  void Decompose(const Positions& u, const Context& context);
   /// wrapd's global objective Σ_t ½ w_t² ‖S_t(u) − p_t‖² and, into gradient_f (#free×3), its
-  /// gradient with respect to the free positions. Fills f_ (and svd caches).
-  double WrapdObjective(const Positions& u, const std::vector<Eigen::Matrix3d>& p,
-                        Eigen::MatrixXd& gradient_f, const Context& context);
+  /// gradient with respect to the free positions, at the u last passed to Decompose.
+  double WrapdObjective(const std::vector<Eigen::Matrix3d>& p, Eigen::MatrixXd& gradient_f,
+                        const Context& context);
   /// A few L-BFGS iterations on WrapdObjective from u, A₀ as the initial Hessian.
   void WrapdGlobalStep(Positions& u, const AdmmOptions& options, SolveStatistics& statistics,
                        const Context& context);
@@ -131,6 +135,9 @@ class AdmmLevelSolver {
   double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
   std::vector<Eigen::Matrix3d> f_, z_, dual_, target_, goal_;  ///< goal_ = Z − U
+  std::vector<SignedRightSvd> svd_;  ///< wrapd: of f_ (not for planar meshes)
+  double decomposed_energy_ = 0.0;   ///< wrapd: energy and inverted count of the decomposed u
+  Index decomposed_inverted_ = 0;
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_, reduced_x_;
   // wrapd's L-BFGS state.
