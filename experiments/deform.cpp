@@ -187,6 +187,9 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                   {"last_relative_residual", solves.last_relative_residual},
                   {"solve_seconds", solves.seconds}};
     if (level.inverted_elements >= 0) entry["inverted_elements"] = level.inverted_elements;
+    if (level.accelerated_iterations >= 0) {
+      entry["accelerated_iterations"] = level.accelerated_iterations;
+    }
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       auto describe = [](const ExtremeEigenvalues& e) {
         return json{{"lambda_min", e.smallest},

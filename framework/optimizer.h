@@ -65,6 +65,9 @@ struct LevelResult {
   SolveStatistics linear_solves;   ///< The level's global-step solves.
   /// ADMM optimizers: elements with det F_t < 0 at the end of the level; −1 where not counted.
   Index inverted_elements = -1;
+  /// Local/global with Anderson acceleration: iterations whose accelerated iterate was kept;
+  /// −1 without acceleration.
+  int accelerated_iterations = -1;
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -64,6 +64,9 @@ OptimizeResult ClassicOptimizer::Optimize(const DeformationProblem& problem,
                                       run.iterations, run.energy, result.timings.total,
                                       run.converged, level.system().num_free(),
                                       run.linear_solves});
+  if (options_.iterations.anderson > 0) {
+    result.levels.back().accelerated_iterations = run.accelerated_iterations;
+  }
   return result;
 }
 

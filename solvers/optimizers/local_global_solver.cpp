@@ -106,8 +106,17 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   int energy_increases = 0;
   bool targets_frozen = false;
   double previous_energy = energy;
+  // Whether `energy` is E(u, R(u)) of the current positions (not so before a first global step
+  // from handed-down rotations): the safeguard of Anderson acceleration compares against it.
+  bool energy_is_fitted = !start_with_global_step;
+  if (options.anderson > 0) {
+    anderson_.Reset(system_->num_free(), options.anderson);
+    current_free_.resize(system_->num_free(), 3);
+    accelerated_free_.resize(system_->num_free(), 3);
+  }
   while (result.iterations < options.max_iterations) {
-    if (update_fixed && !targets_frozen) {
+    const bool targets_move = update_fixed && !targets_frozen;
+    if (targets_move) {
       update_fixed(state.rotations, state.positions);
       system_->SetFixedPositions(state.positions);
     }
@@ -122,10 +131,41 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                        summary.message));
     }
+    // The map G(u) = global(local(u)) may be accelerated only while it stays the same map
+    // (fixed targets) and the pairs (u, G(u)) are true ones (rotations fitted to u).
+    const bool accelerate = options.anderson > 0 && !targets_move && energy_is_fitted;
+    bool extrapolated = false;
+    if (accelerate) {
+      system_->GatherFree(state.positions, current_free_);
+      extrapolated = anderson_.Step(current_free_, reduced_x_, accelerated_free_, context);
+    } else if (options.anderson > 0) {
+      anderson_.Clear();
+    }
+    // The displacement of the plain step, G(u) − u: the convergence test is the same with and
+    // without acceleration.
     const double displacement = system_->ScatterFree(reduced_x_, state.positions) /
                                 squared_diagonal;
+    bool accepted = false;
+    if (extrapolated) {
+      // Safeguard [Peng et al. 2018]: keep the accelerated iterate only if its energy (rotations
+      // fitted) is below the current iterate's; the plain step never raises it, so the iteration
+      // stays monotone.
+      trial_positions_ = state.positions;
+      system_->ScatterFree(accelerated_free_, trial_positions_);
+      trial_rotations_ = state.rotations;  // the warm start of the rotation fit
+      const double trial_energy = energy_->FitRotations(trial_positions_, trial_rotations_,
+                                                        context);
+      if (trial_energy < energy) {
+        std::swap(state.positions, trial_positions_);
+        std::swap(state.rotations, trial_rotations_);
+        energy = trial_energy;
+        accepted = true;
+        ++result.accelerated_iterations;
+      }
+    }
     // Local step: best-fit rotations for the new positions; also yields E(U, R).
-    energy = energy_->FitRotations(state.positions, state.rotations, context);
+    if (!accepted) energy = energy_->FitRotations(state.positions, state.rotations, context);
+    energy_is_fitted = true;
     ++result.iterations;
     if (!std::isfinite(energy)) {
       throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
@@ -207,6 +247,12 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
                                "squared bounding-box diagonal falls below this (0: never)");
   options.max_iterations = node.Get("max_iterations", options.max_iterations,
                                     "cap on local/global iterations (per level)");
+  options.anderson = node.Get("anderson", options.anderson,
+                              "Anderson acceleration with this many previous iterates, "
+                              "safeguarded by the energy (0: off; 5 is typical)");
+  if (options.anderson < 0) {
+    node.Fail("anderson", fmt::format("must be >= 0, got {}", options.anderson));
+  }
   if (options.tolerance < 0.0) {
     node.Fail("tolerance", fmt::format("must be >= 0, got {}", options.tolerance));
   }

@@ -9,6 +9,7 @@
 #include "framework/config.h"
 #include "framework/constrained_system.h"
 #include "framework/optimizer.h"
+#include "solvers/optimizers/anderson_acceleration.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
@@ -25,6 +26,10 @@ struct LocalGlobalOptions {
   /// transient while they swing into place, but some levels cycle forever (tetrahedral meshes,
   /// edge-collapse hierarchies, smooth_arap). Set by hierarchical's `freeze_targets_after`.
   int freeze_targets_after = 3;
+  /// Anderson acceleration of the local/global map with this many previous iterates (0: off),
+  /// safeguarded by the energy so the iteration stays monotone [Peng et al. 2018]; see
+  /// anderson_acceleration.h. Inactive while moving constraint targets change the map.
+  int anderson = 0;
 };
 
 /// Local/global ARAP iterations on one mesh level with a fixed constraint set: owns the level's
@@ -53,6 +58,9 @@ class LocalGlobalSolver {
     /// With moving constraint targets: the iteration after which they were frozen because the
     /// energy kept rising (0: never).
     int targets_frozen_at = 0;
+    /// With `anderson`: iterations whose accelerated iterate was kept (lower energy than the plain
+    /// local/global step's starting point).
+    int accelerated_iterations = 0;
     SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
@@ -102,6 +110,12 @@ class LocalGlobalSolver {
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;
+  // Anderson acceleration (options.anderson > 0): the current free positions, the accelerated
+  // ones, and the trial state they are evaluated in.
+  AndersonAcceleration anderson_;
+  Eigen::MatrixXd current_free_, accelerated_free_;
+  Positions trial_positions_;
+  Rotations trial_rotations_;
 };
 
 /// Initial positions of a problem: `problem.initial` or the rest positions, with constrained

@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: MIT
+#include "solvers/optimizers/anderson_acceleration.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include "framework/error.h"
+
+namespace harap {
+namespace {
+
+/// ⟨a, b⟩ of two #rows×3 matrices, in parallel with a deterministic reduction (same result for
+/// the same thread count).
+double Dot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const Context& context) {
+  const Eigen::Index size = a.size();
+  return context.Run([&] {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<Eigen::Index>(0, size, 16384), 0.0,
+        [&](const tbb::blocked_range<Eigen::Index>& range, double sum) {
+          const Eigen::Index begin = range.begin(), length = range.end() - range.begin();
+          return sum + Eigen::Map<const Eigen::VectorXd>(a.data() + begin, length)
+                           .dot(Eigen::Map<const Eigen::VectorXd>(b.data() + begin, length));
+        },
+        [](double x, double y) { return x + y; });
+  });
+}
+
+}  // namespace
+
+void AndersonAcceleration::Reset(Eigen::Index rows, int history) {
+  HARAP_CHECK(history >= 1, "Anderson acceleration needs a history of at least 1, got {}",
+              history);
+  history_ = history;
+  residual_.resize(rows, 3);
+  previous_residual_.resize(rows, 3);
+  previous_image_.resize(rows, 3);
+  residual_differences_.assign(history, Eigen::MatrixXd(rows, 3));
+  image_differences_.assign(history, Eigen::MatrixXd(rows, 3));
+  gram_.setZero(history, history);
+  rhs_.resize(history);
+  theta_.resize(history);
+  small_matrix_.resize(history, history);
+  Clear();
+}
+
+void AndersonAcceleration::Clear() {
+  stored_ = 0;
+  newest_ = -1;
+  has_previous_ = false;
+}
+
+bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd& g,
+                                Eigen::MatrixXd& next, const Context& context) {
+  residual_ = g - x;
+  if (has_previous_) {
+    newest_ = (newest_ + 1) % history_;
+    stored_ = std::min(stored_ + 1, history_);
+    residual_differences_[newest_] = residual_ - previous_residual_;
+    image_differences_[newest_] = g - previous_image_;
+    for (int j = 0; j < stored_; ++j) {
+      const int slot = (newest_ - j + history_) % history_;
+      gram_(newest_, slot) = gram_(slot, newest_) =
+          Dot(residual_differences_[newest_], residual_differences_[slot], context);
+    }
+  }
+  previous_residual_ = residual_;
+  previous_image_ = g;
+  has_previous_ = true;
+  next = g;
+  if (stored_ == 0) return false;
+  // Normal equations of the small least-squares problem in slot order 0..stored_−1 (newest
+  // first), with a relative Tikhonov term against nearly dependent differences (stagnation).
+  const auto block = small_matrix_.topLeftCorner(stored_, stored_);
+  double trace = 0.0;
+  for (int i = 0; i < stored_; ++i) {
+    const int slot_i = (newest_ - i + history_) % history_;
+    rhs_(i) = Dot(residual_differences_[slot_i], residual_, context);
+    for (int j = 0; j < stored_; ++j) {
+      small_matrix_(i, j) = gram_(slot_i, (newest_ - j + history_) % history_);
+    }
+    trace += small_matrix_(i, i);
+  }
+  if (!(trace > 0.0)) return false;  // no change between iterates: nothing to extrapolate
+  small_matrix_.diagonal().head(stored_).array() += 1e-10 * trace / stored_;
+  ldlt_.compute(block);  // reallocates only while the history fills up
+  theta_.head(stored_) = ldlt_.solve(rhs_.head(stored_));
+  if (!theta_.head(stored_).allFinite()) return false;
+  for (int i = 0; i < stored_; ++i) {
+    next -= theta_(i) * image_differences_[(newest_ - i + history_) % history_];
+  }
+  return true;
+}
+
+}  // namespace harap
