@@ -2,6 +2,7 @@
 #include "solvers/optimizers/anderson_acceleration.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include "framework/error.h"
@@ -24,6 +25,21 @@ double Dot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const Context& co
         [](double x, double y) { return x + y; });
   });
 }
+
+/// body(begin, length) over chunks of the flat coefficient range [0, size), in parallel: the
+/// element-wise updates of the iterates (memory-bound, a few MB each on large meshes).
+template <class Body>
+void ForChunks(Eigen::Index size, const Context& context, Body&& body) {
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, size, 16384),
+                      [&](const tbb::blocked_range<Eigen::Index>& range) {
+                        body(range.begin(), range.end() - range.begin());
+                      });
+  });
+}
+
+using Chunk = Eigen::Map<Eigen::VectorXd>;
+using ConstChunk = Eigen::Map<const Eigen::VectorXd>;
 
 }  // namespace
 
@@ -51,23 +67,40 @@ void AndersonAcceleration::Clear() {
 
 bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd& g,
                                 Eigen::MatrixXd& next, const Context& context) {
-  residual_ = g - x;
-  if (has_previous_) {
+  const Eigen::Index size = x.size();
+  // One pass: the residual f = g − x, the differences to the previous pair into the next ring
+  // slot, and the previous pair replaced by this one.
+  const bool record = has_previous_;
+  if (record) {
     newest_ = (newest_ + 1) % history_;
     stored_ = std::min(stored_ + 1, history_);
-    residual_differences_[newest_] = residual_ - previous_residual_;
-    image_differences_[newest_] = g - previous_image_;
+  }
+  Eigen::MatrixXd& residual_difference = residual_differences_[std::max(newest_, 0)];
+  Eigen::MatrixXd& image_difference = image_differences_[std::max(newest_, 0)];
+  ForChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
+    const ConstChunk gc(g.data() + begin, length), xc(x.data() + begin, length);
+    Chunk f(residual_.data() + begin, length), f_old(previous_residual_.data() + begin, length),
+        g_old(previous_image_.data() + begin, length);
+    f = gc - xc;
+    if (record) {
+      Chunk(residual_difference.data() + begin, length) = f - f_old;
+      Chunk(image_difference.data() + begin, length) = gc - g_old;
+    }
+    f_old = f;
+    g_old = gc;
+  });
+  has_previous_ = true;
+  if (record) {
     for (int j = 0; j < stored_; ++j) {
       const int slot = (newest_ - j + history_) % history_;
       gram_(newest_, slot) = gram_(slot, newest_) =
           Dot(residual_differences_[newest_], residual_differences_[slot], context);
     }
   }
-  previous_residual_ = residual_;
-  previous_image_ = g;
-  has_previous_ = true;
-  next = g;
-  if (stored_ == 0) return false;
+  if (stored_ == 0) {
+    next = g;
+    return false;
+  }
   // Normal equations of the small least-squares problem in slot order 0..stored_−1 (newest
   // first), with a relative Tikhonov term against nearly dependent differences (stagnation).
   const auto block = small_matrix_.topLeftCorner(stored_, stored_);
@@ -80,15 +113,25 @@ bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd&
     }
     trace += small_matrix_(i, i);
   }
-  if (!(trace > 0.0)) return false;  // no change between iterates: nothing to extrapolate
-  small_matrix_.diagonal().head(stored_).array() += 1e-10 * trace / stored_;
-  ldlt_.compute(block);  // reallocates only while the history fills up
-  theta_.head(stored_) = ldlt_.solve(rhs_.head(stored_));
-  if (!theta_.head(stored_).allFinite()) return false;
-  for (int i = 0; i < stored_; ++i) {
-    next -= theta_(i) * image_differences_[(newest_ - i + history_) % history_];
+  bool extrapolated = trace > 0.0;  // else no change between iterates: nothing to extrapolate
+  if (extrapolated) {
+    small_matrix_.diagonal().head(stored_).array() += 1e-10 * trace / stored_;
+    ldlt_.compute(block);  // reallocates only while the history fills up
+    theta_.head(stored_) = ldlt_.solve(rhs_.head(stored_));
+    extrapolated = theta_.head(stored_).allFinite();
   }
-  return true;
+  // next = g − Σ_i θ_i ΔG_i, in one pass.
+  ForChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
+    Chunk out(next.data() + begin, length);
+    out = ConstChunk(g.data() + begin, length);
+    if (!extrapolated) return;
+    for (int i = 0; i < stored_; ++i) {
+      out -= theta_(i) *
+             ConstChunk(image_differences_[(newest_ - i + history_) % history_].data() + begin,
+                        length);
+    }
+  });
+  return extrapolated;
 }
 
 }  // namespace harap

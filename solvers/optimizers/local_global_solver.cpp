@@ -150,14 +150,14 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       // Safeguard [Peng et al. 2018]: keep the accelerated iterate only if its energy (rotations
       // fitted) is below the current iterate's; the plain step never raises it, so the iteration
       // stays monotone.
+      // The rotations are fitted in place: if the extrapolation is rejected, the plain step's
+      // fit below starts from them, as good a warm start as the old ones (G(u) is near both).
       trial_positions_ = state.positions;
       system_->ScatterFree(accelerated_free_, trial_positions_);
-      trial_rotations_ = state.rotations;  // the warm start of the rotation fit
-      const double trial_energy = energy_->FitRotations(trial_positions_, trial_rotations_,
+      const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations,
                                                         context);
       if (trial_energy < energy) {
         std::swap(state.positions, trial_positions_);
-        std::swap(state.rotations, trial_rotations_);
         energy = trial_energy;
         accepted = true;
         ++result.accelerated_iterations;

@@ -111,11 +111,10 @@ class LocalGlobalSolver {
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;
   // Anderson acceleration (options.anderson > 0): the current free positions, the accelerated
-  // ones, and the trial state they are evaluated in.
+  // ones, and the positions they are evaluated at.
   AndersonAcceleration anderson_;
   Eigen::MatrixXd current_free_, accelerated_free_;
   Positions trial_positions_;
-  Rotations trial_rotations_;
 };
 
 /// Initial positions of a problem: `problem.initial` or the rest positions, with constrained
