@@ -234,14 +234,18 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
   reduced_x_.resize(system_->num_free(), 3);
 }
 
+Eigen::Matrix3d AdmmLevelSolver::DeformationGradient(const Positions& u, Index t) const {
+  Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
+  for (int a = 0; a < simplex_size_; ++a) {
+    f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
+  }
+  if (planar_) f(2, 2) = 1.0;  // the z direction stays rigid (rotations of the plane)
+  return f;
+}
+
 void AdmmLevelSolver::DeformationGradients(const Positions& u, const Context& context) {
   ForElements(static_cast<Index>(f_.size()), context, [&](Index t) {
-    Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
-    for (int a = 0; a < simplex_size_; ++a) {
-      f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
-    }
-    if (planar_) f(2, 2) = 1.0;  // the z direction stays rigid (rotations of the plane)
-    f_[t] = f;
+    f_[t] = DeformationGradient(u, t);
   });
 }
 
@@ -280,12 +284,8 @@ double AdmmLevelSolver::Evaluate(const Positions& u, Index& inverted,
   const auto [energy, count] =
       SumOverElements(static_cast<Index>(f_.size()), context, [&](Index t, bool& is_inverted) {
         if (volume_[t] == 0.0) return 0.0;
-        Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
-        for (int a = 0; a < simplex_size_; ++a) {
-          f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
-        }
+        const Eigen::Matrix3d f = DeformationGradient(u, t);
         if (planar_) {
-          f(2, 2) = 1.0;
           is_inverted = f.determinant() < 0.0;
           return volume_[t] * (f - NearestPlanarRotation(f)).squaredNorm();
         }
@@ -302,12 +302,7 @@ Rotations AdmmLevelSolver::ElementRotations(const Positions& u, const Context& c
   Rotations rotations(f_.size(), Rotation::Identity());
   ForElements(static_cast<Index>(f_.size()), context, [&](Index t) {
     if (volume_[t] == 0.0) return;
-    Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
-    for (int a = 0; a < simplex_size_; ++a) {
-      f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
-    }
-    if (planar_) f(2, 2) = 1.0;
-    rotations[t] = ClosestElementRotation(f, planar_);
+    rotations[t] = ClosestElementRotation(DeformationGradient(u, t), planar_);
   });
   return rotations;
 }
@@ -325,12 +320,8 @@ void AdmmLevelSolver::Decompose(const Positions& u, const Context& context) {
   const auto [energy, inverted] =
       SumOverElements(static_cast<Index>(f_.size()), context, [&](Index t, bool& is_inverted) {
         if (weight_[t] == 0.0) return 0.0;
-        Eigen::Matrix3d f = Eigen::Matrix3d::Zero();
-        for (int a = 0; a < simplex_size_; ++a) {
-          f.noalias() += u.row(elements_(t, a)).transpose() * gradients_[t].row(a);
-        }
-        f_[t] = f;
-        svd_[t] = ComputeSignedRightSvd(f, svd_[t].v);  // warm: the last decomposition
+        f_[t] = DeformationGradient(u, t);
+        svd_[t] = ComputeSignedRightSvd(f_[t], svd_[t].v);  // warm: the last decomposition
         is_inverted = svd_[t].sigma(2) < 0.0;
         return volume_[t] * (svd_[t].sigma.array() - 1.0).square().sum();  // ‖F − R‖², small_svd.h
       });

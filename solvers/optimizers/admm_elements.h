@@ -98,6 +98,8 @@ class AdmmLevelSolver {
   double constrain_seconds() const { return constrain_seconds_; }
 
  private:
+  /// F_t(u) = Σ_a u_a ∇φ_aᵀ of element t (planar meshes: z row and column of the identity).
+  Eigen::Matrix3d DeformationGradient(const Positions& u, Index t) const;
   /// F_t(u) for every element into f_.
   void DeformationGradients(const Positions& u, const Context& context);
   /// out.row(v) = Σ_{(t, a): corner a of t is v} w_t² (m_t g_{t,a})ᵀ: the normal-equation

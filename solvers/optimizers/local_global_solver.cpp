@@ -113,6 +113,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     anderson_.Reset(system_->num_free(), options.anderson);
     current_free_.resize(system_->num_free(), 3);
     accelerated_free_.resize(system_->num_free(), 3);
+    trial_positions_ = state.positions;
   }
   while (result.iterations < options.max_iterations) {
     const bool targets_move = update_fixed && !targets_frozen;
@@ -140,6 +141,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       extrapolated = anderson_.Step(current_free_, reduced_x_, accelerated_free_, context);
     } else if (options.anderson > 0) {
       anderson_.Clear();
+      // The fixed rows of the trial positions: they stay put while the acceleration runs (the
+      // targets no longer move), so only the free rows are written from here on.
+      trial_positions_ = state.positions;
     }
     // The displacement of the plain step, G(u) − u: the convergence test is the same with and
     // without acceleration.
@@ -152,7 +156,6 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       // stays monotone.
       // The rotations are fitted in place: if the extrapolation is rejected, the plain step's
       // fit below starts from them, as good a warm start as the old ones (G(u) is near both).
-      trial_positions_ = state.positions;
       system_->ScatterFree(accelerated_free_, trial_positions_);
       const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations,
                                                         context);
