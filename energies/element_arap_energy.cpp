@@ -85,7 +85,7 @@ std::unique_ptr<Energy> ElementArapEnergy::Create(const ConfigNode& node) {
   return std::make_unique<ElementArapEnergy>(Options::FromConfig(node));
 }
 
-void ElementArapEnergy::Precompute(const Mesh& rest, const Context& context) {
+void ElementArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context& context) {
   RequireSupportedMesh(rest);
   context.Run([&] {
     if (rest.kind() == ElementKind::kTetrahedron) {

@@ -43,7 +43,7 @@ class ElementArapEnergy final : public CoupledQuadraticEnergy {
       : CoupledQuadraticEnergy(RotationSite::kElement), options_(options) {}
   static std::unique_ptr<Energy> Create(const ConfigNode& node);
 
-  void Precompute(const Mesh& rest, const Context& context) override;
+  void PrecomputeCoupledForm(const Mesh& rest, const Context& context) override;
 
   /// {"energy_wrapd": Σ_t ½ |t| ‖F_t − R_t‖²_F}, WRAPD's formula evaluated from the deformation
   /// gradients: E(u, rotations) / 2 up to round-off, but a sum of squares, so it stays accurate

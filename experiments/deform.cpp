@@ -190,6 +190,10 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
     if (level.accelerated_iterations >= 0) {
       entry["accelerated_iterations"] = level.accelerated_iterations;
     }
+    if (level.newton_steps >= 0) {
+      entry["newton_steps"] = level.newton_steps;
+      entry["hessian_products"] = level.hessian_products;
+    }
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       auto describe = [](const ExtremeEigenvalues& e) {
         return json{{"lambda_min", e.smallest},

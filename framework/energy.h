@@ -4,8 +4,10 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "framework/context.h"
+#include "framework/error.h"
 #include "framework/mesh.h"
 #include "framework/types.h"
 
@@ -74,6 +76,39 @@ class Energy {
   /// E(u, rotations).
   virtual double Evaluate(const Positions& u, const Rotations& rotations,
                           const Context& context) const = 0;
+
+  /// Second-order information for Newton-type optimizers (optional: see
+  /// has_rotation_derivative()). With R(u) the rotations the local step fits to u, the energy of
+  /// the positions alone, E(u) = E(u, R(u)), has the gradient 2 (A u − B(R(u))) (R(u) minimizes,
+  /// so the rotations' own variation drops out) and, B being linear in R, the Hessian-vector
+  /// product
+  ///
+  ///     H v = 2 (A v − B(R'(u)[v])).
+  ///
+  /// These methods give R'(u)[v], the derivative of the fitted rotations in direction v.
+  /// Energies without it (or with an option that fits rotations to a part of the energy, so that
+  /// R(u) does not minimize E) return false.
+  virtual bool has_rotation_derivative() const { return false; }
+
+  /// With `rotations` fitted to `u` (the local step's result), stores in `curvature` (resized to
+  /// num_rotations()) what RotationDerivative needs at u, one 3×3 matrix per rotation site.
+  /// `project`: instead of the exact derivative, one whose Hessian H is positive semi-definite
+  /// (each rotation site's part of it projected), the model a Newton step minimizes; it equals
+  /// the exact one where the mesh is locally stretched, not compressed.
+  virtual void PrepareRotationDerivative(const Positions& /*u*/, const Rotations& /*rotations*/,
+                                         bool /*project*/,
+                                         std::vector<Eigen::Matrix3d>& /*curvature*/,
+                                         const Context& /*context*/) const {
+    throw InternalError("this energy has no rotation derivative (has_rotation_derivative())");
+  }
+
+  /// d_rotations[s] = R_s'(u)[v] (size num_rotations()), from PrepareRotationDerivative's
+  /// `curvature` and `rotations` at u. Directions v are #V×3 like positions.
+  virtual void RotationDerivative(const Positions& /*v*/, const Rotations& /*rotations*/,
+                                  const std::vector<Eigen::Matrix3d>& /*curvature*/,
+                                  Rotations& /*d_rotations*/, const Context& /*context*/) const {
+    throw InternalError("this energy has no rotation derivative (has_rotation_derivative())");
+  }
 
   /// Further named measures of the state (u, rotations), e.g. the energy in another package's
   /// units so results compare directly (`elements`: "energy_wrapd"). Optimizers call it once

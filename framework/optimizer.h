@@ -68,6 +68,10 @@ struct LevelResult {
   /// Local/global with Anderson acceleration: iterations whose accelerated iterate was kept;
   /// −1 without acceleration.
   int accelerated_iterations = -1;
+  /// Local/global with Newton steps (`optimizer.newton > 0`): iterations that took a Newton step,
+  /// and the Hessian-vector products (conjugate-gradient iterations) of all of them; −1 without.
+  int newton_steps = -1;
+  long long hessian_products = -1;
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -7,7 +7,7 @@
 
 namespace harap {
 
-void CotangentArapEnergy::Precompute(const Mesh& rest, const Context& context) {
+void CotangentArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context& context) {
   RequireTriangleMesh(rest, name_);
   context.Run([&] {
     const Elements& faces = rest.elements;

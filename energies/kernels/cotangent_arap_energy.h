@@ -15,7 +15,7 @@ namespace harap {
 /// the coupling coefficients and to the constant, and a hook for terms beyond per-face sums.
 class CotangentArapEnergy : public CoupledQuadraticEnergy {
  public:
-  void Precompute(const Mesh& rest, const Context& context) final;
+  void PrecomputeCoupledForm(const Mesh& rest, const Context& context) final;
 
   /// Triangles whose weights were zeroed as degenerate in the last Precompute().
   Index num_degenerate_triangles() const { return num_degenerate_; }

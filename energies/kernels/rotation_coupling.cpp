@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <Eigen/Eigenvalues>
+
 #include "energies/kernels/mesh_adjacency.h"
 #include "energies/kernels/polar_decomposition.h"
 #include "framework/error.h"
@@ -220,6 +222,140 @@ double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatri
   });
 }
 
+namespace {
+
+constexpr double kRelativeFloor = 1e-8;
+
+/// Σ_a g(λ_a) e_a e_aᵀ over the eigenpairs of the symmetric 3×3 `m`.
+template <class Function>
+Eigen::Matrix3d SpectralFunction(const Eigen::Matrix3d& m, Function&& g) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(m);
+  const double floor = kRelativeFloor * eigen.eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::Matrix3d result = Eigen::Matrix3d::Zero();
+  for (int a = 0; a < 3; ++a) {
+    const double value = g(eigen.eigenvalues()(a), floor);
+    if (value != 0.0) {
+      result.noalias() += value * eigen.eigenvectors().col(a) * eigen.eigenvectors().col(a).transpose();
+    }
+  }
+  return result;
+}
+
+/// The clamped twist curvature β̃ of a mode whose pair sum relative to rest is μ (see
+/// PrepareCoupledRotationDerivative): exact 1/μ when stretched (μ ≥ 1), 1 (the rest value, site
+/// Hessian singular in that mode) when compressed, 0 when inverted.
+double ClampedTwist(double mu) { return mu >= 1.0 ? 1.0 / mu : (mu > 0.0 ? 1.0 : 0.0); }
+
+}  // namespace
+
+std::vector<Eigen::Matrix3d> TwistMetrics(const RotationCoupling& coupling, const Positions& rest,
+                                          const Context& context) {
+  HARAP_CHECK(rest.rows() == coupling.num_vertices, "{} rest positions for {} vertices",
+              rest.rows(), coupling.num_vertices);
+  std::vector<Eigen::Matrix3d> metric(coupling.num_sites);
+  context.Run([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
+        [&](const tbb::blocked_range<Index>& range) {
+          for (Index s = range.begin(); s != range.end(); ++s) {
+            const Eigen::Matrix3d covariance = Covariance(coupling, rest, s);
+            metric[s].setZero();
+            if (coupling.planar) {
+              const double sum = covariance(0, 0) + covariance(1, 1);
+              const double scale = covariance.topLeftCorner<2, 2>().cwiseAbs().maxCoeff();
+              if (sum > kRelativeFloor * scale) metric[s](2, 2) = 1.0 / std::sqrt(sum);
+              continue;
+            }
+            const Eigen::Matrix3d symmetric = 0.5 * (covariance + covariance.transpose());
+            metric[s] = SpectralFunction(
+                symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric,
+                [](double nu, double floor) { return nu > floor ? 1.0 / std::sqrt(nu) : 0.0; });
+          }
+        });
+  });
+  return metric;
+}
+
+void PrepareCoupledRotationDerivative(const RotationCoupling& coupling, const Positions& u,
+                                      const Rotations& rotations,
+                                      const std::vector<Eigen::Matrix3d>* twist_metric,
+                                      std::vector<Eigen::Matrix3d>& curvature,
+                                      const Context& context) {
+  HARAP_CHECK(static_cast<Index>(rotations.size()) == coupling.num_sites,
+              "{} rotations for {} sites", rotations.size(), coupling.num_sites);
+  HARAP_CHECK(u.rows() == coupling.num_vertices, "{} positions for {} vertices", u.rows(),
+              coupling.num_vertices);
+  HARAP_CHECK(!twist_metric || static_cast<Index>(twist_metric->size()) == coupling.num_sites,
+              "{} twist metrics for {} sites", twist_metric->size(), coupling.num_sites);
+  curvature.resize(coupling.num_sites);
+  context.Run([&] {
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
+        [&](const tbb::blocked_range<Index>& range) {
+          for (Index s = range.begin(); s != range.end(); ++s) {
+            const Eigen::Matrix3d stretch = rotations[s].transpose() * Covariance(coupling, u, s);
+            Eigen::Matrix3d& k = curvature[s];
+            if (coupling.planar) {
+              const double sum = stretch(0, 0) + stretch(1, 1);
+              k.setZero();
+              if (twist_metric) {
+                const double w = (*twist_metric)[s](2, 2);
+                k(2, 2) = w * w * ClampedTwist(sum * w * w);
+              } else if (sum > kRelativeFloor * stretch.topLeftCorner<2, 2>().cwiseAbs().maxCoeff()) {
+                k(2, 2) = 1.0 / sum;
+              }
+              continue;
+            }
+            const Eigen::Matrix3d symmetric = 0.5 * (stretch + stretch.transpose());
+            const Eigen::Matrix3d pair_sums =
+                symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric;
+            if (!twist_metric) {
+              k = SpectralFunction(pair_sums, [](double lambda, double floor) {
+                return lambda > floor ? 1.0 / lambda : 0.0;
+              });
+              continue;
+            }
+            // K̃ = W B̃ W with W = N^-½: the eigenvalues μ of W (tr S I − S) W are the pair sums
+            // relative to rest, β = 1/μ those of N^½ K N^½.
+            const Eigen::Matrix3d& w = (*twist_metric)[s];
+            const Eigen::Matrix3d relative = w * pair_sums * w;
+            k = w * SpectralFunction(0.5 * (relative + relative.transpose()),
+                                     [](double mu, double) { return ClampedTwist(mu); }) *
+                w;
+          }
+        });
+  });
+}
+
+void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions& v,
+                               const Rotations& rotations,
+                               const std::vector<Eigen::Matrix3d>& curvature,
+                               Rotations& d_rotations, const Context& context) {
+  HARAP_CHECK(static_cast<Index>(curvature.size()) == coupling.num_sites &&
+                  static_cast<Index>(rotations.size()) == coupling.num_sites,
+              "{} curvatures and {} rotations for {} sites", curvature.size(), rotations.size(),
+              coupling.num_sites);
+  HARAP_CHECK(v.rows() == coupling.num_vertices, "{} directions for {} vertices", v.rows(),
+              coupling.num_vertices);
+  d_rotations.resize(coupling.num_sites);
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index s = range.begin(); s != range.end(); ++s) {
+                          const Eigen::Matrix3d x =
+                              rotations[s].transpose() * Covariance(coupling, v, s);
+                          const Eigen::Vector3d axial(x(2, 1) - x(1, 2), x(0, 2) - x(2, 0),
+                                                      x(1, 0) - x(0, 1));
+                          const Eigen::Vector3d w = curvature[s] * axial;
+                          Eigen::Matrix3d cross;
+                          cross << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
+                          d_rotations[s].noalias() = rotations[s] * cross;
+                        }
+                      });
+  });
+}
+
 double CoupledQuadraticEnergy::FitRotations(const Positions& u, Rotations& rotations,
                                             const Context& context) const {
   return FitCoupledRotations(coupling_, a_, u, rotations, context,
@@ -234,6 +370,36 @@ void CoupledQuadraticEnergy::AssembleRhs(const Rotations& rotations, Positions& 
 double CoupledQuadraticEnergy::Evaluate(const Positions& u, const Rotations& rotations,
                                         const Context& context) const {
   return EvaluateCoupledEnergy(coupling_, a_, u, rotations, context);
+}
+
+void CoupledQuadraticEnergy::Precompute(const Mesh& rest, const Context& context) {
+  {
+    const std::lock_guard lock(twist_mutex_);
+    rest_positions_ = rest.vertices;
+    twist_metric_.clear();
+  }
+  PrecomputeCoupledForm(rest, context);
+}
+
+void CoupledQuadraticEnergy::PrepareRotationDerivative(const Positions& u,
+                                                       const Rotations& rotations, bool project,
+                                                       std::vector<Eigen::Matrix3d>& curvature,
+                                                       const Context& context) const {
+  HARAP_CHECK(has_rotation_derivative(), "rotation derivative of a partial rotation fit");
+  const std::vector<Eigen::Matrix3d>* metric = nullptr;
+  if (project) {
+    const std::lock_guard lock(twist_mutex_);
+    if (twist_metric_.empty()) twist_metric_ = TwistMetrics(coupling_, rest_positions_, context);
+    metric = &twist_metric_;
+  }
+  PrepareCoupledRotationDerivative(coupling_, u, rotations, metric, curvature, context);
+}
+
+void CoupledQuadraticEnergy::RotationDerivative(const Positions& v, const Rotations& rotations,
+                                                const std::vector<Eigen::Matrix3d>& curvature,
+                                                Rotations& d_rotations,
+                                                const Context& context) const {
+  CoupledRotationDerivative(coupling_, v, rotations, curvature, d_rotations, context);
 }
 
 }  // namespace harap

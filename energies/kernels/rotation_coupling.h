@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <mutex>
 #include <vector>
 
 #include "framework/context.h"
@@ -75,10 +76,53 @@ double EvaluateCoupledEnergy(const RotationCoupling& coupling, const SparseMatri
                              const Positions& u, const Rotations& rotations,
                              const Context& context);
 
+/// Energy::PrepareRotationDerivative for the coupled form, rotations fitted to the full M_s(u).
+/// With M_s = R_s S_s (polar decomposition; S_s = R_sᵀ M_s is symmetric at the fit), a variation
+/// dM_s gives dR_s = R_s [w]× with ((tr S_s) I − S_s) w = a, a = axial(X − Xᵀ), X = R_sᵀ dM_s
+/// (from R_sᵀ dM = W S + dS and W S + S W = [((tr S) I − S) w]× for symmetric S). `curvature[s]`
+/// is K_s = ((tr S_s) I − S_s)⁻¹, eigenvalues 1/(σ_a + σ_b) over pairs of signed singular values
+/// of M_s; the site's rotation term of the Hessian is −2 aᵀ K_s a.
+///
+/// `twist_metric` null: the exact derivative. Pairs with σ_a + σ_b ≤ 1e-8 · max (a site
+/// collapsed onto a line, or inverted) get 0 instead of a huge or negative curvature.
+///
+/// `twist_metric` = TwistMetrics(): K_s projected so that every site's Hessian is positive
+/// semi-definite, the convex model a Newton step needs. If each site's energy is a sum of
+/// squares ‖D_s u − R_s D_s ū‖² with A = Σ_s Q_s (true for every energy in harap with
+/// non-negative weights), the site Hessian is 2 Q_s − 2 T_sᵀ K_s T_s with T_s v = a(v), and
+/// T_s Q_s⁺ T_sᵀ = N_s = (tr S̄_s) I − S̄_s, S̄_s = M_s(rest) (c_sj = (Q_s ū)_j). So it is PSD iff
+/// N_s^½ K_s N_s^½ ⪯ I: K_s is replaced by N_s^-½ B̃ N_s^-½ with B̃ the eigenvalues β of
+/// N_s^½ K_s N_s^½ clamped to ≤ 1 (compressed twist modes; β = 1 at rest, > 1 when compressed,
+/// and for σ_a + σ_b ≤ 0 the rotation is held fixed in that direction, β̃ = 0). Stretched sites
+/// keep the exact curvature. The Teran/Smith-style eigenvalue clamp of the "twist" modes, in the
+/// rest metric.
+void PrepareCoupledRotationDerivative(const RotationCoupling& coupling, const Positions& u,
+                                      const Rotations& rotations,
+                                      const std::vector<Eigen::Matrix3d>* twist_metric,
+                                      std::vector<Eigen::Matrix3d>& curvature,
+                                      const Context& context);
+
+/// N_s^-½ (pseudo-inverse square root, eigenvalues ≤ 1e-8 · max dropped) of N_s = (tr S̄_s) I −
+/// S̄_s, S̄_s = M_s(rest), per site: the metric of PrepareCoupledRotationDerivative's projection.
+/// Planar couplings: entry (2, 2) = (tr of S̄_s's 2×2 block)^-½.
+std::vector<Eigen::Matrix3d> TwistMetrics(const RotationCoupling& coupling, const Positions& rest,
+                                          const Context& context);
+
+/// Energy::RotationDerivative for the coupled form: d_rotations[s] = R_s [w_s]×,
+/// w_s = curvature[s] · axial(X − Xᵀ), X = R_sᵀ M_s(v).
+void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions& v,
+                               const Rotations& rotations,
+                               const std::vector<Eigen::Matrix3d>& curvature,
+                               Rotations& d_rotations, const Context& context);
+
 /// Shared implementation of the Energy interface for energies that are fully described by
-/// (A, RotationCoupling): concrete energies only build `a_` and `coupling_` in Precompute().
+/// (A, RotationCoupling): concrete energies only build `a_` and `coupling_` in
+/// PrecomputeCoupledForm().
 class CoupledQuadraticEnergy : public Energy {
  public:
+  /// Keeps the rest positions (for the projected rotation derivative) and calls
+  /// PrecomputeCoupledForm.
+  void Precompute(const Mesh& rest, const Context& context) final;
   RotationSite rotation_site() const override { return site_; }
   Index num_rotations() const override { return coupling_.num_sites; }
   const SparseMatrix& system_matrix() const override { return a_; }
@@ -88,6 +132,14 @@ class CoupledQuadraticEnergy : public Energy {
                    const Context& context) const override;
   double Evaluate(const Positions& u, const Rotations& rotations,
                   const Context& context) const override;
+  /// Not with fit_coefficients_: the rotations then do not minimize the energy.
+  bool has_rotation_derivative() const override { return fit_coefficients_.empty(); }
+  void PrepareRotationDerivative(const Positions& u, const Rotations& rotations, bool project,
+                                 std::vector<Eigen::Matrix3d>& curvature,
+                                 const Context& context) const override;
+  void RotationDerivative(const Positions& v, const Rotations& rotations,
+                          const std::vector<Eigen::Matrix3d>& curvature, Rotations& d_rotations,
+                          const Context& context) const override;
 
  protected:
   explicit CoupledQuadraticEnergy(RotationSite site) : site_(site) {}
@@ -99,6 +151,15 @@ class CoupledQuadraticEnergy : public Energy {
   /// the coefficients the rotations are fitted to (see FitCoupledRotations), for options that
   /// reproduce a published variant.
   std::vector<Eigen::Vector3d> fit_coefficients_;
+  /// Builds a_ and coupling_ (and whatever else the energy needs) for the rest mesh.
+  virtual void PrecomputeCoupledForm(const Mesh& rest, const Context& context) = 0;
+
+ private:
+  // The rest positions, for the projected rotation derivative, whose TwistMetrics are computed
+  // on first use (most runs never need them).
+  Positions rest_positions_;
+  mutable std::mutex twist_mutex_;
+  mutable std::vector<Eigen::Matrix3d> twist_metric_;  ///< empty until first needed
 };
 
 }  // namespace harap

@@ -108,6 +108,40 @@ void RightHandSide(benchmark::State& state, std::string key) {
   SetCounters(state, f);
 }
 
+/// The second-order kernels of the Newton steps (optimizer.newton): preparing the projected
+/// rotation derivative at the current state, and the rotation part of one Hessian-vector product
+/// (R'(u)[v] and B of it; the rest of the product is A v and the preconditioning solve).
+/// Fits the fixture's rotations and returns the projected rotation derivative's curvature there.
+std::vector<Eigen::Matrix3d> FittedCurvature(Fixture& f) {
+  std::vector<Eigen::Matrix3d> curvature;
+  f.energy->FitRotations(f.u, f.rotations, f.context);
+  f.energy->PrepareRotationDerivative(f.u, f.rotations, /*project=*/true, curvature, f.context);
+  return curvature;
+}
+
+void PrepareRotationDerivative(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f);
+  for (auto _ : state) {
+    f.energy->PrepareRotationDerivative(f.u, f.rotations, /*project=*/true, curvature, f.context);
+    benchmark::ClobberMemory();
+  }
+  SetCounters(state, f);
+}
+
+void RotationDerivativeProduct(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  const std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f);
+  const Positions direction = f.u - f.scenario.mesh.vertices;
+  Rotations d_rotations;
+  for (auto _ : state) {
+    f.energy->RotationDerivative(direction, f.rotations, curvature, d_rotations, f.context);
+    f.energy->AssembleRhs(d_rotations, f.rhs, f.context);
+    benchmark::ClobberMemory();
+  }
+  SetCounters(state, f);
+}
+
 ConfigNode SolverOptions(const std::string& mode, const std::string& ordering,
                          bool parallel_solve = true) {
   ConfigNode options;
@@ -277,6 +311,10 @@ void RegisterAll(const std::string& key) {
   };
   add("LocalStep", LocalStep, key);
   add("RightHandSide", RightHandSide, key);
+  if (Get(key).energy->has_rotation_derivative()) {
+    add("PrepareRotationDerivative", PrepareRotationDerivative, key);
+    add("RotationDerivativeProduct", RotationDerivativeProduct, key);
+  }
   for (const char* ordering : {"amd", "metis"}) {
     for (const char* mode : {"auto", "simplicial", "supernodal"}) {
       const std::string suffix = std::string(mode) + "_" + ordering;

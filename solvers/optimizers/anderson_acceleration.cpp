@@ -1,47 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/anderson_acceleration.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include "framework/error.h"
+#include "solvers/optimizers/block_vectors.h"
 
 namespace harap {
-namespace {
-
-/// ⟨a, b⟩ of two #rows×3 matrices, in parallel with a deterministic reduction (same result for
-/// the same thread count).
-double Dot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const Context& context) {
-  const Eigen::Index size = a.size();
-  return context.Run([&] {
-    return tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<Eigen::Index>(0, size, 16384), 0.0,
-        [&](const tbb::blocked_range<Eigen::Index>& range, double sum) {
-          const Eigen::Index begin = range.begin(), length = range.end() - range.begin();
-          return sum + Eigen::Map<const Eigen::VectorXd>(a.data() + begin, length)
-                           .dot(Eigen::Map<const Eigen::VectorXd>(b.data() + begin, length));
-        },
-        [](double x, double y) { return x + y; });
-  });
-}
-
-/// body(begin, length) over chunks of the flat coefficient range [0, size), in parallel: the
-/// element-wise updates of the iterates (memory-bound, a few MB each on large meshes).
-template <class Body>
-void ForChunks(Eigen::Index size, const Context& context, Body&& body) {
-  context.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, size, 16384),
-                      [&](const tbb::blocked_range<Eigen::Index>& range) {
-                        body(range.begin(), range.end() - range.begin());
-                      });
-  });
-}
-
-using Chunk = Eigen::Map<Eigen::VectorXd>;
-using ConstChunk = Eigen::Map<const Eigen::VectorXd>;
-
-}  // namespace
 
 void AndersonAcceleration::Reset(Eigen::Index rows, int history) {
   HARAP_CHECK(history >= 1, "Anderson acceleration needs a history of at least 1, got {}",
@@ -77,7 +40,7 @@ bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd&
   }
   Eigen::MatrixXd& residual_difference = residual_differences_[std::max(newest_, 0)];
   Eigen::MatrixXd& image_difference = image_differences_[std::max(newest_, 0)];
-  ForChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
+  ForBlockChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
     const ConstChunk gc(g.data() + begin, length), xc(x.data() + begin, length);
     Chunk f(residual_.data() + begin, length), f_old(previous_residual_.data() + begin, length),
         g_old(previous_image_.data() + begin, length);
@@ -94,7 +57,7 @@ bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd&
     for (int j = 0; j < stored_; ++j) {
       const int slot = (newest_ - j + history_) % history_;
       gram_(newest_, slot) = gram_(slot, newest_) =
-          Dot(residual_differences_[newest_], residual_differences_[slot], context);
+          BlockDot(residual_differences_[newest_], residual_differences_[slot], context);
     }
   }
   if (stored_ == 0) {
@@ -107,7 +70,7 @@ bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd&
   double trace = 0.0;
   for (int i = 0; i < stored_; ++i) {
     const int slot_i = (newest_ - i + history_) % history_;
-    rhs_(i) = Dot(residual_differences_[slot_i], residual_, context);
+    rhs_(i) = BlockDot(residual_differences_[slot_i], residual_, context);
     for (int j = 0; j < stored_; ++j) {
       small_matrix_(i, j) = gram_(slot_i, (newest_ - j + history_) % history_);
     }
@@ -121,7 +84,7 @@ bool AndersonAcceleration::Step(const Eigen::MatrixXd& x, const Eigen::MatrixXd&
     extrapolated = theta_.head(stored_).allFinite();
   }
   // next = g − Σ_i θ_i ΔG_i, in one pass.
-  ForChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
+  ForBlockChunks(size, context, [&](Eigen::Index begin, Eigen::Index length) {
     Chunk out(next.data() + begin, length);
     out = ConstChunk(g.data() + begin, length);
     if (!extrapolated) return;

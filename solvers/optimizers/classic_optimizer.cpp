@@ -64,9 +64,7 @@ OptimizeResult ClassicOptimizer::Optimize(const DeformationProblem& problem,
                                       run.iterations, run.energy, result.timings.total,
                                       run.converged, level.system().num_free(),
                                       run.linear_solves});
-  if (options_.iterations.anderson > 0) {
-    result.levels.back().accelerated_iterations = run.accelerated_iterations;
-  }
+  RecordAcceleration(options_.iterations, run, result.levels.back());
   return result;
 }
 

@@ -281,7 +281,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
                                         run.iterations, run.energy, level_seconds[l],
                                         run.converged, solver.system().num_free(),
                                         run.linear_solves});
-    if (options.anderson > 0) result.levels.back().accelerated_iterations = run.accelerated_iterations;
+    RecordAcceleration(options, run, result.levels.back());
     if (l == 0) {
       result.energy = run.energy;
       result.iterations = run.iterations;

@@ -109,11 +109,19 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   // Whether `energy` is E(u, R(u)) of the current positions (not so before a first global step
   // from handed-down rotations): the safeguard of Anderson acceleration compares against it.
   bool energy_is_fitted = !start_with_global_step;
+  if (options.anderson > 0 || options.newton > 0) current_free_.resize(system_->num_free(), 3);
   if (options.anderson > 0) {
     anderson_.Reset(system_->num_free(), options.anderson);
-    current_free_.resize(system_->num_free(), 3);
     accelerated_free_.resize(system_->num_free(), 3);
     trial_positions_ = state.positions;
+  }
+  if (options.newton > 0) {
+    if (!energy_->has_rotation_derivative()) {
+      throw ConfigError(
+          "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
+          "derivative); this energy has none, or fits its rotations to a part of the energy");
+    }
+    newton_.Reset(system_->num_vertices(), system_->num_free(), options.newton_exact_hessian);
   }
   while (result.iterations < options.max_iterations) {
     const bool targets_move = update_fixed && !targets_frozen;
@@ -132,42 +140,15 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                        summary.message));
     }
-    // The map G(u) = global(local(u)) may be accelerated only while it stays the same map
-    // (fixed targets) and the pairs (u, G(u)) are true ones (rotations fitted to u).
-    const bool accelerate = options.anderson > 0 && !targets_move && energy_is_fitted;
-    bool extrapolated = false;
-    if (accelerate) {
-      system_->GatherFree(state.positions, current_free_);
-      extrapolated = anderson_.Step(current_free_, reduced_x_, accelerated_free_, context);
-    } else if (options.anderson > 0) {
-      anderson_.Clear();
-      // The fixed rows of the trial positions: they stay put while the acceleration runs (the
-      // targets no longer move), so only the free rows are written from here on.
-      trial_positions_ = state.positions;
+    // Newton steps and Anderson's extrapolation need the same map G(u) = global(local(u)) from
+    // one iteration to the next (fixed targets) and rotations fitted to u.
+    double displacement = 0.0;
+    if (options.newton > 0 && !targets_move && energy_is_fitted) {
+      displacement = NewtonIteration(state, energy, options, squared_diagonal, context, result);
+    } else {
+      displacement = LocalGlobalIteration(state, energy, options, targets_move, energy_is_fitted,
+                                          squared_diagonal, context, result);
     }
-    // The displacement of the plain step, G(u) − u: the convergence test is the same with and
-    // without acceleration.
-    const double displacement = system_->ScatterFree(reduced_x_, state.positions) /
-                                squared_diagonal;
-    bool accepted = false;
-    if (extrapolated) {
-      // Safeguard [Peng et al. 2018]: keep the accelerated iterate only if its energy (rotations
-      // fitted) is below the current iterate's; the plain step never raises it, so the iteration
-      // stays monotone.
-      // The rotations are fitted in place: if the extrapolation is rejected, the plain step's
-      // fit below starts from them, as good a warm start as the old ones (G(u) is near both).
-      system_->ScatterFree(accelerated_free_, trial_positions_);
-      const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations,
-                                                        context);
-      if (trial_energy < energy) {
-        std::swap(state.positions, trial_positions_);
-        energy = trial_energy;
-        accepted = true;
-        ++result.accelerated_iterations;
-      }
-    }
-    // Local step: best-fit rotations for the new positions; also yields E(U, R).
-    if (!accepted) energy = energy_->FitRotations(state.positions, state.rotations, context);
     energy_is_fitted = true;
     ++result.iterations;
     if (!std::isfinite(energy)) {
@@ -195,6 +176,70 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   }
   result.energy = energy;
   return result;
+}
+
+double LocalGlobalSolver::NewtonIteration(LevelState& state, double& energy,
+                                          const LocalGlobalOptions& options,
+                                          double squared_diagonal, const Context& context,
+                                          RunResult& result) {
+  // The convergence test measures the plain step A_ff⁻¹ rhs − u_f, as without Newton steps.
+  system_->GatherFree(state.positions, current_free_);
+  double displacement = 0.0;
+  for (Index i = 0; i < current_free_.rows(); ++i) {
+    displacement =
+        std::max(displacement, (reduced_x_.row(i) - current_free_.row(i)).squaredNorm());
+  }
+  const NewtonCgStep::Outcome step =
+      newton_.Step(*energy_, *system_, *solver_, options.newton, state.positions,
+                   state.rotations, energy, reduced_rhs_, reduced_x_, context);
+  result.newton_steps += step.newton ? 1 : 0;
+  result.hessian_products += step.cg_iterations;
+  energy = step.energy;
+  return displacement / squared_diagonal;
+}
+
+double LocalGlobalSolver::LocalGlobalIteration(LevelState& state, double& energy,
+                                               const LocalGlobalOptions& options,
+                                               bool targets_move, bool energy_is_fitted,
+                                               double squared_diagonal, const Context& context,
+                                               RunResult& result) {
+  // The map G(u) = global(local(u)) may be accelerated only while it stays the same map
+  // (fixed targets) and the pairs (u, G(u)) are true ones (rotations fitted to u).
+  const bool accelerate = options.anderson > 0 && !targets_move && energy_is_fitted;
+  bool extrapolated = false;
+  if (accelerate) {
+    system_->GatherFree(state.positions, current_free_);
+    extrapolated = anderson_.Step(current_free_, reduced_x_, accelerated_free_, context);
+  } else if (options.anderson > 0) {
+    anderson_.Clear();
+    // The fixed rows of the trial positions: they stay put while the acceleration runs (the
+    // targets no longer move), so only the free rows are written from here on.
+    trial_positions_ = state.positions;
+  }
+  // The displacement of the plain step, G(u) − u: the convergence test is the same with and
+  // without acceleration.
+  const double displacement = system_->ScatterFree(reduced_x_, state.positions) /
+                              squared_diagonal;
+  bool accepted = false;
+  if (extrapolated) {
+    // Safeguard [Peng et al. 2018]: keep the accelerated iterate only if its energy (rotations
+    // fitted) is below the current iterate's; the plain step never raises it, so the iteration
+    // stays monotone.
+    // The rotations are fitted in place: if the extrapolation is rejected, the plain step's
+    // fit below starts from them, as good a warm start as the old ones (G(u) is near both).
+    system_->ScatterFree(accelerated_free_, trial_positions_);
+    const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations,
+                                                      context);
+    if (trial_energy < energy) {
+      std::swap(state.positions, trial_positions_);
+      energy = trial_energy;
+      accepted = true;
+      ++result.accelerated_iterations;
+    }
+  }
+  // Local step: best-fit rotations for the new positions; also yields E(U, R).
+  if (!accepted) energy = energy_->FitRotations(state.positions, state.rotations, context);
+  return displacement;
 }
 
 Positions InitialPositions(const DeformationProblem& problem) {
@@ -253,8 +298,23 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
   options.anderson = node.Get("anderson", options.anderson,
                               "Anderson acceleration with this many previous iterates, "
                               "safeguarded by the energy (0: off; 5 is typical)");
+  options.newton = node.Get("newton", options.newton,
+                            "truncated Newton steps with at most this many preconditioned "
+                            "conjugate-gradient iterations each, instead of local/global steps "
+                            "(0: off; 20 is typical)");
+  options.newton_exact_hessian =
+      node.GetChoice("newton_hessian", "projected", {"projected", "exact"},
+                     "Hessian model of the Newton steps: projected per rotation site (positive "
+                     "semi-definite, line search) or exact (indefinite, trust region)") == "exact";
   if (options.anderson < 0) {
     node.Fail("anderson", fmt::format("must be >= 0, got {}", options.anderson));
+  }
+  if (options.newton < 0) {
+    node.Fail("newton", fmt::format("must be >= 0, got {}", options.newton));
+  }
+  if (options.newton > 0 && options.anderson > 0) {
+    node.Fail("newton", "Newton steps and Anderson acceleration exclude each other: set one of "
+                        "`newton` and `anderson` to 0");
   }
   if (options.tolerance < 0.0) {
     node.Fail("tolerance", fmt::format("must be >= 0, got {}", options.tolerance));
@@ -263,6 +323,15 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
     node.Fail("max_iterations", fmt::format("must be >= 1, got {}", options.max_iterations));
   }
   return options;
+}
+
+void RecordAcceleration(const LocalGlobalOptions& options,
+                        const LocalGlobalSolver::RunResult& run, LevelResult& level) {
+  if (options.anderson > 0) level.accelerated_iterations = run.accelerated_iterations;
+  if (options.newton > 0) {
+    level.newton_steps = run.newton_steps;
+    level.hessian_products = run.hessian_products;
+  }
 }
 
 }  // namespace harap

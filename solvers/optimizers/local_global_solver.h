@@ -10,6 +10,7 @@
 #include "framework/constrained_system.h"
 #include "framework/optimizer.h"
 #include "solvers/optimizers/anderson_acceleration.h"
+#include "solvers/optimizers/newton_cg.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
@@ -30,6 +31,14 @@ struct LocalGlobalOptions {
   /// safeguarded by the energy so the iteration stays monotone [Peng et al. 2018]; see
   /// anderson_acceleration.h. Inactive while moving constraint targets change the map.
   int anderson = 0;
+  /// Truncated Newton steps (newton_cg.h) instead of plain local/global steps, with at most this
+  /// many preconditioned conjugate-gradient iterations each (0: off). Needs an energy with
+  /// Energy::has_rotation_derivative(); excludes `anderson`. Inactive while moving constraint
+  /// targets change the energy.
+  int newton = 0;
+  /// The Hessian model of the Newton steps: false = projected per rotation site, with a line
+  /// search; true = exact, in a trust region (newton_cg.h).
+  bool newton_exact_hessian = false;
 };
 
 /// Local/global ARAP iterations on one mesh level with a fixed constraint set: owns the level's
@@ -61,6 +70,10 @@ class LocalGlobalSolver {
     /// With `anderson`: iterations whose accelerated iterate was kept (lower energy than the plain
     /// local/global step's starting point).
     int accelerated_iterations = 0;
+    /// With `newton`: iterations that took a Newton step (the others the plain local/global
+    /// step), and the Hessian-vector products (CG iterations) they used.
+    int newton_steps = 0;
+    long long hessian_products = 0;
     SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
@@ -98,6 +111,15 @@ class LocalGlobalSolver {
   RunResult Iterate(LevelState& state, bool start_with_global_step,
                     const LocalGlobalOptions& options, double diagonal, const Context& context,
                     const FixedPositionUpdate& update_fixed);
+  // One iteration from `state` (rotations fitted unless !energy_is_fitted) after the global
+  // step's solve into reduced_x_; updates `energy` and returns the plain step's displacement
+  // for the convergence test.
+  double NewtonIteration(LevelState& state, double& energy, const LocalGlobalOptions& options,
+                         double squared_diagonal, const Context& context, RunResult& result);
+  double LocalGlobalIteration(LevelState& state, double& energy,
+                              const LocalGlobalOptions& options, bool targets_move,
+                              bool energy_is_fitted, double squared_diagonal,
+                              const Context& context, RunResult& result);
 
   int level_;
   MeshOrdering ordering_;
@@ -115,6 +137,7 @@ class LocalGlobalSolver {
   AndersonAcceleration anderson_;
   Eigen::MatrixXd current_free_, accelerated_free_;
   Positions trial_positions_;
+  NewtonCgStep newton_;
 };
 
 /// Initial positions of a problem: `problem.initial` or the rest positions, with constrained
@@ -123,5 +146,9 @@ Positions InitialPositions(const DeformationProblem& problem);
 
 /// Reads the options shared by all local/global optimizers from their config table.
 LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node);
+
+/// Copies what the acceleration options did on a level (Anderson, Newton) into its report entry.
+void RecordAcceleration(const LocalGlobalOptions& options,
+                        const LocalGlobalSolver::RunResult& run, LevelResult& level);
 
 }  // namespace harap

@@ -134,6 +134,49 @@ BentTube::BentTube(int rings, int segments, double height, double angle,
   }
 }
 
+namespace {
+
+/// Fixes the vertices `select` picks, at `target(rest position)`.
+template <class Select, class Target>
+void FixVertices(const Mesh& mesh, Select&& select, Target&& target, Constraints& constraints) {
+  std::vector<Eigen::RowVector3d> targets;
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d p = mesh.vertices.row(v).transpose();
+    if (!select(p)) continue;
+    constraints.indices.push_back(v);
+    targets.push_back(target(p).transpose());
+  }
+  constraints.targets.resize(static_cast<Index>(targets.size()), 3);
+  for (size_t k = 0; k < targets.size(); ++k) constraints.targets.row(k) = targets[k];
+}
+
+}  // namespace
+
+TwistedTetBar::TwistedTetBar(int nx, int ny, int nz, double height, double angle)
+    : mesh(TetBox(nx, ny, nz)) {
+  mesh.vertices.col(2) *= height;
+  problem.mesh = &mesh;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d axis(0.5, 0.5, 0.0);
+  FixVertices(
+      mesh, [&](const Eigen::Vector3d& p) { return p.z() == 0.0 || p.z() == height; },
+      [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
+        return p.z() == 0.0 ? p : Eigen::Vector3d(turn * (p - axis) + axis);
+      },
+      problem.constraints);
+}
+
+ShearedPlanarGrid::ShearedPlanarGrid(int nx, int ny, const Eigen::Vector2d& shift)
+    : mesh(PlanarGrid(nx, ny)) {
+  problem.mesh = &mesh;
+  FixVertices(
+      mesh, [](const Eigen::Vector3d& p) { return p.x() == 0.0 || p.x() == 1.0; },
+      [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
+        return p.x() == 0.0 ? p : Eigen::Vector3d(p + Eigen::Vector3d(shift.x(), shift.y(), 0.0));
+      },
+      problem.constraints);
+}
+
 Mesh SeamedGrid(int n, std::vector<std::pair<Index, Index>>& seam) {
   Mesh mesh = Grid(n, n);
   const Index original_count = mesh.num_vertices();

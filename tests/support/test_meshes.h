@@ -41,6 +41,28 @@ struct BentTube {
   Mesh mesh;
   DeformationProblem problem;
 };
+/// A TetBox(nx, ny, nz) stretched to `height` along z, its bottom layer fixed and its top layer
+/// turned by `angle` about the box's vertical axis: a twisting problem for the per-element energy.
+struct TwistedTetBar {
+  TwistedTetBar(int nx, int ny, int nz, double height, double angle);
+  TwistedTetBar(const TwistedTetBar&) = delete;  // problem.mesh points at mesh
+  TwistedTetBar& operator=(const TwistedTetBar&) = delete;
+
+  Mesh mesh;
+  DeformationProblem problem;
+};
+
+/// A PlanarGrid(nx, ny), its left column (x = 0) fixed and its right column (x = 1) moved by
+/// `shift` in the plane: an in-plane shearing problem for the per-element energy.
+struct ShearedPlanarGrid {
+  ShearedPlanarGrid(int nx, int ny, const Eigen::Vector2d& shift);
+  ShearedPlanarGrid(const ShearedPlanarGrid&) = delete;
+  ShearedPlanarGrid& operator=(const ShearedPlanarGrid&) = delete;
+
+  Mesh mesh;
+  DeformationProblem problem;
+};
+
 /// Grid(n, n) (n odd) cut along x = 0.5 into two halves that share positions but no vertex index,
 /// an unwelded seam as in the shared teapot. `seam` receives the (copy, original) vertex pairs.
 Mesh SeamedGrid(int n, std::vector<std::pair<Index, Index>>& seam);
