@@ -108,22 +108,22 @@ void RightHandSide(benchmark::State& state, std::string key) {
   SetCounters(state, f);
 }
 
-/// The second-order kernels of the Newton steps (optimizer.newton): preparing the projected
-/// rotation derivative at the current state, and the rotation part of one Hessian-vector product
+/// The second-order kernels of the Newton steps (optimizer.newton): preparing the rotation
+/// derivative (exact or projected) at the current state, and the rotation part of one Hessian-vector product
 /// (R'(u)[v] and B of it; the rest of the product is A v and the preconditioning solve).
-/// Fits the fixture's rotations and returns the projected rotation derivative's curvature there.
-std::vector<Eigen::Matrix3d> FittedCurvature(Fixture& f) {
+/// Fits the fixture's rotations and returns the rotation derivative's curvature there.
+std::vector<Eigen::Matrix3d> FittedCurvature(Fixture& f, bool project) {
   std::vector<Eigen::Matrix3d> curvature;
   f.energy->FitRotations(f.u, f.rotations, f.context);
-  f.energy->PrepareRotationDerivative(f.u, f.rotations, /*project=*/true, curvature, f.context);
+  f.energy->PrepareRotationDerivative(f.u, f.rotations, project, curvature, f.context);
   return curvature;
 }
 
-void PrepareRotationDerivative(benchmark::State& state, std::string key) {
+void PrepareRotationDerivative(benchmark::State& state, std::string key, bool project) {
   Fixture& f = Get(key);
-  std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f);
+  std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f, project);
   for (auto _ : state) {
-    f.energy->PrepareRotationDerivative(f.u, f.rotations, /*project=*/true, curvature, f.context);
+    f.energy->PrepareRotationDerivative(f.u, f.rotations, project, curvature, f.context);
     benchmark::ClobberMemory();
   }
   SetCounters(state, f);
@@ -131,7 +131,7 @@ void PrepareRotationDerivative(benchmark::State& state, std::string key) {
 
 void RotationDerivativeProduct(benchmark::State& state, std::string key) {
   Fixture& f = Get(key);
-  const std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f);
+  const std::vector<Eigen::Matrix3d> curvature = FittedCurvature(f, /*project=*/false);
   const Positions direction = f.u - f.scenario.mesh.vertices;
   Rotations d_rotations;
   for (auto _ : state) {
@@ -312,7 +312,8 @@ void RegisterAll(const std::string& key) {
   add("LocalStep", LocalStep, key);
   add("RightHandSide", RightHandSide, key);
   if (Get(key).energy->has_rotation_derivative()) {
-    add("PrepareRotationDerivative", PrepareRotationDerivative, key);
+    add("PrepareRotationDerivative_exact", PrepareRotationDerivative, key, false);
+    add("PrepareRotationDerivative_projected", PrepareRotationDerivative, key, true);
     add("RotationDerivativeProduct", RotationDerivativeProduct, key);
   }
   for (const char* ordering : {"amd", "metis"}) {

@@ -303,9 +303,10 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
                             "conjugate-gradient iterations each, instead of local/global steps "
                             "(0: off; 20 is typical)");
   options.newton_exact_hessian =
-      node.GetChoice("newton_hessian", "projected", {"projected", "exact"},
-                     "Hessian model of the Newton steps: projected per rotation site (positive "
-                     "semi-definite, line search) or exact (indefinite, trust region)") == "exact";
+      node.GetChoice("newton_hessian", "exact", {"exact", "projected"},
+                     "Hessian model of the Newton steps: exact (indefinite, trust region) or "
+                     "projected per rotation site (positive semi-definite, line search)") ==
+      "exact";
   if (options.anderson < 0) {
     node.Fail("anderson", fmt::format("must be >= 0, got {}", options.anderson));
   }

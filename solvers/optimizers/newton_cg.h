@@ -20,13 +20,13 @@ namespace harap {
 /// bending modes of large meshes make tiny. Here P⁻¹ instead preconditions conjugate gradients on
 /// H d = −g, whose iteration count grows only with the square root of P⁻¹H's condition number.
 /// Two models of H:
-///   - projected (default): every rotation site's Hessian clamped to positive semi-definite
+///   - projected: every rotation site's Hessian clamped to positive semi-definite
 ///     (Energy::PrepareRotationDerivative with `project`), so 0 ⪯ H ⪯ P; the step is u + α d
 ///     with Armijo backtracking on E. The first CG iterate is the local/global step scaled by an
 ///     exact line search (α ≥ 1, since H ⪯ P), so a Newton step with one CG iteration is an
 ///     over-relaxed local/global step. The projection ignores negative curvature, so near a
 ///     saddle point the steps crawl as the plain iteration does.
-///   - exact: the true, indefinite H in a trust region of the P-norm (Steihaug–Toint CG: to the
+///   - exact (default): the true, indefinite H in a trust region of the P-norm (Steihaug–Toint CG: to the
 ///     region's boundary along a direction of negative curvature), radius adapted by the ratio of
 ///     actual to predicted decrease [Nocedal & Wright, Alg. 4.1, 7.2]; it leaves saddles along
 ///     their negative curvature.
@@ -43,7 +43,7 @@ class NewtonCgStep {
   /// Sizes the buffers for a level (`num_vertices` rows, `num_free` free ones) and forgets g₀
   /// (and the trust radius). `exact_hessian`: the exact, indefinite Hessian in a trust region
   /// instead of the projected one with a line search (see the class comment).
-  void Reset(Index num_vertices, Index num_free, bool exact_hessian = false);
+  void Reset(Index num_vertices, Index num_free, bool exact_hessian = true);
 
   struct Outcome {
     bool newton = false;     ///< false: the plain local/global step was taken.
