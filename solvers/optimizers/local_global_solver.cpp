@@ -109,9 +109,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   // Whether `energy` is E(u, R(u)) of the current positions (not so before a first global step
   // from handed-down rotations): the safeguard of Anderson acceleration compares against it.
   bool energy_is_fitted = !start_with_global_step;
-  if (options.anderson > 0 || options.newton > 0) current_free_.resize(system_->num_free(), 3);
   if (options.anderson > 0) {
     anderson_.Reset(system_->num_free(), options.anderson);
+    current_free_.resize(system_->num_free(), 3);
     accelerated_free_.resize(system_->num_free(), 3);
     trial_positions_ = state.positions;
   }
@@ -182,20 +182,14 @@ double LocalGlobalSolver::NewtonIteration(LevelState& state, double& energy,
                                           const LocalGlobalOptions& options,
                                           double squared_diagonal, const Context& context,
                                           RunResult& result) {
-  // The convergence test measures the plain step A_ff⁻¹ rhs − u_f, as without Newton steps.
-  system_->GatherFree(state.positions, current_free_);
-  double displacement = 0.0;
-  for (Index i = 0; i < current_free_.rows(); ++i) {
-    displacement =
-        std::max(displacement, (reduced_x_.row(i) - current_free_.row(i)).squaredNorm());
-  }
   const NewtonCgStep::Outcome step =
       newton_.Step(*energy_, *system_, *solver_, options.newton, state.positions,
                    state.rotations, energy, reduced_rhs_, reduced_x_, context);
   result.newton_steps += step.newton ? 1 : 0;
   result.hessian_products += step.cg_iterations;
   energy = step.energy;
-  return displacement / squared_diagonal;
+  // The convergence test measures the plain step A_ff⁻¹ rhs − u_f, as without Newton steps.
+  return step.plain_step_displacement / squared_diagonal;
 }
 
 double LocalGlobalSolver::LocalGlobalIteration(LevelState& state, double& energy,

@@ -105,6 +105,10 @@ NewtonCgStep::Outcome NewtonCgStep::Step(const Energy& energy_function,
     Chunk(preconditioned_.data() + begin, length) =
         ConstChunk(global_step.data() + begin, length) - u;
   });
+  for (Index i = 0; i < preconditioned_.rows(); ++i) {
+    outcome.plain_step_displacement =
+        std::max(outcome.plain_step_displacement, preconditioned_.row(i).squaredNorm());
+  }
   const double initial_rz = BlockDot(residual_, preconditioned_, context);
   if (!(initial_rz > 0.0)) return take_global_step();  // stationary (or not finite)
   const double gradient_norm = std::sqrt(initial_rz);

@@ -49,6 +49,9 @@ class NewtonCgStep {
     bool newton = false;     ///< false: the plain local/global step was taken.
     int cg_iterations = 0;   ///< CG iterations of this step (Hessian products).
     double energy = 0.0;     ///< E(u⁺, R(u⁺)) of the new state.
+    /// max_i ‖z_i‖² of the plain local/global step z = A_ff⁻¹ rhs − u_f (the convergence test's
+    /// displacement, before scaling by the diagonal).
+    double plain_step_displacement = 0.0;
   };
 
   /// One step from `positions` (rotations fitted to them, energy `energy`). `reduced_rhs` is the
