@@ -6,12 +6,14 @@
 #include "solvers/cholmod_solver.h"
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -219,6 +221,99 @@ bool EnsureBlasWorkBuffer() {
   return ready;
 }
 
+// CHOLMOD's own parallelism (Options::native_threads): the OpenMP loops of its supernodal
+// factorization and the BLAS it calls. The controls are looked up at run time: they exist only
+// when CHOLMOD was built with OpenMP and the BLAS behind libblas.so.3 is OpenBLAS, and harap
+// itself is not compiled with -fopenmp (that would also switch on Eigen's OpenMP code paths).
+struct NativeThreadControls {
+  using GetInt = int (*)();
+  using SetInt = void (*)(int);
+  GetInt omp_get_dynamic = nullptr;
+  GetInt omp_get_max_threads = nullptr;
+  SetInt omp_set_dynamic = nullptr;
+  SetInt omp_set_num_threads = nullptr;
+  SetInt openblas_set_num_threads = nullptr;
+  // As the environment set it, read before harap changed anything: native_threads = 0 restores
+  // it.
+  int default_blas_threads = 0;
+  std::mutex blas_mutex;
+  int applied_blas_threads = 0;
+
+  static NativeThreadControls& Get() {
+    static NativeThreadControls controls;
+    return controls;
+  }
+  bool has_openmp() const { return omp_set_num_threads != nullptr; }
+
+ private:
+  NativeThreadControls() {
+    const auto get = [](const char* name) {
+      return reinterpret_cast<GetInt>(dlsym(RTLD_DEFAULT, name));
+    };
+    const auto set = [](const char* name) {
+      return reinterpret_cast<SetInt>(dlsym(RTLD_DEFAULT, name));
+    };
+    omp_get_dynamic = get("omp_get_dynamic");
+    omp_get_max_threads = get("omp_get_max_threads");
+    omp_set_dynamic = set("omp_set_dynamic");
+    omp_set_num_threads = set("omp_set_num_threads");
+    if (!omp_get_dynamic || !omp_get_max_threads || !omp_set_dynamic || !omp_set_num_threads) {
+      omp_set_num_threads = nullptr;
+    }
+    const GetInt openblas_get_num_threads = get("openblas_get_num_threads");
+    openblas_set_num_threads = set("openblas_set_num_threads");
+    if (!openblas_get_num_threads || !openblas_set_num_threads) {
+      openblas_set_num_threads = nullptr;
+    } else {
+      default_blas_threads = applied_blas_threads = openblas_get_num_threads();
+    }
+  }
+};
+
+// Caps CHOLMOD's own parallelism at `threads` (0: as the environment set it) while it lives.
+//
+// OpenMP's controls are per thread: this thread's are set, and restored at the end, so only the
+// factorization is capped. CHOLMOD's loops say num_threads(4), which omp_set_num_threads alone
+// does not override; with dynamic adjustment on, libgomp bounds the team by this thread's
+// nthreads-var (OpenMP 5.2, §2.6.1: with dyn-var true the implementation may deliver fewer
+// threads than requested). The solves are left alone: libgomp allocates a new team for every
+// one-thread region (it caches only larger teams), and Solve() must not allocate.
+//
+// OpenBLAS's thread count is process-wide and not restored: it is set only when it changes, so
+// concurrent factorizations with the same setting never touch it while another is inside BLAS.
+class ScopedNativeThreads {
+ public:
+  explicit ScopedNativeThreads(int threads) : controls_(NativeThreadControls::Get()) {
+    if (threads > 0 && controls_.has_openmp()) {
+      saved_dynamic_ = controls_.omp_get_dynamic();
+      saved_threads_ = controls_.omp_get_max_threads();
+      controls_.omp_set_dynamic(1);
+      controls_.omp_set_num_threads(threads);
+    }
+    if (controls_.openblas_set_num_threads != nullptr) {
+      const int blas_threads = threads > 0 ? threads : controls_.default_blas_threads;
+      const std::lock_guard lock(controls_.blas_mutex);
+      if (blas_threads != controls_.applied_blas_threads) {
+        controls_.openblas_set_num_threads(blas_threads);
+        controls_.applied_blas_threads = blas_threads;
+      }
+    }
+  }
+  ~ScopedNativeThreads() {
+    if (saved_threads_ > 0) {
+      controls_.omp_set_dynamic(saved_dynamic_);
+      controls_.omp_set_num_threads(saved_threads_);
+    }
+  }
+  ScopedNativeThreads(const ScopedNativeThreads&) = delete;
+  ScopedNativeThreads& operator=(const ScopedNativeThreads&) = delete;
+
+ private:
+  NativeThreadControls& controls_;
+  int saved_dynamic_ = 0;
+  int saved_threads_ = 0;  // 0: nothing to restore
+};
+
 }  // namespace
 
 struct CholmodSolver::Impl {
@@ -379,7 +474,15 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       "solve with a simplicial factor by substitution over independent subtrees of the "
       "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
+  options.native_threads = node.Get(
+      "native_threads", options.native_threads,
+      "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
+      "own parallelism is TBB's, which native threads compete with)");
   node.RejectUnknownKeys();
+  if (options.native_threads < 0) {
+    throw ConfigError(fmt::format("{}: native_threads must be >= 0, got {}",
+                                  node.Where("native_threads"), options.native_threads));
+  }
   return options;
 }
 
@@ -430,6 +533,7 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
         a.rows(), a.cols(), kBlasBufferProbeBytes >> 20,
         solver_checks::kOutOfMemoryAdvice.substr(4)));  // "an iterative solver ..."
   }
+  const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
   impl.factor = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);

@@ -16,15 +16,18 @@ namespace harap {
 /// are n×k (k = 3 for the global step). Factorize() redoes the symbolic analysis (ordering,
 /// elimination tree) every time: each solver object factors one matrix (a hierarchy creates one
 /// solver per level). Solve() is allocation-free after its first call with a given k: the
-/// permuted right-hand side and solution live in workspaces kept between calls.
+/// permuted right-hand side and solution live in workspaces kept between calls. (BLAS, used by
+/// solves with a supernodal factor, may allocate: OpenBLAS 0.3.21's small-matrix dgemm kernel
+/// on AVX-512 machines takes a buffer from malloc on every call.)
 ///
 /// Factorize() throws NumericalError when A is not positive definite (a negative or zero pivot,
 /// or one so small relative to A's diagonal that A is numerically singular) or when CHOLMOD runs
 /// out of memory; the message names the pivot and says what to try.
 ///
-/// Not thread-safe: one object per thread. BLAS (used by the supernodal factorization) follows
-/// OPENBLAS_NUM_THREADS, not the Context's task arena. Compiled only when CHOLMOD was found
-/// (HARAP_WITH_CHOLMOD); create it through the registry, which then lists "cholmod".
+/// Not thread-safe: one object per thread. BLAS (used by the supernodal factorization) and
+/// CHOLMOD's OpenMP loops run on Options::native_threads threads, not on the Context's task
+/// arena. Compiled only when CHOLMOD was found (HARAP_WITH_CHOLMOD); create it through the
+/// registry, which then lists "cholmod".
 class CholmodSolver final : public LinearSolver {
  public:
   static constexpr std::string_view kName = "cholmod";
@@ -63,6 +66,15 @@ class CholmodSolver final : public LinearSolver {
     bool parallel_solve = true;
     /// Compute max over columns of ‖b − A x‖ / ‖b‖ in every Solve() (keeps a copy of A; slow).
     bool check_residual = false;
+    /// Threads for CHOLMOD's own parallelism in Factorize(): the OpenMP loops of its supernodal
+    /// factorization (which ask for CHOLMOD_OMP_NUM_THREADS = 4 threads whatever the machine
+    /// has) and the BLAS it calls (OpenBLAS: one thread per core); 0 leaves both as the
+    /// environment sets them. harap parallelizes with TBB, and these threads only compete with
+    /// it: on armadillo-bend's finest level (2-core VM, docs/benchmarks.md) 1 factors 1.4×
+    /// faster than 0 alone, and 2.8× faster with a second factorization running beside it, as
+    /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
+    /// Factorize() sets it.
+    int native_threads = 1;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
     static Options FromConfig(const ConfigNode& node);

@@ -19,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "experiments/benchmarks/hierarchy_benchmark.h"
@@ -143,22 +144,43 @@ void RotationDerivativeProduct(benchmark::State& state, std::string key) {
 }
 
 ConfigNode SolverOptions(const std::string& mode, const std::string& ordering,
-                         bool parallel_solve = true) {
+                         bool parallel_solve = true, int native_threads = 1) {
   ConfigNode options;
   options.Set("mode", fmt::format("\"{}\"", mode));
   options.Set("ordering", fmt::format("\"{}\"", ordering));
   options.Set("parallel_solve", parallel_solve ? "true" : "false");
+  options.Set("native_threads", std::to_string(native_threads));
   return options;
 }
 
 void Factorization(benchmark::State& state, std::string key, std::string mode,
-                   std::string ordering, bool parallel_solve) {
+                   std::string ordering, bool parallel_solve, int native_threads) {
   Fixture& f = Get(key);
-  const ConfigNode options = SolverOptions(mode, ordering, parallel_solve);
+  const ConfigNode options = SolverOptions(mode, ordering, parallel_solve, native_threads);
   for (auto _ : state) {
     auto solver = f.registries.linear_solvers.Create("cholmod", options);
     solver->Factorize(f.system->reduced_matrix(), f.context);
     benchmark::DoNotOptimize(solver.get());
+  }
+  SetCounters(state, f);
+}
+
+// Two factorizations of the reduced matrix at once, one on a thread of its own, as the
+// hierarchical optimizer's setup runs them (one level in the background, another in the
+// caller's thread); with CHOLMOD's own threads on (native_threads = 0: OpenMP asks for 4, OpenBLAS
+// one per core) they compete with each other on top of the two factorizations.
+void ConcurrentFactorizations(benchmark::State& state, std::string key, int native_threads) {
+  Fixture& f = Get(key);
+  const ConfigNode options = SolverOptions("auto", "amd", true, native_threads);
+  const auto factorize = [&] {
+    auto solver = f.registries.linear_solvers.Create("cholmod", options);
+    solver->Factorize(f.system->reduced_matrix(), f.context);
+    benchmark::DoNotOptimize(solver.get());
+  };
+  for (auto _ : state) {
+    std::thread other(factorize);
+    factorize();
+    other.join();
   }
   SetCounters(state, f);
 }
@@ -320,17 +342,24 @@ void RegisterAll(const std::string& key) {
     for (const char* mode : {"auto", "simplicial", "supernodal"}) {
       const std::string suffix = std::string(mode) + "_" + ordering;
       add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering),
-          true);
+          true, 1);
       add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering), true);
       if (std::string_view(mode) != "supernodal") {
         // CHOLMOD's own sequential solve with the same factor, for the side-by-side ratio.
         add("Factorization_" + suffix + "_sequential", Factorization, key, std::string(mode),
-            std::string(ordering), false);
+            std::string(ordering), false, 1);
         add("Solve3_" + suffix + "_sequential", Solve, key, std::string(mode),
             std::string(ordering), false);
       }
     }
   }
+  // CHOLMOD's own threads (OpenMP, OpenBLAS) on, beside the default native_threads = 1.
+  add("Factorization_auto_amd_native_threads", Factorization, key, std::string("auto"),
+      std::string("amd"), true, 0);
+  add("Factorization_supernodal_amd_native_threads", Factorization, key,
+      std::string("supernodal"), std::string("amd"), true, 0);
+  add("ConcurrentFactorizations", ConcurrentFactorizations, key, 1);
+  add("ConcurrentFactorizations_native_threads", ConcurrentFactorizations, key, 0);
   add("FullIteration", FullIteration, key);
 
   HierarchyFixtures()[key] = std::make_unique<HierarchyFixture>(Get(key).scenario.mesh);

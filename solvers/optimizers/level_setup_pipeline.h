@@ -34,9 +34,11 @@ class SerializedFactory final : public ComponentFactory {
 /// the caller solves the levels that are ready: the hierarchical optimizer's P and C phases of
 /// finer levels overlap the S phase of coarser ones.
 ///
-/// With `overlap`, a task in the context's arena sets the levels up from coarse to fine; a caller
-/// that needs a level nobody has started yet sets it up itself (so nothing waits for a thread that
-/// may never come, e.g. under a global TBB thread limit). Without it, WaitFor() sets levels up on
+/// With `overlap`, a task in the context's arena sets the levels up in the given order (the
+/// hierarchical optimizer: finest first); a caller that needs a level nobody has started yet
+/// sets it up itself (so nothing waits for a thread that may never come, e.g. under a global TBB
+/// thread limit), so the caller, walking from the coarsest level down, and the task, walking up
+/// from the finest, meet in the middle. Without it, WaitFor() sets levels up on
 /// demand, in the caller's thread. Levels must be independent of each other's setup.
 class LevelSetupPipeline {
  public:

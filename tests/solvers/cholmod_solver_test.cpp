@@ -3,7 +3,11 @@
 // build has no CHOLMOD (the registry then has no "cholmod").
 
 #include <catch2/catch.hpp>
+#include <dlfcn.h>
+
+#include <filesystem>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -35,6 +39,20 @@ namespace {
 const std::vector<std::string> kModes = {"auto", "simplicial", "supernodal"};
 const std::vector<std::string> kOrderings = {"metis", "amd", "best"};
 
+// Threads of this process (Linux: entries of /proc/self/task; elsewhere 0).
+long ThreadCount() {
+#if defined(__linux__)
+  long count = 0;
+  for ([[maybe_unused]] const auto& entry :
+       std::filesystem::directory_iterator("/proc/self/task")) {
+    ++count;
+  }
+  return count;
+#else
+  return 0;
+#endif
+}
+
 #define HARAP_REQUIRE_CHOLMOD(registry)                              \
   if (!(registry).Contains("cholmod")) {                             \
     WARN("skipped: this build has no CHOLMOD (HARAP_WITH_CHOLMOD)"); \
@@ -63,6 +81,68 @@ TEST_CASE("cholmod: invalid option values list the valid choices", "[solvers][ch
   CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "mdoe = \"simplicial\""),
                     Catch::Contains("mode") && Catch::Contains("ordering") &&
                         Catch::Contains("check_residual") && Catch::Contains("pivot_tolerance"));
+}
+
+TEST_CASE("cholmod: native_threads caps CHOLMOD's OpenMP and BLAS threads, results agree",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "native_threads = -1"),
+                    Catch::Contains("native_threads") && Catch::Contains(">= 0"));
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "native_thread = 1"),
+                    Catch::Contains("native_threads"));
+
+  // The controls the solver sets, read back where this process has them (Debian's CHOLMOD is
+  // built with OpenMP; libblas.so.3 may or may not be OpenBLAS).
+  using GetInt = int (*)();
+  const auto omp_get_max_threads =
+      reinterpret_cast<GetInt>(dlsym(RTLD_DEFAULT, "omp_get_max_threads"));
+  const auto omp_get_dynamic = reinterpret_cast<GetInt>(dlsym(RTLD_DEFAULT, "omp_get_dynamic"));
+  const auto openblas_get_num_threads =
+      reinterpret_cast<GetInt>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  const int default_blas_threads = openblas_get_num_threads ? openblas_get_num_threads() : 0;
+
+  const Context context;
+  const SparseMatrix a = PinnedGridLaplacian(120, 120, 21);
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 23);
+  // Factors and solves on a new thread, which starts with OpenMP's defaults and, on its first
+  // parallel region, gets a pool of OpenMP threads of its own that lives as long as it does: the
+  // threads the process gained during the factorization are those CHOLMOD's OpenMP started.
+  const auto solve = [&](int native_threads, long& new_threads) {
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    std::thread worker([&] {
+      const int dynamic_before = omp_get_dynamic ? omp_get_dynamic() : 0;
+      const int threads_before = omp_get_max_threads ? omp_get_max_threads() : 0;
+      auto solver = MakeSolver(registry, "cholmod",
+                               "mode = \"supernodal\"\nnative_threads = " +
+                                   std::to_string(native_threads));
+      const long before = ThreadCount();
+      solver->Factorize(a, context);
+      new_threads = ThreadCount() - before;
+      // Only the factorization is capped: this thread's OpenMP settings are as they were.
+      if (omp_get_dynamic) CHECK(omp_get_dynamic() == dynamic_before);
+      if (omp_get_max_threads) CHECK(omp_get_max_threads() == threads_before);
+      CHECK(solver->Solve(b, x, context).success);
+    });
+    worker.join();
+    return x;
+  };
+  long capped_threads = 0, two_threads = 0, native_threads = 0;
+  const Eigen::MatrixXd one = solve(1, capped_threads);
+  if (openblas_get_num_threads) CHECK(openblas_get_num_threads() == 1);
+  const Eigen::MatrixXd two = solve(2, two_threads);
+  if (openblas_get_num_threads) CHECK(openblas_get_num_threads() == 2);
+  const Eigen::MatrixXd environment = solve(0, native_threads);
+  if (openblas_get_num_threads) CHECK(openblas_get_num_threads() == default_blas_threads);
+  if (native_threads > 0) {
+    // CHOLMOD's own OpenMP started threads; with the cap it started none.
+    CHECK(capped_threads == 0);
+  } else {
+    WARN("CHOLMOD started no OpenMP threads here: the cap is not observable");
+  }
+  CHECK(RelativeResidual(a, b, one) < 1e-10);
+  CHECK(RelativeDifference(two, one) < 1e-12);
+  CHECK(RelativeDifference(environment, one) < 1e-12);
 }
 
 TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][cholmod]") {

@@ -3,13 +3,18 @@
 // iteration). Counted by interposing malloc/calloc/realloc in this executable (glibc: forwards to
 // __libc_*), which also sees CHOLMOD's and BLAS's allocations through the dynamic linker.
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include <dlfcn.h>
 
 #include "framework/context.h"
 #include "tests/solvers/solver_test_matrices.h"
@@ -30,9 +35,15 @@
 namespace {
 std::atomic<bool> counting{false};
 std::atomic<long> allocations{0};
+// Who called malloc/calloc/realloc, for the first allocations counted: classified afterwards
+// (dladdr) without allocating while counting.
+std::array<void*, 4096> callers;
 
-void Count() {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1, std::memory_order_relaxed);
+void Count(void* caller) {
+  if (counting.load(std::memory_order_relaxed)) {
+    const long k = allocations.fetch_add(1, std::memory_order_relaxed);
+    if (k < static_cast<long>(callers.size())) callers[k] = caller;
+  }
 }
 }  // namespace
 
@@ -42,15 +53,15 @@ void* __libc_calloc(size_t count, size_t size);
 void* __libc_realloc(void* pointer, size_t size);
 
 void* malloc(size_t size) {
-  Count();
+  Count(__builtin_return_address(0));
   return __libc_malloc(size);
 }
 void* calloc(size_t count, size_t size) {
-  Count();
+  Count(__builtin_return_address(0));
   return __libc_calloc(count, size);
 }
 void* realloc(void* pointer, size_t size) {
-  Count();
+  Count(__builtin_return_address(0));
   return __libc_realloc(pointer, size);
 }
 }
@@ -71,6 +82,24 @@ long AllocationsIn(F&& f) {
   return allocations.load();
 }
 
+// Of the allocations the last AllocationsIn() counted, those that BLAS made itself. OpenBLAS
+// 0.3.21 (Debian 12) makes some on AVX-512 machines: its small-matrix dgemm kernel for
+// SkylakeX/CooperLake takes a 512-byte buffer from malloc on every call (seen on an AMD EPYC with
+// avx512_bf16, where it picks the COOPERLAKE kernels), and CHOLMOD's supernodal solve makes such
+// products. harap cannot avoid them; every other allocation is a failure.
+long AllocationsByBlas() {
+  const long counted = std::min<long>(allocations.load(), static_cast<long>(callers.size()));
+  long by_blas = 0;
+  for (long k = 0; k < counted; ++k) {
+    Dl_info info{};
+    if (dladdr(callers[k], &info) != 0 && info.dli_fname != nullptr &&
+        std::string_view(info.dli_fname).find("blas") != std::string_view::npos) {
+      ++by_blas;
+    }
+  }
+  return by_blas;
+}
+
 }  // namespace
 
 TEST_CASE("linear solvers: the allocation counter sees allocations", "[solvers]") {
@@ -81,6 +110,7 @@ TEST_CASE("linear solvers: the allocation counter sees allocations", "[solvers]"
   void* (*volatile allocate_new)(size_t) = static_cast<void* (*)(size_t)>(&::operator new);
   void (*volatile release_new)(void*) = static_cast<void (*)(void*)>(&::operator delete);
   CHECK(AllocationsIn([&] { release(allocate(64)); }) == 1);
+  CHECK(AllocationsByBlas() == 0);  // made here, not in BLAS
   CHECK(AllocationsIn([&] { release_new(allocate_new(64)); }) == 1);
   CHECK(AllocationsIn([] {}) == 0);
 }
@@ -114,7 +144,12 @@ TEST_CASE("linear solvers: Solve() does not allocate after its first call", "[so
         for (int i = 0; i < 3; ++i) summary = solver->Solve(b, x, context);
       });
       CHECK(summary.success);
-      CHECK(count == 0);
+      const long by_blas = AllocationsByBlas();
+      if (by_blas > 0) {
+        WARN(configuration << ": " << by_blas << " allocations in 3 solves made inside BLAS "
+                           << "(this machine's BLAS allocates in small matrix products)");
+      }
+      CHECK(count - by_blas == 0);
     }
   }
 }
