@@ -6,6 +6,7 @@
 #include <map>
 #include <mutex>
 
+#include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include "framework/error.h"
@@ -70,7 +71,17 @@ struct LevelSetupPipeline::State {
     lock.unlock();
     std::exception_ptr error;
     try {
-      setup(level);
+      if (arena) {
+        // Isolated: while this setup waits for its own parallel loops, its thread must not pick
+        // up another task of the arena. The background task is spawned by the caller's thread
+        // and stays in that thread's task pool until a worker steals it; without isolation the
+        // caller, setting up a coarse level on demand, could run the whole background task
+        // (finest level first) inside its own parallel loop before it got back to the coarse
+        // levels.
+        arena->execute([&] { tbb::this_task_arena::isolate([&] { setup(level); }); });
+      } else {
+        setup(level);
+      }
     } catch (...) {
       error = std::current_exception();
     }
