@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <thread>
 
 #include "framework/error.h"
@@ -60,13 +61,16 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
   Stopwatch check_clock;
-  const PreparedProblem prepared = [&] {
+  // Built inside the run's arena so the checks' parallel sorts keep to --threads.
+  const std::unique_ptr<const PreparedProblem> prepared_problem = [&] {
     try {
-      return PreparedProblem(problem, mesh_options);
+      return context.Run(
+          [&] { return std::make_unique<const PreparedProblem>(problem, mesh_options); });
     } catch (const InputError& error) {
       throw InputError(fmt::format("{}: {}", scenario.mesh_source, error.what()));
     }
   }();
+  const PreparedProblem& prepared = *prepared_problem;
   outcome.mesh_check_seconds = check_clock.Seconds();
   outcome.mesh_checks = prepared.checks();
   outcome.mesh_summary = prepared.Summary();

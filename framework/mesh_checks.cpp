@@ -3,6 +3,9 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -37,25 +40,62 @@ bool FiniteRow(const Positions& vertices, Index v) {
          std::isfinite(vertices(v, 2));
 }
 
-// For each vertex: the lowest-index referenced vertex with exactly the same (finite) coordinates,
-// or kNoVertex if it is that vertex itself, unreferenced or not finite.
-std::vector<Index> EarlierDuplicateVertex(const Mesh& mesh, const std::vector<bool>& referenced) {
-  std::vector<Index> order;
-  order.reserve(mesh.num_vertices());
-  for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    if (referenced[v] && FiniteRow(mesh.vertices, v)) order.push_back(v);
+// A sort key of N values with the index it belongs to; ordered by key, then index, so a parallel
+// sort gives the same order as a stable one. Compared value by value: std::array's operators
+// go through memcmp, which dominated the checks on large meshes.
+template <class Value, size_t N>
+struct KeyedIndex {
+  std::array<Value, N> key;
+  Index index;
+
+  bool SameKey(const KeyedIndex& other) const {
+    for (size_t i = 0; i < N; ++i) {
+      if (key[i] != other.key[i]) return false;
+    }
+    return true;
   }
-  const auto key = [&](Index v) {
-    return std::array<double, 3>{mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)};
-  };
-  std::sort(order.begin(), order.end(), [&](Index a, Index b) {
-    const auto ka = key(a), kb = key(b);
-    return ka != kb ? ka < kb : a < b;
-  });
-  std::vector<Index> earlier(mesh.num_vertices(), kNoVertex);
-  for (size_t i = 1, first = 0; i < order.size(); ++i) {
-    if (key(order[i]) == key(order[first])) {
-      earlier[order[i]] = order[first];
+  bool operator<(const KeyedIndex& other) const {
+    for (size_t i = 0; i < N; ++i) {
+      if (key[i] != other.key[i]) return key[i] < other.key[i];
+    }
+    return index < other.index;
+  }
+};
+
+// The records record_of(0..count−1) (KeyedIndex-like, key[0] a vertex index below
+// `num_vertices`), sorted by key, then index: a counting sort on key[0], then each vertex's few
+// records by the rest. Several times faster than one comparison sort of all records (the keys of
+// sides and elements are vertices); the records are made twice instead of being stored unsorted.
+template <class MakeRecord>
+auto SortByVertexKey(size_t count, Index num_vertices, const MakeRecord& record_of) {
+  using Record = decltype(record_of(size_t{0}));
+  std::vector<size_t> bucket_begin(static_cast<size_t>(num_vertices) + 1, 0);
+  for (size_t i = 0; i < count; ++i) ++bucket_begin[record_of(i).key[0] + 1];
+  std::partial_sum(bucket_begin.begin(), bucket_begin.end(), bucket_begin.begin());
+  std::vector<Record> sorted(count);
+  std::vector<size_t> fill(bucket_begin.begin(), bucket_begin.end() - 1);
+  for (size_t i = 0; i < count; ++i) {
+    const Record record = record_of(i);
+    sorted[fill[record.key[0]]++] = record;
+  }
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_vertices, 1024),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index v = range.begin(); v != range.end(); ++v) {
+                        std::sort(sorted.begin() + bucket_begin[v],
+                                  sorted.begin() + bucket_begin[v + 1]);
+                      }
+                    });
+  return sorted;
+}
+
+// For each of `count` items: the lowest index whose key equals its own, or kNoVertex if that is
+// the item itself. `sorted` holds the keyed items (a subset of 0..count−1) sorted by key, index.
+template <class Value, size_t N>
+std::vector<Index> EarlierEqualKey(Index count, const std::vector<KeyedIndex<Value, N>>& sorted) {
+  std::vector<Index> earlier(count, kNoVertex);
+  for (size_t i = 1, first = 0; i < sorted.size(); ++i) {
+    if (sorted[i].SameKey(sorted[first])) {
+      earlier[sorted[i].index] = sorted[first].index;
     } else {
       first = i;
     }
@@ -63,30 +103,35 @@ std::vector<Index> EarlierDuplicateVertex(const Mesh& mesh, const std::vector<bo
   return earlier;
 }
 
-// For each element: the lowest-index earlier element with the same vertex set, or kNoVertex.
-std::vector<Index> EarlierDuplicateElement(const Elements& elements) {
-  const Index count = static_cast<Index>(elements.rows());
-  const int size = static_cast<int>(elements.cols());
-  std::vector<std::array<Index, 4>> sorted(count);
-  for (Index e = 0; e < count; ++e) {
-    sorted[e].fill(kNoVertex);
-    for (int a = 0; a < size; ++a) sorted[e][a] = elements(e, a);
-    std::sort(sorted[e].begin(), sorted[e].begin() + size);
-  }
-  std::vector<Index> order(count);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](Index a, Index b) {
-    return sorted[a] != sorted[b] ? sorted[a] < sorted[b] : a < b;
-  });
-  std::vector<Index> earlier(count, kNoVertex);
-  for (size_t i = 1, first = 0; i < order.size(); ++i) {
-    if (sorted[order[i]] == sorted[order[first]]) {
-      earlier[order[i]] = order[first];
-    } else {
-      first = i;
+// For each vertex: the lowest-index referenced vertex with exactly the same (finite) coordinates,
+// or kNoVertex if it is that vertex itself, unreferenced or not finite.
+std::vector<Index> EarlierDuplicateVertex(const Mesh& mesh, const std::vector<bool>& referenced) {
+  std::vector<KeyedIndex<double, 3>> records;
+  records.reserve(mesh.num_vertices());
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    if (referenced[v] && FiniteRow(mesh.vertices, v)) {
+      records.push_back({{mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)}, v});
     }
   }
-  return earlier;
+  tbb::parallel_sort(records.begin(), records.end());
+  return EarlierEqualKey(mesh.num_vertices(), records);
+}
+
+// For each element: the lowest-index earlier element with the same vertex set, or kNoVertex.
+std::vector<Index> EarlierDuplicateElement(const Elements& elements, Index num_vertices) {
+  const Index count = static_cast<Index>(elements.rows());
+  const int size = static_cast<int>(elements.cols());
+  const auto record_of = [&](size_t i) {
+    KeyedIndex<Index, 4> record{{kNoVertex, kNoVertex, kNoVertex, kNoVertex}, static_cast<Index>(i)};
+    for (int a = 0; a < size; ++a) {  // insertion sort of the 3 or 4 vertices
+      const Index vertex = elements(record.index, a);
+      int b = a;
+      for (; b > 0 && record.key[b - 1] > vertex; --b) record.key[b] = record.key[b - 1];
+      record.key[b] = vertex;
+    }
+    return record;
+  };
+  return EarlierEqualKey(count, SortByVertexKey(count, num_vertices, record_of));
 }
 
 bool IsDegenerate(const Mesh& mesh, Index e) {
@@ -113,39 +158,35 @@ double SignedTetVolume6(const Mesh& mesh, Index e) {
 }
 
 // A side of an element: an edge of a triangle or a face of a tetrahedron, with its vertices
-// sorted, the element and (triangles) whether the element runs along it in sorted order.
-struct Side {
-  std::array<Index, 3> vertices;
-  Index element;
+// sorted (key), the element (index) and (triangles) whether the element runs along it in sorted
+// order. Ordered by vertices, then element.
+struct Side : KeyedIndex<Index, 3> {
   bool forward;
-  bool operator<(const Side& other) const {
-    return vertices != other.vertices ? vertices < other.vertices : element < other.element;
-  }
 };
 
 std::vector<Side> CollectSides(const Mesh& mesh) {
-  std::vector<Side> sides;
   const bool triangles = mesh.kind() == ElementKind::kTriangle;
-  sides.reserve(static_cast<size_t>(mesh.num_elements()) * (triangles ? 3 : 4));
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
+  const int per_element = triangles ? 3 : 4;
+  const auto side_of = [&](size_t i) {
+    const Index e = static_cast<Index>(i / per_element);
+    const int a = static_cast<int>(i % per_element);
+    Side side;
+    side.index = e;
     if (triangles) {
-      for (int a = 0; a < 3; ++a) {
-        const Index u = mesh.elements(e, a), v = mesh.elements(e, (a + 1) % 3);
-        sides.push_back({{std::min(u, v), std::max(u, v), kNoVertex}, e, u < v});
+      const Index u = mesh.elements(e, a), v = mesh.elements(e, (a + 1) % 3);
+      side.key = {std::min(u, v), std::max(u, v), kNoVertex};
+      side.forward = u < v;
+    } else {  // the face opposite corner a
+      for (int b = 0, k = 0; b < 4; ++b) {
+        if (b != a) side.key[k++] = mesh.elements(e, b);
       }
-    } else {
-      for (int skip = 0; skip < 4; ++skip) {
-        std::array<Index, 3> face{};
-        for (int a = 0, k = 0; a < 4; ++a) {
-          if (a != skip) face[k++] = mesh.elements(e, a);
-        }
-        std::sort(face.begin(), face.end());
-        sides.push_back({face, e, true});
-      }
+      std::sort(side.key.begin(), side.key.end());
+      side.forward = true;
     }
-  }
-  std::sort(sides.begin(), sides.end());
-  return sides;
+    return side;
+  };
+  return SortByVertexKey(static_cast<size_t>(mesh.num_elements()) * per_element,
+                         mesh.num_vertices(), side_of);
 }
 
 int CornerOf(const Mesh& mesh, Index e, Index v) {
@@ -156,19 +197,67 @@ int CornerOf(const Mesh& mesh, Index e, Index v) {
 }
 
 std::vector<Index> SideExample(const Side& side, bool triangles) {
-  std::vector<Index> example(side.vertices.begin(), side.vertices.begin() + (triangles ? 2 : 3));
+  std::vector<Index> example(side.key.begin(), side.key.begin() + (triangles ? 2 : 3));
   return example;
+}
+
+// Triangles: for each vertex, whether its incident triangles form more than one fan, two of
+// them being in one fan when they share an edge at the vertex (directly or through others).
+// Works vertex by vertex on its corners (in parallel, in cache): two corners are joined when
+// their triangles' other two vertices share one. The repeated corner of a triangle that lists a
+// vertex twice joins nothing, so such a vertex always counts as non-manifold.
+std::vector<bool> VerticesWithSeveralFans(const Mesh& mesh) {
+  const Index n = mesh.num_vertices();
+  std::vector<Index> corners_begin(static_cast<size_t>(n) + 1, 0);
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < 3; ++a) ++corners_begin[mesh.elements(e, a) + 1];
+  }
+  std::partial_sum(corners_begin.begin(), corners_begin.end(), corners_begin.begin());
+  std::vector<Index> corners(corners_begin.back());  // 3·triangle + corner, per vertex ascending
+  std::vector<Index> fill(corners_begin.begin(), corners_begin.end() - 1);
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < 3; ++a) corners[fill[mesh.elements(e, a)]++] = 3 * e + a;
+  }
+  std::vector<char> several(n, 0);  // not vector<bool>: written from several threads
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024), [&](const tbb::blocked_range<Index>& range) {
+    std::vector<std::pair<Index, Index>> links;  // (other vertex, local corner)
+    std::vector<Index> parent;
+    for (Index v = range.begin(); v != range.end(); ++v) {
+      const Index first = corners_begin[v], count = corners_begin[v + 1] - first;
+      if (count < 2) continue;
+      links.clear();
+      for (Index j = 0; j < count; ++j) {
+        const Index e = corners[first + j] / 3;
+        const int a = static_cast<int>(corners[first + j] % 3);
+        if (CornerOf(mesh, e, v) != a) continue;
+        links.emplace_back(mesh.elements(e, (a + 1) % 3), j);
+        links.emplace_back(mesh.elements(e, (a + 2) % 3), j);
+      }
+      std::sort(links.begin(), links.end());
+      parent.resize(count);
+      std::iota(parent.begin(), parent.end(), 0);
+      const auto find = [&](Index x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+      };
+      for (size_t i = 1; i < links.size(); ++i) {
+        if (links[i].first == links[i - 1].first) {
+          parent[find(links[i].second)] = find(links[i - 1].second);
+        }
+      }
+      const Index root = find(0);
+      for (Index j = 1; j < count && !several[v]; ++j) several[v] = find(j) != root;
+    }
+  });
+  return std::vector<bool>(several.begin(), several.end());
 }
 
 void CheckSides(const Mesh& mesh, MeshCheckReport& report) {
   const bool triangles = mesh.kind() == ElementKind::kTriangle;
   const std::vector<Side> sides = CollectSides(mesh);
-  // Corners (3·triangle + corner) of one vertex are joined when their triangles share an edge at
-  // the vertex; a vertex whose corners end up in more than one set has more than one fan.
-  DisjointSets<size_t> fans(triangles ? 3 * static_cast<size_t>(mesh.num_elements()) : 0);
   for (size_t begin = 0; begin < sides.size();) {
     size_t end = begin + 1;
-    while (end < sides.size() && sides[end].vertices == sides[begin].vertices) ++end;
+    while (end < sides.size() && sides[end].SameKey(sides[begin])) ++end;
     const size_t multiplicity = end - begin;
     if (multiplicity == 1) {
       Add(report.boundary_edges, SideExample(sides[begin], triangles));
@@ -177,34 +266,12 @@ void CheckSides(const Mesh& mesh, MeshCheckReport& report) {
     } else if (triangles && sides[begin].forward == sides[begin + 1].forward) {
       Add(report.inconsistent_orientation, SideExample(sides[begin], triangles));
     }
-    if (triangles) {
-      for (size_t i = begin + 1; i < end; ++i) {
-        for (int k = 0; k < 2; ++k) {
-          const Index v = sides[begin].vertices[k];
-          fans.Unite(3 * static_cast<size_t>(sides[begin].element) +
-                         CornerOf(mesh, sides[begin].element, v),
-                     3 * static_cast<size_t>(sides[i].element) + CornerOf(mesh, sides[i].element, v));
-        }
-      }
-    }
     begin = end;
   }
   if (triangles) {
-    std::vector<size_t> first_fan(mesh.num_vertices(), SIZE_MAX);
-    std::vector<bool> reported(mesh.num_vertices(), false);
-    for (Index e = 0; e < mesh.num_elements(); ++e) {
-      for (int a = 0; a < 3; ++a) {
-        const Index v = mesh.elements(e, a);
-        const size_t fan = fans.Find(3 * static_cast<size_t>(e) + a);
-        if (first_fan[v] == SIZE_MAX) {
-          first_fan[v] = fan;
-        } else if (first_fan[v] != fan && !reported[v]) {
-          reported[v] = true;
-        }
-      }
-    }
+    const std::vector<bool> several = VerticesWithSeveralFans(mesh);
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
-      if (reported[v]) Add(report.non_manifold_vertices, {v});
+      if (several[v]) Add(report.non_manifold_vertices, {v});
     }
   } else {
     // Tetrahedra: orientation is the sign of the volume; the minority sign is "inconsistent".
@@ -326,7 +393,7 @@ MeshCheckReport CheckMesh(const Mesh& mesh, const std::vector<Index>& constraine
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     if (IsDegenerate(mesh, e)) Add(report.degenerate_elements, {e});
   }
-  const std::vector<Index> earlier_element = EarlierDuplicateElement(mesh.elements);
+  const std::vector<Index> earlier_element = EarlierDuplicateElement(mesh.elements, mesh.num_vertices());
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     if (earlier_element[e] != kNoVertex) Add(report.duplicate_elements, {e, earlier_element[e]});
   }
@@ -398,8 +465,10 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
       }
     }
   }
-  if (options.drop_duplicate_elements) {
-    const std::vector<Index> earlier = EarlierDuplicateElement(elements);
+  // Without welding the elements are the checked ones, so the check's count says whether any
+  // repeat; welding can make new repeats, so then they are searched again.
+  if (options.drop_duplicate_elements && (welded > 0 || checks_.duplicate_elements.count > 0)) {
+    const std::vector<Index> earlier = EarlierDuplicateElement(elements, mesh.num_vertices());
     for (Index e = 0; e < elements.rows(); ++e) {
       if (keep[e] && earlier[e] != kNoVertex) {
         keep[e] = false;

@@ -28,6 +28,7 @@
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/scenario.h"
+#include "framework/mesh_checks.h"
 #include "solvers/cholmod_solver.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
@@ -38,6 +39,7 @@ using namespace harap;
 /// One loaded problem with its energy precomputed and its reduced system factored.
 struct Fixture {
   Scenario scenario;
+  Mesh input_mesh;  ///< The scenario's mesh in file order, as `harap deform` checks it.
   Registries registries = MakeBuiltinRegistries();
   Context context;
   std::unique_ptr<Energy> energy;
@@ -48,7 +50,7 @@ struct Fixture {
   Eigen::MatrixXd reduced_rhs, reduced_x;
 
   Fixture(Scenario loaded, const std::string& energy_name)
-      : scenario(std::move(loaded)) {
+      : scenario(std::move(loaded)), input_mesh(scenario.mesh) {
     // The optimizers renumber each level for locality; measure the kernels the same way.
     const MeshOrdering ordering = LocalityOrdering(scenario.mesh);
     scenario.mesh = ordering.mesh;
@@ -260,6 +262,20 @@ void IterativeSolve(benchmark::State& state, std::string key, IterativeCase c) {
   SetCounters(state, f);
 }
 
+// The input checks and repairs `harap deform` runs before any optimizer (PreparedProblem:
+// CheckMesh, then welding and duplicate removal), on the mesh in file order.
+void PrepareProblem(benchmark::State& state, std::string key) {
+  Fixture& f = Get(key);
+  DeformationProblem problem;
+  problem.mesh = &f.input_mesh;
+  problem.constraints = f.scenario.MergedConstraints();
+  for (auto _ : state) {
+    const PreparedProblem prepared(problem, MeshRepairOptions());
+    benchmark::DoNotOptimize(prepared.checks().boundary_edges.count);
+  }
+  SetCounters(state, f);
+}
+
 void FullIteration(benchmark::State& state, std::string key) {
   Fixture& f = Get(key);
   for (auto _ : state) {
@@ -361,6 +377,7 @@ void RegisterAll(const std::string& key) {
   add("ConcurrentFactorizations", ConcurrentFactorizations, key, 1);
   add("ConcurrentFactorizations_native_threads", ConcurrentFactorizations, key, 0);
   add("FullIteration", FullIteration, key);
+  add("PrepareProblem", PrepareProblem, key);
 
   HierarchyFixtures()[key] = std::make_unique<HierarchyFixture>(Get(key).scenario.mesh);
   const Registries& registries = HierarchyFixtures()[key]->registries;

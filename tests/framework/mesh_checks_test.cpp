@@ -111,6 +111,24 @@ TEST_CASE("CheckMesh finds each defect and names the element", "[mesh_checks]") 
     CHECK(report.non_manifold_edges.count == 0);
     CHECK(report.components.size() == 1);  // connected through the shared vertex
   }
+  SECTION("a closed fan around a vertex, listed in scrambled order, is one fan") {
+    // An octahedron: every vertex has a closed fan of four triangles.
+    Mesh mesh = MakeMesh({{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}},
+                         {{0, 2, 4}, {1, 3, 5}, {2, 1, 4}, {3, 0, 5}, {1, 2, 5}, {0, 3, 4},
+                          {2, 0, 5}, {3, 1, 4}});
+    const MeshCheckReport report = CheckMesh(mesh, {});
+    CHECK(report.non_manifold_vertices.count == 0);
+    CHECK(report.boundary_edges.count == 0);
+    CHECK(report.non_manifold_edges.count == 0);
+  }
+  SECTION("a face that lists a vertex twice makes it non-manifold") {
+    // Its second corner at vertex 1 shares no edge with anything: a fan of its own.
+    Mesh mesh = MakeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {1, 1, 2}});
+    const MeshCheckReport report = CheckMesh(mesh, {});
+    CHECK(report.non_manifold_vertices.count == 1);
+    CHECK(report.non_manifold_vertices.examples[0] == std::vector<Index>{1});
+    CHECK(report.degenerate_elements.count == 1);
+  }
   SECTION("inconsistent orientation across an edge") {
     Mesh mesh = ClosedTetrahedron();
     mesh.elements(3, 1) = 3;  // 1 2 3 flipped to 1 3 2
@@ -254,6 +272,19 @@ TEST_CASE("PreparedProblem drops repeated faces and faces welding collapses", "[
     CHECK(prepared.problem().mesh->num_elements() == 3);  // the copy is gone
     CHECK(prepared.problem().mesh->num_vertices() == 5);
     CHECK(prepared.checks().degenerate_elements.count == 1);
+  }
+  SECTION("repeats that only welding makes are dropped too") {
+    // Two copies of one triangle on unwelded seam vertices: different faces until welded.
+    const Mesh seam = MakeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}},
+                               {{0, 1, 2}, {3, 4, 2}});
+    DeformationProblem seam_problem;
+    seam_problem.mesh = &seam;
+    MeshRepairOptions weld;
+    weld.weld_duplicates = true;
+    const PreparedProblem prepared(seam_problem, weld);
+    CHECK(prepared.checks().duplicate_elements.count == 0);
+    CHECK(prepared.problem().mesh->num_elements() == 1);
+    CHECK(prepared.problem().mesh->num_vertices() == 3);
   }
   MeshRepairOptions options;
   options.weld_duplicates = true;
