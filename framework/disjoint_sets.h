@@ -11,7 +11,10 @@ namespace harap {
 /// member, so roots (and anything numbered by them) do not depend on the order of the unions.
 template <class Integer>
 struct DisjointSets {
-  explicit DisjointSets(Integer n) : parent(static_cast<size_t>(n)) {
+  explicit DisjointSets(Integer n = 0) { Reset(n); }
+  /// Makes 0..n−1 singletons again, keeping the storage (for reuse in a loop).
+  void Reset(Integer n) {
+    parent.resize(static_cast<size_t>(n));
     std::iota(parent.begin(), parent.end(), Integer{0});
   }
   Integer Find(Integer x) {

@@ -66,10 +66,15 @@ struct KeyedIndex {
 // `num_vertices`), sorted by key, then index: a counting sort on key[0], then each vertex's few
 // records by the rest. Several times faster than one comparison sort of all records (the keys of
 // sides and elements are vertices); the records are made twice instead of being stored unsorted.
+// `bucket_begin_out`, if given, receives where each vertex's records begin (num_vertices + 1
+// entries).
 template <class MakeRecord>
-auto SortByVertexKey(size_t count, Index num_vertices, const MakeRecord& record_of) {
+auto SortByVertexKey(size_t count, Index num_vertices, const MakeRecord& record_of,
+                     std::vector<size_t>* bucket_begin_out = nullptr) {
   using Record = decltype(record_of(size_t{0}));
-  std::vector<size_t> bucket_begin(static_cast<size_t>(num_vertices) + 1, 0);
+  std::vector<size_t> local_bucket_begin;
+  std::vector<size_t>& bucket_begin = bucket_begin_out ? *bucket_begin_out : local_bucket_begin;
+  bucket_begin.assign(static_cast<size_t>(num_vertices) + 1, 0);
   for (size_t i = 0; i < count; ++i) ++bucket_begin[record_of(i).key[0] + 1];
   std::partial_sum(bucket_begin.begin(), bucket_begin.end(), bucket_begin.begin());
   std::vector<Record> sorted(count);
@@ -122,7 +127,8 @@ std::vector<Index> EarlierDuplicateElement(const Elements& elements, Index num_v
   const Index count = static_cast<Index>(elements.rows());
   const int size = static_cast<int>(elements.cols());
   const auto record_of = [&](size_t i) {
-    KeyedIndex<Index, 4> record{{kNoVertex, kNoVertex, kNoVertex, kNoVertex}, static_cast<Index>(i)};
+    KeyedIndex<Index, 4> record{{kNoVertex, kNoVertex, kNoVertex, kNoVertex},
+                                static_cast<Index>(i)};
     for (int a = 0; a < size; ++a) {  // insertion sort of the 3 or 4 vertices
       const Index vertex = elements(record.index, a);
       int b = a;
@@ -208,47 +214,43 @@ std::vector<Index> SideExample(const Side& side, bool triangles) {
 // vertex twice joins nothing, so such a vertex always counts as non-manifold.
 std::vector<bool> VerticesWithSeveralFans(const Mesh& mesh) {
   const Index n = mesh.num_vertices();
-  std::vector<Index> corners_begin(static_cast<size_t>(n) + 1, 0);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < 3; ++a) ++corners_begin[mesh.elements(e, a) + 1];
-  }
-  std::partial_sum(corners_begin.begin(), corners_begin.end(), corners_begin.begin());
-  std::vector<Index> corners(corners_begin.back());  // 3·triangle + corner, per vertex ascending
-  std::vector<Index> fill(corners_begin.begin(), corners_begin.end() - 1);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < 3; ++a) corners[fill[mesh.elements(e, a)]++] = 3 * e + a;
-  }
+  // Each vertex's corners (3·triangle + corner), ascending.
+  std::vector<size_t> corners_begin;
+  const std::vector<KeyedIndex<Index, 1>> corners = SortByVertexKey(
+      3 * static_cast<size_t>(mesh.num_elements()), n,
+      [&](size_t c) {
+        return KeyedIndex<Index, 1>{{mesh.elements(static_cast<Index>(c / 3), c % 3)},
+                                    static_cast<Index>(c)};
+      },
+      &corners_begin);
   std::vector<char> several(n, 0);  // not vector<bool>: written from several threads
-  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024), [&](const tbb::blocked_range<Index>& range) {
-    std::vector<std::pair<Index, Index>> links;  // (other vertex, local corner)
-    std::vector<Index> parent;
-    for (Index v = range.begin(); v != range.end(); ++v) {
-      const Index first = corners_begin[v], count = corners_begin[v + 1] - first;
-      if (count < 2) continue;
-      links.clear();
-      for (Index j = 0; j < count; ++j) {
-        const Index e = corners[first + j] / 3;
-        const int a = static_cast<int>(corners[first + j] % 3);
-        if (CornerOf(mesh, e, v) != a) continue;
-        links.emplace_back(mesh.elements(e, (a + 1) % 3), j);
-        links.emplace_back(mesh.elements(e, (a + 2) % 3), j);
-      }
-      std::sort(links.begin(), links.end());
-      parent.resize(count);
-      std::iota(parent.begin(), parent.end(), 0);
-      const auto find = [&](Index x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-      };
-      for (size_t i = 1; i < links.size(); ++i) {
-        if (links[i].first == links[i - 1].first) {
-          parent[find(links[i].second)] = find(links[i - 1].second);
-        }
-      }
-      const Index root = find(0);
-      for (Index j = 1; j < count && !several[v]; ++j) several[v] = find(j) != root;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      std::vector<std::pair<Index, Index>> links;  // (other vertex, local corner)
+                      DisjointSets<Index> fans;
+                      for (Index v = range.begin(); v != range.end(); ++v) {
+                        const size_t first = corners_begin[v];
+                        const Index count = static_cast<Index>(corners_begin[v + 1] - first);
+                        if (count < 2) continue;
+                        links.clear();
+                        for (Index j = 0; j < count; ++j) {
+                          const Index e = corners[first + j].index / 3;
+                          const int a = corners[first + j].index % 3;
+                          if (CornerOf(mesh, e, v) != a) continue;
+                          links.emplace_back(mesh.elements(e, (a + 1) % 3), j);
+                          links.emplace_back(mesh.elements(e, (a + 2) % 3), j);
+                        }
+                        std::sort(links.begin(), links.end());
+                        fans.Reset(count);
+                        for (size_t i = 1; i < links.size(); ++i) {
+                          if (links[i].first == links[i - 1].first)
+                            fans.Unite(links[i].second, links[i - 1].second);
+                        }
+                        // A set's root is its smallest member: corner 0 roots its own fan.
+                        for (Index j = 1; j < count && !several[v]; ++j)
+                          several[v] = fans.Find(j) != 0;
+                      }
+                    });
   return std::vector<bool>(several.begin(), several.end());
 }
 
@@ -393,7 +395,8 @@ MeshCheckReport CheckMesh(const Mesh& mesh, const std::vector<Index>& constraine
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     if (IsDegenerate(mesh, e)) Add(report.degenerate_elements, {e});
   }
-  const std::vector<Index> earlier_element = EarlierDuplicateElement(mesh.elements, mesh.num_vertices());
+  const std::vector<Index> earlier_element =
+      EarlierDuplicateElement(mesh.elements, mesh.num_vertices());
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     if (earlier_element[e] != kNoVertex) Add(report.duplicate_elements, {e, earlier_element[e]});
   }
