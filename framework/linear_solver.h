@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "framework/context.h"
 #include "framework/types.h"
@@ -64,6 +65,32 @@ class LinearSolver {
 
   /// True for factorization-based solvers (their result does not depend on the warm start).
   virtual bool is_direct() const = 0;
+
+  /// How Refactor() brought the factorization up to date.
+  enum class RefactorRoute {
+    kFull,     ///< Analysis and factorization from scratch (what Factorize() does).
+    kNumeric,  ///< The last analysis (ordering, elimination tree) reused, values factored anew.
+    kUpdate,   ///< The existing factor modified row by row (low-rank updates), nothing refactored.
+  };
+  struct RefactorSummary {
+    RefactorRoute route = RefactorRoute::kFull;
+    Index changed_rows = 0;
+    double seconds = 0.0;
+  };
+
+  /// Brings the factorization up to date for `a`, which has the same size and sparsity pattern
+  /// (explicit zeros included) as the matrix of the last Factorize(), and whose values differ
+  /// only in the rows and columns `changed_rows` (sorted, unique). Interactive sessions change
+  /// which vertices are handles this way: a handle's row and column become the identity's.
+  /// Solvers choose the cheapest route that gives the same factorization up to rounding; the
+  /// default factors from scratch. Throws like Factorize(); on a throw the solver must be
+  /// factored again before the next Solve().
+  virtual RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                                   const Context& context) {
+    Stopwatch clock;
+    Factorize(a, context);
+    return {RefactorRoute::kFull, static_cast<Index>(changed_rows.size()), clock.Seconds()};
+  }
 
  protected:
   LinearSolver() = default;
