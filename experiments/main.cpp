@@ -17,6 +17,7 @@
 #include "experiments/component_factory.h"
 #include "experiments/deform.h"
 #include "experiments/experiment.h"
+#include "experiments/handles_command.h"
 #include "experiments/process.h"
 #include "experiments/runner.h"
 #include "framework/error.h"
@@ -397,6 +398,15 @@ int main(int argc, char** argv) {
   hierarchy->add_option("--set", args.settings, "set an option, e.g. hierarchy.min_vertices=500");
   hierarchy->add_option("--threads", args.threads, "worker threads (default: all cores)");
 
+  std::string handles_scenario, handles_out;
+  auto* handles = app.add_subcommand(
+      "handles", "show what a scenario's handles select and where they go, without solving: "
+                 "bounding box, per handle vertex count, centroid and motion; --out writes the "
+                 "mesh with the handles coloured");
+  handles->add_option("scenario", handles_scenario, "scenario TOML file")->required();
+  handles->add_option("--out", handles_out,
+                      "write the rest mesh as PLY with each handle's vertices coloured");
+
   RunArguments run_args;
   auto* run = app.add_subcommand("run", "run an experiment config: every scenario x variant x grid "
                                         "combination, with resume (docs/experiments.md)");
@@ -429,6 +439,7 @@ int main(int argc, char** argv) {
   try {
     if (*list) return List();
     if (*hierarchy) return WriteHierarchy(args, hierarchy_out);
+    if (*handles) return HandlesCommand(handles_scenario, handles_out);
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
     return Deform(args);

@@ -17,6 +17,12 @@ struct ScenarioHandle {
   std::string name;             ///< `name`, or "handle N" (1-based) if absent.
   std::vector<Index> vertices;  ///< Selected vertices, ascending.
   Positions targets;            ///< #vertices×3 target positions.
+  /// What selects the vertices, with its units ("slab y in [0, 0.05] (fractions of the bounding
+  /// box)", "label 2 of x.sel", ...), for `harap handles` and messages.
+  std::string selection;
+  /// The target motion in words: "fixed", "rotate 90° about (0, 0, 1) through (..), translate
+  /// (..)", "per-vertex targets from FILE", "4x4 transform from FILE", ...
+  std::string motion;
 };
 
 /// A deformation scenario (../shared/scenarios/FORMAT.md, harap's additions in docs/input.md):
@@ -26,6 +32,8 @@ struct Scenario {
   std::string mesh_source;          ///< Mesh file path or builtin description, for reports.
   Mesh mesh;                        ///< After `refine` / `tetrahedralize`; `planar` decided.
   std::vector<ScenarioHandle> handles;
+  /// The box selections refer to: of the vertices some element references (docs/input.md).
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero(), box_max = Eigen::Vector3d::Zero();
   std::optional<Positions> initial; ///< From `initial = "file"`.
   /// Remarks about the input for reports: reoriented tetrahedra, what tetrahedralization made,
   /// why the mesh is (not) treated as planar.
