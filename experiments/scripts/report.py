@@ -32,6 +32,7 @@ import shutil
 import statistics
 import subprocess
 import sys
+import time
 from collections import OrderedDict, defaultdict
 
 import matplotlib
@@ -40,11 +41,45 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+try:
+    import tomllib  # Python 3.11
+except ImportError:  # pragma: no cover
+    tomllib = None
+
 PHASES = [("hierarchy", "H", "#1f77b4"), ("precompute", "P", "#ff7f0e"),
           ("constrain", "C", "#2ca02c"), ("solve", "S", "#d62728")]
-KNOWN_FIGURES = {"phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars"}
-KNOWN_REPORT_KEYS = {"claim", "notes", "figures", "compare", "baseline", "panel", "render",
-                     "render_runs"}
+# One list for report.py and `harap run`, which checks [report] before any run starts.
+with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "report_keys.json"),
+          encoding="utf-8") as _keys_file:
+    _KEYS = json.load(_keys_file)
+KNOWN_FIGURES = set(_KEYS["figures"])
+KNOWN_REPORT_KEYS = set(_KEYS["report_keys"])
+_START = time.monotonic()
+
+
+def progress(message):
+    """Plain progress lines on stderr (terminal or pipe alike): what the report is doing."""
+    print(f"report: [{time.monotonic() - _START:5.1f} s] {message}", file=sys.stderr, flush=True)
+
+
+def energy_of(run):
+    """What a run's energy value measures: the energy's name and its [energy] settings."""
+    config = run["_plan"].get("config", "")
+    table = ""
+    if tomllib is not None:
+        try:
+            table = json.dumps(tomllib.loads(config).get("energy", {}), sort_keys=True)
+        except tomllib.TOMLDecodeError:
+            table = ""
+    return (run.get("energy_type", ""), table)
+
+
+def energy_label(run):
+    name, table = energy_of(run)
+    settings = json.loads(table) if table else {}
+    settings.pop("type", None)
+    extra = ", ".join(f"{k}={v}" for k, v in sorted(settings.items()))
+    return f"{name}{' (' + extra + ')' if extra else ''}"
 
 
 # ------------------------------------------------------------------------------------------
@@ -513,7 +548,9 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
     results = []
     renderer = render_vtk if use_vtk else render_matplotlib
     os.makedirs(os.path.join(directory, "pictures"), exist_ok=True)
-    for scenario, group in by_scenario.items():
+    for number, (scenario, group) in enumerate(by_scenario.items(), 1):
+        if not use_vtk:
+            progress(f"picture {number}/{len(by_scenario)}: {scenario}")
         group = group[:per_scenario]
         info = group[0]["run"]
         rest_path = os.path.join(directory, info["rest_mesh"])
@@ -554,6 +591,21 @@ def measured_summary(runs, compare, baseline):
         by_value.setdefault(compare_value(run, compare), []).append((run, base))
     for value, group in by_value.items():
         n = len(group)
+        different = sorted({(energy_label(r), energy_label(b)) for r, b in group
+                            if energy_of(r) != energy_of(b)})
+        if different:
+            # Values of different functionals: no "lower energy" or energy ratio between them.
+            t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
+                       if b["timings"]["total"] > 0]
+            faster = sum(1 for r, b in group if r["timings"]["total"] < b["timings"]["total"])
+            text = (f"**{value}** vs **{baseline}** ({n} {'pair' if n == 1 else 'pairs'}): "
+                    f"⚠ different energies ({'; '.join(f'{a} vs {b}' for a, b in different)}), "
+                    "so their values are not compared; faster in total in "
+                    f"{faster}/{n}")
+            if t_ratio:
+                text += f", median total-time ratio {statistics.median(t_ratio):.3g}"
+            lines.append(text + ".")
+            continue
         e_ratio = [r["energy"] / b["energy"] for r, b in group if b["energy"] > 0]
         t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
                    if b["timings"]["total"] > 0]
@@ -610,7 +662,9 @@ def main():
     args = parser.parse_args()
     directory = args.directory
 
+    progress(f"reading {directory}")
     plan, runs = load(directory)
+    progress(f"{len(runs)} runs, {sum(1 for r in runs if ok(r))} finished")
     GRID_KEYS[:] = plan.get("grid_keys", [])
     report = plan.get("report", {})
     unknown = set(report) - KNOWN_REPORT_KEYS
@@ -693,7 +747,8 @@ def main():
 
     # Figures.
     out.append("## Figures\n")
-    for figure in figures:
+    for number, figure in enumerate(figures, 1):
+        progress(f"figure {number}/{len(figures)}: {figure}")
         if figure == "phases":
             made = figure_phases(directory, runs)
         elif figure == "energy_vs_time":
@@ -713,6 +768,7 @@ def main():
 
     # Pictures.
     if render and not args.no_render:
+        progress("pictures of the meshes (VTK under Xvfb if available, else matplotlib)")
         pictures, backend = make_pictures(directory, runs, render, per_scenario,
                                           args.render_backend)
         if pictures:
@@ -736,6 +792,7 @@ def main():
 
     with open(os.path.join(directory, "report.md"), "w", encoding="utf-8") as file:
         file.write("\n".join(out) + "\n")
+    progress("done")
     print(f"wrote {os.path.join(directory, 'report.md')}")
     return 0
 

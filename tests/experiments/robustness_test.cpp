@@ -44,7 +44,7 @@ fs::path TempDir(const std::string& name) {
 Scenario SeamScenario(std::vector<std::pair<Index, Index>>& seam) {
   Scenario scenario;
   scenario.mesh = testing::SeamedGrid(9, seam);
-  ScenarioHandle left{"left", {}, {}}, right{"right", {}, {}};
+  ScenarioHandle left{"left", {}, {}, {}, {}}, right{"right", {}, {}, {}, {}};
   for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
     if (scenario.mesh.vertices(v, 0) == 0.0) left.vertices.push_back(v);
     if (scenario.mesh.vertices(v, 0) == 1.0) right.vertices.push_back(v);
