@@ -30,6 +30,7 @@
 #include "experiments/component_factory.h"
 #include "framework/config.h"
 #include "framework/error.h"
+#include "framework/io/scenario.h"
 
 namespace harap {
 
@@ -133,6 +134,9 @@ class ExperimentParser {
         }
       }
       for (const fs::path& file : matches) {
+        // The scenario's text now (a typo should not fail every run of it after the sweep
+        // started); its mesh and other files are read by the runs.
+        CheckScenarioText(file);
         ExperimentScenario scenario;
         scenario.name = file.stem().string();
         scenario.file = fs::absolute(file).lexically_normal();

@@ -712,6 +712,7 @@ class Parser {
         }
       }
     }
+    if (text_only_) return Scenario{};
 
     Scenario scenario;
     const toml::node* refine_node = root.get("refine");
@@ -1010,6 +1011,9 @@ class Parser {
   std::string source_;
   std::filesystem::path base_;
   ScenarioLimits limits_;
+
+ public:
+  bool text_only_ = false;  // CheckScenarioText: stop before reading any file
 };
 
 }  // namespace
@@ -1042,6 +1046,16 @@ Scenario ParseScenario(std::string_view toml_text, const std::string& source_nam
                        const std::filesystem::path& base_directory,
                        const ScenarioLimits& limits) {
   return Parser(source_name, base_directory, limits).Parse(toml_text);
+}
+
+void CheckScenarioText(const std::filesystem::path& file) {
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) {
+    throw InputError(fmt::format("{}: scenario file not found", file.string()));
+  }
+  Parser parser(file.string(), file.parent_path(), {});
+  parser.text_only_ = true;
+  parser.Parse(ReadFileMaybeXz(file));
 }
 
 Scenario LoadScenario(const std::filesystem::path& file) {

@@ -57,6 +57,11 @@ struct ScenarioLimits {
 /// InputError naming the file, the handle and the problem.
 Scenario LoadScenario(const std::filesystem::path& file);
 
+/// Checks a scenario file's text (TOML syntax, keys, values, handles) without reading the mesh
+/// or any other file it names, for callers that want typos found before long work starts
+/// (`harap run` checks every scenario file of an experiment so). Throws like LoadScenario.
+void CheckScenarioText(const std::filesystem::path& file);
+
 /// Same from TOML text; relative paths are resolved against `base_directory`.
 Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,
                        const std::filesystem::path& base_directory,

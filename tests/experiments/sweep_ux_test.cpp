@@ -97,6 +97,17 @@ TEST_CASE("harap run checks [report] before any run: figures, keys, compare",
       ReadText(fs::path(HARAP_SOURCE_DIR) / "experiments/scripts/report.py");
   CHECK_THAT(report_py, Contains("report_keys.json"));
 
+  // A typo in a scenario file fails now too, naming the scenario file and line.
+  folder.Write("typo.toml", "mesh = { builtin = \"cylinder\", vertices = 600 }\n[[handle]]\n"
+                            "select.slab = { axis = \"z\", from = 0.0, to = 0.05 }\n"
+                            "rotat = { axis = [1, 0, 0], degrees = 10 }\n");
+  const std::string typo_config =
+      folder.Write("typo-config.toml", "[scenarios]\nfiles = [\"typo.toml\"]\n");
+  const auto typo = RunHarap(fmt::format("run {} --out {}", typo_config, out.string()));
+  CHECK(typo.status == 1);
+  CHECK_THAT(typo.output, Contains("typo.toml:4:1") && Contains("unknown key 'rotat'"));
+  CHECK_FALSE(fs::exists(out));
+
   auto error_of = [&](const std::string& report_table) {
     try {
       harap::ParseExperiment(std::string(kTwoVariants) + "[grid]\n\"solver.type\" = "
