@@ -268,6 +268,9 @@ def quadrant_color(x, y):
 def figure_relative_scatter(directory, runs, compare, baseline, panel):
     pairs = pairs_against_baseline(runs, compare, baseline)
     pairs = [(r, b) for r, b in pairs if b["energy"] > 0 and b["timings"]["total"] > 0]
+    # Energy ratios only between runs of the same energy (see measured_summary).
+    skipped = sum(1 for r, b in pairs if energy_of(r) != energy_of(b))
+    pairs = [(r, b) for r, b in pairs if energy_of(r) == energy_of(b)]
     if not pairs:
         return None
     if panel:
@@ -304,7 +307,9 @@ def figure_relative_scatter(directory, runs, compare, baseline, panel):
     return save(fig, directory, "relative_scatter"), (
         f"Each point: one scenario, total time and final energy relative to `{baseline}`. Green: "
         "faster and lower energy (the ideal, bottom left); blue: lower energy but slower; "
-        "orange: faster but higher energy; red: slower and higher.")
+        "orange: faster but higher energy; red: slower and higher." +
+        (f" {skipped} pairs with different energies are left out (their energies are not "
+         "comparable)." if skipped else ""))
 
 
 def figure_levels(directory, runs):
@@ -368,9 +373,12 @@ def figure_energy_bars(directory, runs):
         ax.set_title(title, fontsize=10)
     axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
+    mixed = len({energy_of(r) for r in done}) > 1
     return save(fig, directory, "energy_bars"), (
         "Final energy above the lowest energy among the runs of the same scenario (in percent; "
-        "0 for the best run) and total time per run.")
+        "0 for the best run) and total time per run." +
+        (" ⚠ The runs use different energies, whose values are not comparable: read the energy "
+         "bars within runs of the same energy only." if mixed else ""))
 
 
 # ------------------------------------------------------------------------------------------

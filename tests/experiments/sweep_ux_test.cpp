@@ -145,6 +145,8 @@ energy.type = "spokes_and_rims"
 [[variant]]
 name = "edges"
 energy.type = "spokes"
+[report]
+figures = ["phases", "relative_scatter", "energy_bars"]
 )");
   const fs::path out = folder.dir / "out";
   // Piped: plain lines, one per finished run, named by scenario and variant.
@@ -164,11 +166,13 @@ energy.type = "spokes"
   INFO(report.output);
   REQUIRE(report.status == 0);
   CHECK_THAT(report.output, Contains("report: ["));  // progress lines
-  CHECK_THAT(report.output, Contains("figure 1/2: phases"));
+  CHECK_THAT(report.output, Contains("figure 1/3: phases"));
   const std::string text = ReadText(out / "report.md");
   CHECK_THAT(text, Contains("different energies"));
   CHECK_THAT(text, Contains("spokes vs spokes_and_rims"));
   CHECK_THAT(text, !Contains("median energy ratio"));
+  CHECK_THAT(text, Contains("relative_scatter: no data"));  // its only pair mixes energies
+  CHECK_THAT(text, Contains("The runs use different energies"));  // energy_bars caption
   CHECK_THAT(text, !Contains("lower energy in"));
 }
 
