@@ -15,6 +15,7 @@
 
 #include <fnmatch.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -275,8 +276,8 @@ class Progress {
     }
     if (bar_) {
       // The finished run on its own line above the bar, so the names stay readable.
-      fmt::print(stderr, "\r{:<120}\r[{}/{}] {:7} {}  {}\n", "", done_, total_, status, name,
-                 detail);
+      fmt::print(stderr, "\r{:<{}}\r[{}/{}] {:7} {}  {}\n", "", TerminalWidth(), done_, total_,
+                 status, name, detail);
       Draw();
     } else if (!quiet_) {
       fmt::print(stderr, "[{}/{}] {:7} {}  {}\n", done_, total_, status, name, detail);
@@ -285,6 +286,15 @@ class Progress {
   }
 
  private:
+  // Columns of the terminal less one (a full line would wrap), 79 if unknown.
+  static size_t TerminalWidth() {
+    winsize size{};
+    if (ioctl(fileno(stderr), TIOCGWINSZ, &size) == 0 && size.ws_col > 1) {
+      return static_cast<size_t>(size.ws_col) - 1;
+    }
+    return 79;
+  }
+
   void Tick() {
     std::unique_lock lock(mutex_);
     while (!stop_) {
@@ -304,9 +314,13 @@ class Progress {
     std::string running = running_.empty() ? std::string() : "  running " + running_.front();
     if (running_.size() > 1) running += fmt::format(" (+{})", running_.size() - 1);
     if (running.size() > 60) running = running.substr(0, 57) + "...";
-    fmt::print(stderr, "\r[{}{}] {}/{} runs  {} failed  {} skipped  elapsed {}  ETA {}{}   ",
-               std::string(filled, '#'), std::string(kWidth - filled, '.'), done_, total_,
-               failed_, skipped_, FormatDuration(elapsed), eta, running);
+    // Padded to a fixed width: a shorter line (the running run gone) leaves nothing behind.
+    const std::string line =
+        fmt::format("[{}{}] {}/{} runs  {} failed  {} skipped  elapsed {}  ETA {}{}",
+                    std::string(filled, '#'), std::string(kWidth - filled, '.'), done_, total_,
+                    failed_, skipped_, FormatDuration(elapsed), eta, running);
+    const size_t width = TerminalWidth();
+    fmt::print(stderr, "\r{:<{}}", line.substr(0, width), width);
     std::fflush(stderr);
   }
 
