@@ -78,12 +78,12 @@ Mesh LoopSubdivide(const Mesh& mesh, int steps, std::string* note) {
           "refine: the mesh is not a manifold, consistently oriented surface (OpenMesh refused {} "
           "of its {} triangles, first: triangle {} with vertices {} {} {}{}), so it was refined "
           "with harap's Loop variant that keeps {} non-manifold edge{} (3 or more triangles) and "
-          "the boundary as creases and {} vertex{} where separate fans meet in place "
+          "the boundary as creases and {} {} where separate fans meet in place "
           "(docs/input.md)",
           refused, mesh.num_elements(), first_refused, mesh.elements(first_refused, 0),
           mesh.elements(first_refused, 1), mesh.elements(first_refused, 2),
           reason.empty() ? "" : fmt::format("; OpenMesh: {}", reason), edges,
-          edges == 1 ? "" : "s", vertices, vertices == 1 ? "" : "es");
+          edges == 1 ? "" : "s", vertices, vertices == 1 ? "vertex" : "vertices");
     }
     return result;
   }
