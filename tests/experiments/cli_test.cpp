@@ -353,6 +353,65 @@ TEST_CASE("phases: optimizers announce them through the context, the display ren
   fs::remove_all(dir);
 }
 
+TEST_CASE("harap report: setup installs what report.py imports, fallback pictures fill their "
+          "panels",
+          "[experiments][cli][report]") {
+  const fs::path dir = TempDir("render");
+  // The check runs in the interpreter `harap report` uses.
+  std::ofstream(dir / "check.py") << R"PY(
+import ast, sys
+source = sys.argv[1]
+tree = ast.parse(open(source + "/experiments/scripts/report.py").read())
+modules = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import)
+           for a in n.names}
+modules |= {n.module.split(".")[0] for n in ast.walk(tree)
+            if isinstance(n, ast.ImportFrom) and n.module}
+debian = {"matplotlib": "python3-matplotlib", "mpl_toolkits": "python3-matplotlib",
+          "numpy": "python3-numpy", "vtk": None}  # vtk: optional (pictures fall back)
+setup = open(source + "/.ci/setup").read()
+for module in sorted(modules - set(sys.stdlib_module_names)):
+    if module not in debian:
+        sys.exit(f"report.py imports {module}: add its Debian package to .ci/setup and here")
+    if debian[module] and debian[module] not in setup:
+        sys.exit(f"{debian[module]} (for report.py's {module}) is missing from .ci/setup")
+try:
+    import matplotlib, numpy as np
+except ImportError:
+    print("SKIP: no matplotlib in this interpreter")
+    sys.exit(0)
+sys.path.insert(0, source + "/experiments/scripts")
+import report
+# A 2 x 1 sheet, and the same sheet with its far end lifted: the shared frame must fit both.
+nx, ny = 21, 11
+x, y = np.meshgrid(np.linspace(0, 2, nx), np.linspace(0, 1, ny))
+rest = np.stack([x.ravel(), y.ravel(), np.zeros(nx * ny)], axis=1)
+bent = rest.copy()
+bent[:, 2] = 0.3 * np.maximum(rest[:, 0] - 1.0, 0) ** 2
+quads = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+         for j in range(ny - 1) for i in range(nx - 1)]
+triangles = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+labels = np.zeros(nx * ny, dtype=int)
+labels[rest[:, 0] < 0.1] = 1
+images = report.render_matplotlib([(rest, triangles, labels), (bent, triangles, labels)], 300)
+low, high = np.array([1.0, 1.0]), np.array([0.0, 0.0])
+for image in images:
+    ink = (image < 245).any(axis=2)
+    rows, cols = np.where(ink.any(axis=1))[0], np.where(ink.any(axis=0))[0]
+    size = np.array(image.shape[:2], dtype=float)
+    low = np.minimum(low, [rows[0] / size[0], cols[0] / size[1]])
+    high = np.maximum(high, [(rows[-1] + 1) / size[0], (cols[-1] + 1) / size[1]])
+print("covered", high - low)
+if ((high - low) < 0.85).any():
+    sys.exit(f"the meshes cover only {high - low} of the panel (rows, columns)")
+)PY";
+  const CommandResult check = testing::RunCommand(
+      fmt::format("/usr/bin/python3 {} {}", (dir / "check.py").string(), HARAP_SOURCE_DIR));
+  INFO(check.output);
+  CHECK(check.status == 0);
+  if (check.output.find("SKIP") != std::string::npos) WARN(check.output);
+  fs::remove_all(dir);
+}
+
 // Starts harap with `arguments`, its stderr on a pipe; returns the pid and the pipe's read end.
 std::pair<pid_t, int> SpawnHarap(const std::vector<std::string>& arguments) {
   int pipe_ends[2];
