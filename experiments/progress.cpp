@@ -72,9 +72,17 @@ PhaseCallback ProgressDisplay::AsPhaseCallback() {
 void ProgressDisplay::Draw() {
   const double now = clock_.Seconds();
   const double in_phase = now - phase_start_;
-  // A short phase stays silent, unless the live line is already showing (it would go stale).
-  const bool showing = options_.terminal && drawn_width_ > 0;
-  if (phase_.empty() || (in_phase < options_.show_after && !showing)) return;
+  if (phase_.empty()) return;
+  if (options_.terminal) {
+    // The live line appears once the command has run for show_after, then follows every phase.
+    if (now < options_.show_after) return;
+  } else {
+    // A line when a phase has lasted show_after, and otherwise one every line_interval, so a
+    // run of many short phases is not silent either.
+    const bool long_phase = !phase_printed_ && in_phase >= options_.show_after;
+    const bool due = now >= options_.line_interval && now - last_line_ >= options_.line_interval;
+    if (!long_phase && !due) return;
+  }
   std::string text = fmt::format("harap: {:7.1f} s  {}", now, phase_);
   if (have_iteration_) {
     text += fmt::format(": iteration {}, energy {:.6e}, step {:.2e}", iteration_.iteration,
@@ -89,7 +97,6 @@ void ProgressDisplay::Draw() {
     fmt::print(stream_, "\r{:{}}", text, std::max(width, drawn_width_));
     drawn_width_ = width;
   } else {
-    if (phase_printed_ && now - last_line_ < options_.line_interval) return;
     fmt::print(stream_, "{}\n", text);
     phase_printed_ = true;
     last_line_ = now;

@@ -19,12 +19,13 @@ struct ProgressOptions {
   bool enabled = true;
   /// A terminal gets one line, redrawn in place; otherwise (a pipe or a file) plain lines.
   bool terminal = false;
-  /// A phase is shown once it has lasted this long (short phases stay silent).
+  /// Terminal: the live line appears once the command has run this long. Plain lines: a phase
+  /// gets a line once it has lasted this long.
   double show_after = 1.0;
-  /// Terminal: the line is redrawn at most this often (seconds).
+  /// Terminal: the line is redrawn this often (seconds).
   double refresh_interval = 0.2;
-  /// Plain lines: a phase gets a line when it passes show_after, and a long phase (e.g. the
-  /// iterations of a level) one more line at most this often.
+  /// Plain lines: besides the line per long phase, one line (the current state) this often, so
+  /// no stretch of silence is longer, however short the phases.
   double line_interval = 2.0;
 
   /// Enabled unless `quiet`; terminal when `stream` is one (isatty).
