@@ -44,19 +44,21 @@ std::vector<std::string> RunWarnings(const RunWarningInput& input) {
     const Index duplicates = input.input_checks->duplicate_vertices.count;
     if (duplicates > 0 && solved.duplicate_vertices.count > 0) {
       advice = fmt::format(
-          "the input has {} vertices at the same position as another: weld them with --set "
+          "The input has {} vertices at the same position as another: weld them with --set "
           "mesh.weld_duplicates=true (or [mesh] weld_duplicates = true)",
           duplicates);
     } else {
-      advice = "no corners share a position, so welding would not help: the mesh file itself "
+      advice = "No corners share a position, so welding would not help: the mesh file itself "
                "needs repair (merge close vertices in a mesh editor)";
     }
+    const Index largest = solved.components.front().elements;
+    const char* elements = triangles ? "triangles" : "tetrahedra";
     warnings.push_back(fmt::format(
-        "the mesh is a {} soup: {} separate pieces, {} of them one or two {}s (the largest has "
+        "the mesh is a {} soup: {} separate pieces, {} of them one or two {} (the largest: {} "
         "{}); each piece deforms on its own and the energy adds up unrelated pieces, so the "
         "result and its energy mean little. {}",
-        element, solved.components.size(), tiny, element, solved.components.front().elements,
-        advice));
+        element, solved.components.size(), tiny, elements, largest,
+        largest == 1 ? element : elements, advice));
   }
 
   // Handles that share vertices: MergedConstraints gives such a vertex the first handle's target.
