@@ -96,7 +96,7 @@ int Deform(const DeformArguments& args) {
   }
   ProgressDisplay progress(stderr, ProgressOptions::For(stderr, args.quiet));
   current_stage = "reading the scenario and its mesh";
-  progress.Phase("reading the scenario and its mesh");
+  progress.Phase(ScenarioLoadingPhase(args.scenario));
   const Scenario scenario = LoadScenario(args.scenario);
   for (const auto& [out, option] : {outputs[1], outputs[2]}) {
     if (out->empty()) continue;

@@ -2,6 +2,7 @@
 #include "experiments/output_checks.h"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cctype>
@@ -66,6 +67,27 @@ void RefuseMeshAsScenario(const fs::path& file) {
       "(slab bounds are fractions of the bounding box; see docs/input.md), then run harap "
       "deform {}",
       file.string(), scenario.string(), file.filename().string(), scenario.string()));
+}
+
+std::string ScenarioLoadingPhase(const fs::path& file) {
+  const std::string plain = "reading the scenario and its mesh";
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const std::exception&) {
+    return plain;
+  }
+  std::string mesh = "reading its mesh";
+  if (const toml::table* table = root["mesh"].as_table()) {
+    if (table->contains("tetrahedralize")) {
+      mesh = "tetrahedralizing its mesh (TetGen)";
+    } else if (table->contains("builtin")) {
+      mesh = "building its built-in mesh";
+    }
+  }
+  const int refine = root["refine"].value_or(0);
+  if (refine > 0) mesh += fmt::format(" with refine = {}", refine);
+  return "reading the scenario, " + mesh;
 }
 
 }  // namespace harap

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 namespace harap {
@@ -20,5 +21,11 @@ bool LooksLikeMeshFile(const std::filesystem::path& file);
 /// Throws InputError when `file` is a mesh file given where a scenario is expected, with a
 /// scenario for it to start from (instead of the TOML parser's syntax error).
 void RefuseMeshAsScenario(const std::filesystem::path& file);
+
+/// The progress label for loading the scenario `file`: what LoadScenario will do, read from the
+/// scenario's top-level keys (a built-in mesh is built, a surface tetrahedralized, `refine`
+/// subdivides), e.g. "reading the scenario, tetrahedralizing its mesh (TetGen)". A file that
+/// cannot be parsed gets the plain label (LoadScenario reports the error).
+std::string ScenarioLoadingPhase(const std::filesystem::path& file);
 
 }  // namespace harap

@@ -25,6 +25,7 @@
 
 #include "experiments/builtins.h"
 #include "experiments/deform.h"
+#include "experiments/output_checks.h"
 #include "experiments/progress.h"
 #include "experiments/run_warnings.h"
 #include "framework/io/mesh_io.h"
@@ -343,6 +344,19 @@ TEST_CASE("phases: optimizers announce them through the context, the display ren
   CHECK_THAT(text, Contains("factoring level 0 ("));
   CHECK_THAT(text, Contains("solving level 0: iteration 7, energy 1.500000e+00"));
   CHECK_THAT(text, !Contains("\r"));
+
+  // The loading phase says what loading will do.
+  const fs::path scenarios = TempDir("loading");
+  std::ofstream(scenarios / "tet.toml")
+      << "mesh = { tetrahedralize = { builtin = \"cylinder\" } }\n";
+  std::ofstream(scenarios / "refined.toml") << "mesh = \"a.obj\"\nrefine = 2\n";
+  std::ofstream(scenarios / "broken.toml") << "mesh = [\n";
+  CHECK(ScenarioLoadingPhase(scenarios / "tet.toml") ==
+        "reading the scenario, tetrahedralizing its mesh (TetGen)");
+  CHECK(ScenarioLoadingPhase(scenarios / "refined.toml") ==
+        "reading the scenario, reading its mesh with refine = 2");
+  CHECK(ScenarioLoadingPhase(scenarios / "broken.toml") == "reading the scenario and its mesh");
+  fs::remove_all(scenarios);
 
   // --quiet: nothing at all on stderr or stdout.
   const fs::path dir = TempDir("quiet");
