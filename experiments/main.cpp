@@ -146,14 +146,18 @@ int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   const ConfigNode config = BuildRunConfig(args);
   ValidateRunConfig(config);
   RefuseMeshAsScenario(args.scenario);
+  ProgressDisplay progress(stderr, ProgressOptions::For(stderr, false));
   current_stage = "reading the scenario and its mesh";
+  progress.Phase(ScenarioLoadingPhase(args.scenario));
   const Scenario scenario = LoadScenario(args.scenario);
   current_stage = "building the hierarchy";
   auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
   Context context = Context::WithThreads(args.threads);
+  progress.Phase("building the hierarchy");
   Stopwatch clock;
   const MeshHierarchy levels = hierarchy->Build(scenario.mesh, context);
   const double seconds = clock.Seconds();
+  progress.Finish();
   if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
   fmt::print("{:>5} {:>10} {:>10} {:>10}  {}\n", "level", "vertices", "faces", "reduction", "file");
   for (int l = 0; l < levels.num_levels(); ++l) {
