@@ -64,10 +64,11 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
   fmt::print("iterations  {}\n", IterationsLine(outcome));
   fmt::print("energy      {:.9e}\n", r.energy);
   for (const auto& [name, value] : r.measures) fmt::print("{:<11} {:.9e}\n", name, value);
-  fmt::print("time [s]    hierarchy {:.3f} | precompute {:.3f} | constrain {:.3f} | solve {:.3f} "
-             "| total {:.3f}\n",
-             r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
-             r.timings.total);
+  fmt::print(
+      "time [s]    hierarchy {:.3f} | precompute {:.3f} | constrain {:.3f} | solve {:.3f} "
+      "| total {:.3f}\n",
+      r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
+      r.timings.total);
   fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
   for (const auto& note : scenario.notes) fmt::print("note        {}\n", note);
   for (size_t k = 0; k < r.levels.size(); ++k) {
@@ -75,30 +76,33 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
     const SolveStatistics& solves = level.linear_solves;
     const bool direct = k < outcome.level_solver_direct.size() && outcome.level_solver_direct[k];
     // A direct solver has no iterations, and a residual only when asked to check it.
-    const std::string iterations =
-        direct ? fmt::format("{:>18}", "direct") : fmt::format("{:7} iterations", solves.iterations);
+    const std::string iterations = direct ? fmt::format("{:>18}", "direct")
+                                          : fmt::format("{:7} iterations", solves.iterations);
     const std::string residual =
-        solves.residuals_computed > 0 ? fmt::format("max residual {:.2e}", solves.max_relative_residual)
-                                      : std::string("residual not computed");
+        solves.residuals_computed > 0
+            ? fmt::format("max residual {:.2e}", solves.max_relative_residual)
+            : std::string("residual not computed");
     fmt::print("level {:<5} {:>8} unknowns | {:<12} {:4} solves {} {:7.3f} s | {}\n", level.level,
                level.unknowns, k < outcome.level_solvers.size() ? outcome.level_solvers[k] : "",
                solves.solves, iterations, solves.seconds, residual);
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       const SystemSpectrum& spectrum = it->second;
-      fmt::print("            A: λ [{:.4e}, {:.4e}] κ {:.3e} | D^-1/2 A D^-1/2: λ [{:.4e}, "
-                 "{:.4e}] κ {:.3e} | {:.2f} s\n",
-                 spectrum.matrix.smallest, spectrum.matrix.largest,
-                 spectrum.matrix.condition_number(), spectrum.jacobi.smallest,
-                 spectrum.jacobi.largest, spectrum.jacobi.condition_number(), spectrum.seconds);
+      fmt::print(
+          "            A: λ [{:.4e}, {:.4e}] κ {:.3e} | D^-1/2 A D^-1/2: λ [{:.4e}, "
+          "{:.4e}] κ {:.3e} | {:.2f} s\n",
+          spectrum.matrix.smallest, spectrum.matrix.largest, spectrum.matrix.condition_number(),
+          spectrum.jacobi.smallest, spectrum.jacobi.largest, spectrum.jacobi.condition_number(),
+          spectrum.seconds);
     }
   }
   if (outcome.mesh_summary.empty()) fmt::print("checks      no findings\n");
   for (const auto& line : outcome.mesh_summary) fmt::print("checks      {}\n", line);
   if (outcome.mesh_repaired) {
-    fmt::print("repaired    solved on {} vertices, {} {} (results written for all {} input "
-               "vertices); the repaired mesh:\n",
-               outcome.solved_vertices, outcome.solved_elements, ElementWord(scenario.mesh),
-               scenario.mesh.num_vertices());
+    fmt::print(
+        "repaired    solved on {} vertices, {} {} (results written for all {} input "
+        "vertices); the repaired mesh:\n",
+        outcome.solved_vertices, outcome.solved_elements, ElementWord(scenario.mesh),
+        scenario.mesh.num_vertices());
     if (outcome.repaired_mesh_summary.empty()) fmt::print("  checks    no findings\n");
     for (const auto& line : outcome.repaired_mesh_summary) fmt::print("  checks    {}\n", line);
   }
@@ -144,9 +148,10 @@ void ListMeshOptions() {
 void ListBuiltinMeshes() {
   fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
   for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
-  fmt::print("volumetric twins of surfaces (scenario: mesh = {{ tetrahedralize = FILE or "
-             "{{ builtin = NAME, ... }}, max_volume, max_radius_edge_ratio, "
-             "min_dihedral_angle }}, see docs/input.md)\n");
+  fmt::print(
+      "volumetric twins of surfaces (scenario: mesh = {{ tetrahedralize = FILE or "
+      "{{ builtin = NAME, ... }}, max_volume, max_radius_edge_ratio, "
+      "min_dihedral_angle }}, see docs/input.md)\n");
 }
 
 }  // namespace
@@ -182,9 +187,10 @@ int ListPieces(const std::string& requested) {
     }
     valid += (valid.empty() ? "" : ", ") + names.front();
   }
-  throw ConfigError(fmt::format("harap list: unknown kind '{}'; valid kinds: {} (or none for "
-                                "everything)",
-                                requested, valid));
+  throw ConfigError(
+      fmt::format("harap list: unknown kind '{}'; valid kinds: {} (or none for "
+                  "everything)",
+                  requested, valid));
 }
 
 std::string VersionString() {

@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "experiments/progress.h"
 
-#include <unistd.h>
-
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <chrono>
 

@@ -20,10 +20,9 @@ constexpr Index kTinyComponentElements = 2;
 
 bool LooksLikeTriangleSoup(const MeshCheckReport& checks) {
   if (checks.components.size() < kSoupMinComponents) return false;
-  const auto tiny = std::count_if(checks.components.begin(), checks.components.end(),
-                                  [](const MeshComponentInfo& c) {
-                                    return c.elements <= kTinyComponentElements;
-                                  });
+  const auto tiny = std::count_if(
+      checks.components.begin(), checks.components.end(),
+      [](const MeshComponentInfo& c) { return c.elements <= kTinyComponentElements; });
   return 2 * static_cast<size_t>(tiny) > checks.components.size();
 }
 
@@ -36,10 +35,9 @@ std::vector<std::string> RunWarnings(const RunWarningInput& input) {
   const char* element = triangles ? "triangle" : "tetrahedron";
 
   if (LooksLikeTriangleSoup(solved)) {
-    const auto tiny = std::count_if(solved.components.begin(), solved.components.end(),
-                                    [](const MeshComponentInfo& c) {
-                                      return c.elements <= kTinyComponentElements;
-                                    });
+    const auto tiny = std::count_if(
+        solved.components.begin(), solved.components.end(),
+        [](const MeshComponentInfo& c) { return c.elements <= kTinyComponentElements; });
     std::string advice;
     const Index duplicates = input.input_checks->duplicate_vertices.count;
     if (duplicates > 0 && solved.duplicate_vertices.count > 0) {
@@ -48,8 +46,9 @@ std::vector<std::string> RunWarnings(const RunWarningInput& input) {
           "mesh.weld_duplicates=true (or [mesh] weld_duplicates = true)",
           duplicates);
     } else {
-      advice = "No corners share a position, so welding would not help: the mesh file itself "
-               "needs repair (merge close vertices in a mesh editor)";
+      advice =
+          "No corners share a position, so welding would not help: the mesh file itself "
+          "needs repair (merge close vertices in a mesh editor)";
     }
     const Index largest = solved.components.front().elements;
     const char* elements = triangles ? "triangles" : "tetrahedra";

@@ -110,8 +110,8 @@ std::string StlBinary(const Positions& vertices, const Elements& triangles) {
 }
 
 std::string MeditText(const Positions& vertices, const Elements& tetrahedra) {
-  std::string out = fmt::format("MeshVersionFormatted 2\nDimension 3\nVertices\n{}\n",
-                                vertices.rows());
+  std::string out =
+      fmt::format("MeshVersionFormatted 2\nDimension 3\nVertices\n{}\n", vertices.rows());
   AppendVertices(out, vertices, "", " 0");
   fmt::format_to(std::back_inserter(out), "Tetrahedra\n{}\n", tetrahedra.rows());
   for (Index t = 0; t < tetrahedra.rows(); ++t) {
@@ -164,9 +164,9 @@ void CheckMeshOutputFormat(const std::filesystem::path& file, ElementKind kind) 
             : ""));
   }
   if (TetrahedraOnly(format) && kind == ElementKind::kTriangle) {
-    throw InputError(fmt::format(
-        "{}: '{}' holds tetrahedra, but this is a triangle mesh; use {}", file.string(),
-        file.extension().string(), MeshOutputFormats(kind)));
+    throw InputError(fmt::format("{}: '{}' holds tetrahedra, but this is a triangle mesh; use {}",
+                                 file.string(), file.extension().string(),
+                                 MeshOutputFormats(kind)));
   }
 }
 
@@ -183,7 +183,8 @@ void WriteMesh(const std::filesystem::path& file, const Positions& vertices,
   HARAP_CHECK(elements.rows() == 0 || elements.cols() == 3 || elements.cols() == 4,
               "WriteMesh writes triangles or tetrahedra, got elements with {} vertices",
               elements.cols());
-  const ElementKind kind = elements.cols() == 4 ? ElementKind::kTetrahedron : ElementKind::kTriangle;
+  const ElementKind kind =
+      elements.cols() == 4 ? ElementKind::kTetrahedron : ElementKind::kTriangle;
   CheckMeshOutputFormat(file, kind);
   for (Index e = 0; e < elements.rows(); ++e) {
     for (Index a = 0; a < elements.cols(); ++a) {
@@ -208,8 +209,8 @@ void WriteMesh(const std::filesystem::path& file, const Positions& vertices,
     default:
       break;
   }
-  const Elements triangles = kind == ElementKind::kTetrahedron ? BoundaryTriangles(elements)
-                                                                : elements;
+  const Elements triangles =
+      kind == ElementKind::kTetrahedron ? BoundaryTriangles(elements) : elements;
   if (format == OutputFormat::kObj) WriteWholeFile(file, ObjText(vertices, triangles));
   if (format == OutputFormat::kOff) WriteWholeFile(file, OffText(vertices, triangles));
   if (format == OutputFormat::kStl) WriteWholeFile(file, StlBinary(vertices, triangles));

@@ -3,17 +3,15 @@
 // fail before solving, a mesh given as a scenario says so, repaired meshes are summarized as
 // solved, warnings for results that mislead, output that says what it measured (direct solvers,
 // --version, list KIND, pieces, hierarchical iterations), progress phases, and Ctrl-C.
-#include <catch2/catch.hpp>
-
 #include <fcntl.h>
+#include <fmt/ranges.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <fmt/ranges.h>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -66,7 +64,8 @@ void WriteGridObj(const fs::path& file, int nx, int ny, bool soup) {
   std::ofstream out(file);
   if (!soup) {
     for (Index v = 0; v < grid.num_vertices(); ++v) {
-      out << fmt::format("v {} {} {}\n", grid.vertices(v, 0), grid.vertices(v, 1), grid.vertices(v, 2));
+      out << fmt::format("v {} {} {}\n", grid.vertices(v, 0), grid.vertices(v, 1),
+                         grid.vertices(v, 2));
     }
     for (Index f = 0; f < grid.num_elements(); ++f) {
       out << fmt::format("f {} {} {}\n", grid.elements(f, 0) + 1, grid.elements(f, 1) + 1,
@@ -77,7 +76,8 @@ void WriteGridObj(const fs::path& file, int nx, int ny, bool soup) {
   for (Index f = 0; f < grid.num_elements(); ++f) {
     for (int a = 0; a < 3; ++a) {
       const Index v = grid.elements(f, a);
-      out << fmt::format("v {} {} {}\n", grid.vertices(v, 0), grid.vertices(v, 1), grid.vertices(v, 2));
+      out << fmt::format("v {} {} {}\n", grid.vertices(v, 0), grid.vertices(v, 1),
+                         grid.vertices(v, 2));
     }
     out << fmt::format("f {} {} {}\n", 3 * f + 1, 3 * f + 2, 3 * f + 3);
   }
@@ -120,9 +120,9 @@ TEST_CASE("harap deform --out: the extension picks the format, else it refuses b
   CHECK_FALSE(fs::exists(dir / "out.mesh"));
 
   // Unwritable paths fail before the solve and leave no empty files behind.
-  const CommandResult no_folder = RunHarap(
-      fmt::format("deform {} --out {} --report {}", scenario.string(), (dir / "new.ply").string(),
-                  (dir / "missing" / "report.json").string()));
+  const CommandResult no_folder =
+      RunHarap(fmt::format("deform {} --out {} --report {}", scenario.string(),
+                           (dir / "new.ply").string(), (dir / "missing" / "report.json").string()));
   CHECK(no_folder.status == 1);
   CHECK_THAT(no_folder.output, Contains("--report") && Contains("does not exist"));
   CHECK_THAT(no_folder.output, !Contains("energy "));
@@ -199,8 +199,8 @@ TEST_CASE("warnings: overlapping handles, handles on every vertex, a one-level h
          "translate = [0.0, 0.0, 0.1]\n";
   const fs::path report_file = dir / "report.json";
 
-  const CommandResult overlap = RunHarap(fmt::format(
-      "deform {} --report {}", (dir / "overlap.toml").string(), report_file.string()));
+  const CommandResult overlap = RunHarap(
+      fmt::format("deform {} --report {}", (dir / "overlap.toml").string(), report_file.string()));
   INFO(overlap.output);
   REQUIRE(overlap.status == 0);
   CHECK_THAT(overlap.output, Contains("warning     handles 'a' and 'b' overlap: 4 vertices"));
@@ -210,13 +210,14 @@ TEST_CASE("warnings: overlapping handles, handles on every vertex, a one-level h
       "deform {} --report {}", (dir / "everything.toml").string(), report_file.string()));
   INFO(everything.output);
   REQUIRE(everything.status == 0);
-  CHECK_THAT(everything.output, Contains("iterations  0 (nothing to solve: every vertex is a handle)"));
+  CHECK_THAT(everything.output,
+             Contains("iterations  0 (nothing to solve: every vertex is a handle)"));
   CHECK_THAT(everything.output, Contains("warning     the handles leave no vertex free"));
   CHECK_THAT(everything.output, !Contains("(converged)"));
 
-  const CommandResult small = RunHarap(fmt::format(
-      "deform {} --optimizer hierarchical --report {}", (dir / "overlap.toml").string(),
-      report_file.string()));
+  const CommandResult small =
+      RunHarap(fmt::format("deform {} --optimizer hierarchical --report {}",
+                           (dir / "overlap.toml").string(), report_file.string()));
   INFO(small.output);
   REQUIRE(small.status == 0);
   CHECK_THAT(small.output, Contains("warning     the hierarchy has a single level: the mesh (48 "
@@ -255,8 +256,8 @@ TEST_CASE("the summary says what it measured: direct solvers, pieces, levels, --
   CHECK_THAT(direct.output, Contains("direct") && Contains("residual not computed"));
   CHECK_THAT(direct.output, !Contains("0 iterations") && !Contains("0.00e+00"));
   CHECK(ReadJson(report_file)["levels"][0]["max_relative_residual"].is_null());
-  const CommandResult checked = RunHarap(
-      fmt::format("deform {} --set solver.check_residual=true", scenario.string()));
+  const CommandResult checked =
+      RunHarap(fmt::format("deform {} --set solver.check_residual=true", scenario.string()));
   CHECK_THAT(checked.output, Contains("direct") && Contains("max residual"));
   const CommandResult iterative = RunHarap(fmt::format("deform {} --solver cg", scenario.string()));
   INFO(iterative.output);
@@ -311,8 +312,8 @@ TEST_CASE("phases: optimizers announce them through the context, the display ren
   INFO(fmt::format("{}", fmt::join(phases, "; ")));
   REQUIRE_FALSE(phases.empty());
   CHECK(phases.front() == "building the hierarchy");
-  for (const char* phase : {"precomputing level 0", "factoring level 0", "precomputing level 1",
-                            "factoring level 1"}) {
+  for (const char* phase :
+       {"precomputing level 0", "factoring level 0", "precomputing level 1", "factoring level 1"}) {
     CHECK(std::find(phases.begin(), phases.end(), phase) != phases.end());
   }
 
@@ -366,9 +367,10 @@ TEST_CASE("phases: optimizers announce them through the context, the display ren
   fs::remove_all(dir);
 }
 
-TEST_CASE("harap report: setup installs what report.py imports, fallback pictures fill their "
-          "panels",
-          "[experiments][cli][report]") {
+TEST_CASE(
+    "harap report: setup installs what report.py imports, fallback pictures fill their "
+    "panels",
+    "[experiments][cli][report]") {
   const fs::path dir = TempDir("render");
   // The check runs in the interpreter `harap report` uses.
   std::ofstream(dir / "check.py") << R"PY(
@@ -489,10 +491,18 @@ TEST_CASE("Ctrl-C stops harap deform at the next iteration and still writes its 
       << "mesh = { builtin = \"cylinder\", vertices = 20000 }\n[[handle]]\n"
          "select.slab = { axis = \"z\", from = 0.0, to = 0.05 }\n[[handle]]\n"
          "select.slab = { axis = \"z\", from = 0.95, to = 1.0 }\ntranslate = [0.3, 0.0, 0.0]\n";
-  const std::vector<std::string> arguments = {
-      "deform",      (dir / "slow.toml").string(), "--tolerance", "0", "--max-iterations",
-      "1000000",     "--threads",                  "1",           "--out", (dir / "out.ply").string(),
-      "--report",    (dir / "report.json").string()};
+  const std::vector<std::string> arguments = {"deform",
+                                              (dir / "slow.toml").string(),
+                                              "--tolerance",
+                                              "0",
+                                              "--max-iterations",
+                                              "1000000",
+                                              "--threads",
+                                              "1",
+                                              "--out",
+                                              (dir / "out.ply").string(),
+                                              "--report",
+                                              (dir / "report.json").string()};
 
   SECTION("one Ctrl-C: stops, writes the report (status interrupted) and the mesh so far") {
     auto [pid, fd] = SpawnHarap(arguments);

@@ -2,17 +2,17 @@
 // WriteMesh: the extension picks the format, each format reads back (exactly where the format
 // can hold doubles), tetrahedra-only formats refuse triangle meshes, unknown extensions name the
 // valid ones.
-#include <catch2/catch.hpp>
+#include "framework/io/mesh_writers.h"
 
 #include <unistd.h>
 
+#include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
-#include "framework/io/mesh_writers.h"
 #include "tests/support/test_meshes.h"
 
 namespace harap {
