@@ -20,7 +20,7 @@ DIR/runs/*.json (one `harap deform --report --trace` report per run, plus its `r
     render_runs  at most this many deformed meshes per scenario picture (default 6)
 
 Pictures are rendered with VTK (Debian python3-vtk9) under xvfb-run; without VTK or Xvfb they
-fall back to matplotlib's 3D plots (say so in the report).
+fall back to flat-shaded matplotlib drawings of the same view (say so in the report).
 """
 import argparse
 import datetime
@@ -513,30 +513,51 @@ def render_vtk(panels, size):
 
 
 def render_matplotlib(panels, size):
-    """Fallback without VTK/Xvfb: matplotlib's 3D surface plots (coarser)."""
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    """Fallback without VTK/Xvfb: the same camera as render_vtk (orthographic), faces drawn flat
+    shaded with the painter's algorithm in a 2D plot. All panels share one screen frame, fitted
+    to the projected meshes, so the mesh fills its panel and the panels compare at one scale.
+    Returns images sized to that frame's aspect (longer side `size` pixels)."""
+    from matplotlib.collections import PolyCollection
+
+    rest = panels[0][0]
+    view, up, center, _ = view_frame(rest, [p[0] for p in panels[1:]])
+    towards = view_direction(view, up)  # from the mesh towards the camera
+    up_vector = np.zeros(3)
+    up_vector[up] = 1.0
+    right_vector = np.cross(up_vector, towards)
+    right_vector /= np.linalg.norm(right_vector)
+    screen = np.stack([right_vector, up_vector], axis=1)
+    # One frame for all panels: the projected bounding box of every mesh, with a small margin.
+    projected = [(positions - center) @ screen for positions, _, _ in panels]
+    low = np.min([p.min(axis=0) for p in projected], axis=0)
+    high = np.max([p.max(axis=0) for p in projected], axis=0)
+    extent = np.maximum(high - low, 1e-12 * max(1.0, float(np.max(high - low))))
+    margin = 0.03 * extent.max()
+    low, high = low - margin, high + margin
+    aspect = float(np.clip((high[1] - low[1]) / (high[0] - low[0]), 0.25, 4.0))
+    width_px, height_px = (size, size * aspect) if aspect <= 1 else (size / aspect, size)
+    light = towards + 0.5 * up_vector - 0.4 * right_vector  # from the upper left
+    light /= np.linalg.norm(light)
 
     images = []
-    rest = panels[0][0]
-    view, up, center, radius = view_frame(rest, [p[0] for p in panels[1:]])
-    right = [d for d in range(3) if d not in (view, up)][0]
-    for positions, triangles, labels in panels:
-        step = max(1, len(triangles) // 60000)
-        tris = triangles[::step]
-        fig = plt.figure(figsize=(size / 100, size / 100), dpi=100)
-        ax = fig.add_subplot(projection="3d")
-        coords = positions[:, [right, view, up]]
-        shade = np.abs(np.cross(coords[tris[:, 1]] - coords[tris[:, 0]],
-                                coords[tris[:, 2]] - coords[tris[:, 0]]))
-        normal = shade / np.maximum(np.linalg.norm(shade, axis=1, keepdims=True), 1e-30)
-        light = 0.35 + 0.65 * normal[:, 1]
-        base = HANDLE_COLORS[np.minimum(labels[tris].max(axis=1), len(HANDLE_COLORS) - 1)]
-        ax.add_collection3d(Poly3DCollection(coords[tris], facecolors=base * light[:, None],
-                                             linewidths=0))
-        c = center[[right, view, up]]
-        for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
-            setter(c[k] - radius, c[k] + radius)
-        ax.view_init(elev=0, azim=-90 + VIEW_TILT_DEGREES)
+    for (positions, triangles, labels), flat in zip(panels, projected):
+        corners = positions[triangles]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = normals / np.maximum(lengths, 1e-300)
+        # Two-sided: open meshes show both sides.
+        shade = 0.3 + 0.7 * np.abs(normals @ light)
+        depth = ((corners.mean(axis=1) - center) @ towards)
+        order = np.argsort(depth)  # far faces first
+        base = HANDLE_COLORS[np.minimum(labels[triangles].max(axis=1), len(HANDLE_COLORS) - 1)]
+        colors = np.clip(base * shade[:, None], 0, 1)[order]
+        fig = plt.figure(figsize=(width_px / 100, height_px / 100), dpi=100)
+        ax = fig.add_axes([0, 0, 1, 1])
+        ax.add_collection(PolyCollection(flat[triangles[order]], facecolors=colors,
+                                         edgecolors=colors, linewidths=0.2, antialiased=True))
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[1], high[1])
+        ax.set_aspect("auto")
         ax.set_axis_off()
         fig.canvas.draw()
         images.append(np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy())
@@ -574,13 +595,20 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
             titles.append(f"{run_name(run)}\nE = {fmt_number(run['energy'])}, "
                           f"T = {run['timings']['total']:.2f} s")
         images = renderer(panels, 420)
-        fig, axes = plt.subplots(1, len(images), figsize=(2.6 * len(images), 3.0), squeeze=False)
+        # Panels as tall as the pictures need (wide meshes get short panels, not white bands),
+        # plus room for two title lines.
+        aspect = images[0].shape[0] / images[0].shape[1]
+        panel_width = 2.8
+        picture_height = min(panel_width * aspect, 4.5)
+        # Constrained layout keeps the suptitle clear of the panel titles (tight_layout does not).
+        fig, axes = plt.subplots(1, len(images),
+                                 figsize=(panel_width * len(images), picture_height + 0.9),
+                                 squeeze=False, layout="constrained")
         for ax, image, title in zip(axes.flat, images, titles):
             ax.imshow(image)
-            ax.set_title(title, fontsize=7)
+            ax.set_title(title, fontsize=9)
             ax.axis("off")
-        fig.suptitle(scenario, fontsize=9)
-        fig.tight_layout()
+        fig.suptitle(scenario, fontsize=11)
         path = os.path.join("pictures", f"{scenario}.png")
         fig.savefig(os.path.join(directory, path), dpi=100, bbox_inches="tight")
         plt.close(fig)
@@ -806,7 +834,7 @@ def main():
 
 
 def make_pictures(directory, runs, render, per_scenario, backend):
-    """VTK under xvfb-run in a child process; matplotlib 3D if that is not possible."""
+    """VTK under xvfb-run in a child process; flat-shaded matplotlib if that is not possible."""
     if backend in ("auto", "vtk"):
         xvfb = shutil.which("xvfb-run")
         try:
@@ -828,7 +856,7 @@ def make_pictures(directory, runs, render, per_scenario, backend):
         elif backend == "vtk":
             print("VTK or xvfb-run missing; using matplotlib", file=sys.stderr)
     pictures = render_pictures(directory, runs, render, per_scenario, use_vtk=False)
-    return pictures, "matplotlib 3D (fallback: VTK or Xvfb not available)"
+    return pictures, "matplotlib, flat shaded (fallback: VTK or Xvfb not available)"
 
 
 if __name__ == "__main__":

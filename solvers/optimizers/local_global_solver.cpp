@@ -15,6 +15,7 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
                                      const Context& context, const Mesh* input_mesh)
     : level_(level) {
   Stopwatch clock;
+  context.ReportPhase(fmt::format("precomputing level {}", level));
   ordering_ = LocalityOrdering(mesh);
   energy_ = factory.MakeEnergy();
   if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
@@ -22,6 +23,7 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
   precompute_seconds_ = clock.Seconds();
 
   clock.Restart();
+  context.ReportPhase(fmt::format("factoring level {}", level));
   std::vector<Index> renumbered(constrained.size());
   for (size_t k = 0; k < constrained.size(); ++k) {
     HARAP_CHECK(constrained[k] >= 0 && constrained[k] < mesh.num_vertices(),

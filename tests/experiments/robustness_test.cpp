@@ -119,7 +119,7 @@ TEST_CASE("harap deform: mesh checks on the terminal and in the report, output p
   REQUIRE(run.status == 0);
   CHECK_THAT(run.output, Contains("checks      unreferenced vertices 1 (e.g. vertex 6): "));
   CHECK_THAT(run.output, Contains("duplicate faces 1 (e.g. face 8 repeats face 0): 1 copies left out"));
-  CHECK_THAT(run.output, Contains("solved on   7 vertices, 8 faces"));
+  CHECK_THAT(run.output, Contains("repaired    solved on 7 vertices, 8 faces"));
   std::ifstream stream(report_file);
   const auto report = nlohmann::json::parse(stream);
   const auto& checks = report["mesh_checks"];
