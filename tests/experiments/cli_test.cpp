@@ -294,7 +294,7 @@ TEST_CASE("phases: optimizers announce them through the context, the display ren
       "[optimizer]\ntype = \"hierarchical\"\n[hierarchy]\nmin_vertices = 30\n");
   Scenario scenario;
   scenario.mesh = testing::Grid(16, 16);
-  ScenarioHandle corner{"corner", {0, 1}, {}};
+  ScenarioHandle corner{"corner", {0, 1}, {}, {}, {}};
   corner.targets = scenario.mesh.vertices(corner.vertices, Eigen::all);
   corner.targets(1, 2) += 0.2;
   scenario.handles = {corner};
