@@ -147,12 +147,12 @@ def test_bad_files(tmp_path):
     V, F = harap.builtin_mesh("disk", vertices=50)
     with pytest.raises(harap.InputError, match="writes binary PLY"):
         harap.write_mesh(tmp_path / "out.obj", V, F)
-    with pytest.raises(harap.InputError, match="cannot|No such|directory"):
+    with pytest.raises(harap.Error, match="cannot open the file for writing"):
         harap.write_mesh(tmp_path / "no" / "such" / "dir.ply", V, F)
 
 
 def test_bad_builtin_mesh():
-    with pytest.raises(harap.ConfigError, match="valid"):
+    with pytest.raises(harap.ConfigError, match="not one of: cylinder, plane, disk, rectangle"):
         harap.builtin_mesh("cube")
     with pytest.raises(harap.ConfigError, match="verticez"):
         harap.builtin_mesh("cylinder", verticez=10)

@@ -32,7 +32,8 @@ def test_callback_sees_every_iteration_on_the_calling_thread(cylinder):
     def callback(level, iteration, energy):
         calls.append((level, iteration, energy, threading.get_ident()))
 
-    result = harap.deform(V, F, handles, targets, callback=callback, tolerance=1e-6)
+    result = harap.deform(V, F, handles, targets, callback=callback, tolerance=1e-6,
+                          options={"hierarchy.min_vertices": 100})
     trace = result.report["trace"]
     assert [(c[0], c[2]) for c in calls] == [(p["level"], p["energy"]) for p in trace]
     assert {c[3] for c in calls} == {threading.get_ident()}
