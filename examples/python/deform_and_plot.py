@@ -6,6 +6,7 @@ against time (the report's per-iteration trace) with matplotlib.
     PYTHONPATH=build/python python3 examples/python/deform_and_plot.py --out energy.png
 """
 import argparse
+import os
 import sys
 
 import numpy as np
@@ -51,5 +52,6 @@ axes.set_ylabel("ARAP energy")
 axes.set_title(f"cylinder bend, {len(V)} vertices")
 axes.legend()
 figure.tight_layout()
+os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
 figure.savefig(args.out, dpi=100)
 print(f"wrote {args.out}")

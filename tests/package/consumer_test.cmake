@@ -41,7 +41,7 @@ run("running the installed harap" ${prefix}/bin/harap list)
 if(PYTHON)
   run("importing the installed Python package" ${CMAKE_COMMAND} -E env
       PYTHONPATH=${prefix}/${PYTHON_DIR} ${PYTHON} -c
-      "import harap; V, F = harap.builtin_mesh('disk', vertices=50); print(harap.__file__, len(V))")
+      "import harap\nV, F = harap.builtin_mesh('disk', vertices=50)\nprint(harap.__file__, len(V))")
   if(NOT last_output MATCHES "${prefix}")
     message(FATAL_ERROR "imported harap from elsewhere: ${last_output}")
   endif()
