@@ -123,9 +123,10 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
     optimizer.tolerance / optimizer.max_iterations as the command's flags do.
     initial: (n, 3) start positions; planar: None decides as scenario files do (z = 0
     everywhere), True/False forces it.
-    callback(level, iteration, energy): called after every iteration (from a worker thread, with
-    the GIL held); returning False stops the solve after that iteration, raising stops it and
-    propagates. Ctrl-C (KeyboardInterrupt) stops the solve within one iteration.
+    callback(level, iteration, energy): called after every iteration, on the calling thread (the
+    solve itself runs on a worker thread without the GIL and waits for it); returning False stops
+    the solve after that iteration, an exception stops it and propagates. Ctrl-C
+    (KeyboardInterrupt) stops the solve within one iteration.
     threads: worker threads (0: all cores). trace: include the per-iteration trace in the report.
 
     Returns a DeformResult (positions, report, stopped).

@@ -73,7 +73,8 @@ def test_sigint_from_the_callback_raises_keyboard_interrupt_at_once(long_solve):
 
     with pytest.raises(KeyboardInterrupt):
         run(long_solve, callback=callback)
-    assert calls[-1] <= 6
+    # The callback runs on the main thread, where the signal's KeyboardInterrupt is raised.
+    assert calls[-1] == 5
 
 
 def test_sigint_from_another_thread_stops_within_one_iteration(long_solve):
