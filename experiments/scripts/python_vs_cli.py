@@ -21,6 +21,8 @@ parser = argparse.ArgumentParser()
 parser.add_argument("scenario")
 parser.add_argument("--runs", type=int, default=5)
 parser.add_argument("--harap", default="build/harap")
+parser.add_argument("--baseline", help="a second harap executable to alternate with (e.g. a "
+                    "build without position-independent code)")
 parser.add_argument("--optimizer", default="hierarchical")
 parser.add_argument("--tolerance", type=float, default=1e-6)
 args = parser.parse_args()
@@ -35,10 +37,10 @@ print(json.dumps({"energy": r.report["energy"], "total": r.report["timings"]["to
 """
 
 
-def run_cli():
+def run_cli(executable=None):
     with tempfile.TemporaryDirectory() as folder:
         report = os.path.join(folder, "report.json")
-        subprocess.run([args.harap, "deform", args.scenario, "--optimizer", args.optimizer,
+        subprocess.run([executable or args.harap, "deform", args.scenario, "--optimizer", args.optimizer,
                         "--tolerance", str(args.tolerance), "--report", report, "--quiet"],
                        check=True)
         data = json.load(open(report))
@@ -52,18 +54,25 @@ def run_python():
     return json.loads(output.stdout)
 
 
-results = {"cli": [], "python": []}
+commands = [("cli", run_cli), ("python", run_python)]
+if args.baseline:
+    commands.append(("baseline", lambda: run_cli(args.baseline)))
+results = {name: [] for name, _ in commands}
 for run in range(args.runs):
-    for name, function in (("cli", run_cli), ("python", run_python)):
+    for name, function in commands:
         r = function()
         results[name].append(r)
-        print(f"run {run + 1} {name:>6}: energy {r['energy']:.9e}  iterations {r['iterations']}"
+        print(f"run {run + 1} {name:>8}: energy {r['energy']:.9e}  iterations {r['iterations']}"
               f"  total {r['total']:.3f} s", flush=True)
 for name, runs in results.items():
     totals = [r["total"] for r in runs]
     energies = sorted({format(r["energy"], ".9e") for r in runs})
-    print(f"{name:>6}: median total {statistics.median(totals):.3f} s "
+    print(f"{name:>8}: median total {statistics.median(totals):.3f} s "
           f"(min {min(totals):.3f}, max {max(totals):.3f}); energies {energies}")
 ratio = statistics.median(r["total"] for r in results["python"]) / \
     statistics.median(r["total"] for r in results["cli"])
 print(f"python / cli median total: {ratio:.3f}")
+if args.baseline:
+    ratio = statistics.median(r["total"] for r in results["cli"]) / \
+        statistics.median(r["total"] for r in results["baseline"])
+    print(f"cli / baseline median total: {ratio:.3f}")
