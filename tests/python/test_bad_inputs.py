@@ -156,3 +156,39 @@ def test_bad_builtin_mesh():
         harap.builtin_mesh("cube")
     with pytest.raises(harap.ConfigError, match="verticez"):
         harap.builtin_mesh("cylinder", verticez=10)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_random_small_meshes_solve_or_fail_cleanly(seed):
+    """Random tiny meshes (flat, tiny, huge, repeated positions, random triangles and
+    tetrahedra, random handles): every call returns or raises an input/config error, never an
+    internal error or a crash."""
+    rng = np.random.default_rng(seed)
+    succeeded = 0
+    for _ in range(150):
+        n = int(rng.integers(4, 14))
+        V = rng.standard_normal((n, 3)) * rng.choice([1, 1e-20, 1e20])
+        if rng.random() < 0.3:
+            V[:, 2] = 0
+        if rng.random() < 0.1:
+            V[int(rng.integers(0, n))] = V[0]
+        k = int(rng.choice([3, 4]))
+        F = np.array([rng.permutation(n)[:k] for _ in range(int(rng.integers(1, 15)))])
+        H = rng.permutation(n)[:int(rng.integers(0, 4))]
+        T = V[H] + rng.standard_normal((len(H), 3)) * (rng.random() < 0.7)
+        call = rng.integers(0, 3)
+        try:
+            if call == 0:
+                harap.deform(V, F, H, T, optimizer=str(rng.choice(
+                    ["classic", "hierarchical", "admm_pd", "wrapd"])), max_iterations=5)
+            elif call == 1:
+                harap.hierarchy(V, F, str(rng.choice(["octree", "edge_collapse"])),
+                                min_vertices=2)
+            else:
+                harap.energy(str(rng.choice(["spokes", "spokes_and_rims", "elements",
+                                             "smooth_arap"])), V, F,
+                             V + rng.standard_normal(V.shape))
+            succeeded += 1
+        except (harap.InputError, harap.ConfigError, harap.NumericalError):
+            pass
+    assert succeeded > 30  # the generator makes valid problems too
