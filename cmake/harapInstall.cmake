@@ -49,7 +49,8 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/harapConfigVersion.cmake
 install(FILES ${PROJECT_BINARY_DIR}/harapConfig.cmake ${PROJECT_BINARY_DIR}/harapConfigVersion.cmake
         DESTINATION ${harap_config_dir})
 
-if(HARAP_BUILD_TESTS)
+# Not in sanitizer builds: an instrumented install is no package anyone consumes.
+if(HARAP_BUILD_TESTS AND NOT HARAP_SANITIZE)
   set(harap_consumer_python)
   if(TARGET harap_python)
     set(harap_consumer_python -DPYTHON=${Python3_EXECUTABLE}
