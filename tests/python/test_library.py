@@ -161,3 +161,21 @@ def test_load_scenario_matches_the_cli_handles(tmp_path):
     V, F, handles, targets = s
     assert V.shape[1] == 3 and F.shape[1] == 3 and len(handles) == len(targets)
     assert s.initial is None and not s.planar
+
+
+def test_tetrahedral_hierarchy_and_energy(tmp_path):
+    scenario = tmp_path / "tets.toml"
+    scenario.write_text('mesh = { tetrahedralize = { builtin = "cylinder", vertices = 300 }, '
+                        'max_volume = 0.01 }\n[[handle]]\n'
+                        'select.slab = { axis = "z", from = 0.0, to = 0.05 }\n')
+    s = harap.load_scenario(scenario)
+    levels = harap.hierarchy(s.V, s.F, min_vertices=30)
+    assert len(levels) > 1 and all(level.elements.shape[1] == 4 for level in levels)
+    stretched = s.V * [1.0, 1.0, 1.2]
+    e = harap.energy("elements", s.V, s.F, stretched)
+    assert e.per_element and not e.planar and e.value > 0
+    assert e.rotations.shape == (len(s.F), 3, 3)
+    # A rigid motion costs nothing.
+    c, r = np.cos(0.3), np.sin(0.3)
+    rigid = s.V @ np.array([[c, -r, 0], [r, c, 0], [0, 0, 1]]).T + [1, 2, 3]
+    assert harap.energy("elements", s.V, s.F, rigid).value < 1e-12
