@@ -6,6 +6,7 @@
 #include "solvers/cholmod_solver.h"
 
 #include <cholmod.h>
+#include <cholmod_modify.h>
 #include <dlfcn.h>
 #include <fmt/format.h>
 
@@ -61,6 +62,14 @@ constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kO
     {CholmodSolver::Ordering::kAmd, "amd"},
     {CholmodSolver::Ordering::kBest, "best"},
 }};
+
+constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 4>
+    kRefactorNames = {{
+        {CholmodSolver::RefactorChoice::kAuto, "auto"},
+        {CholmodSolver::RefactorChoice::kFull, "full"},
+        {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
+        {CholmodSolver::RefactorChoice::kUpdate, "update"},
+    }};
 
 template <class Enum, size_t N>
 std::vector<std::string> Names(const std::array<std::pair<Enum, std::string_view>, N>& table) {
@@ -314,6 +323,43 @@ class ScopedNativeThreads {
   int saved_threads_ = 0;  // 0: nothing to restore
 };
 
+
+// The entries of column j of `a` (compressed or not): [begin, end) into its index/value arrays.
+std::pair<Index, Index> ColumnRange(const SparseMatrix& a, Index j) {
+  const Index begin = a.outerIndexPtr()[j];
+  const Index end = a.isCompressed() ? a.outerIndexPtr()[j + 1] : begin + a.innerNonZeroPtr()[j];
+  return {begin, end};
+}
+
+bool SamePattern(const SparseMatrix& x, const SparseMatrix& y) {
+  if (x.rows() != y.rows() || x.cols() != y.cols()) return false;
+  for (Index j = 0; j < x.cols(); ++j) {
+    const auto [xb, xe] = ColumnRange(x, j);
+    const auto [yb, ye] = ColumnRange(y, j);
+    if (xe - xb != ye - yb ||
+        !std::equal(x.innerIndexPtr() + xb, x.innerIndexPtr() + xe, y.innerIndexPtr() + yb)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Row (= column, `a` is symmetric) j of `a` is the identity's: what a handle's row becomes in
+// the masked matrix, and what cholmod_rowdel leaves in the factor.
+bool IsIdentityRow(const SparseMatrix& a, Index j) {
+  const auto [begin, end] = ColumnRange(a, j);
+  bool diagonal_one = false;
+  for (Index e = begin; e < end; ++e) {
+    const double value = a.valuePtr()[e];
+    if (a.innerIndexPtr()[e] == j) {
+      diagonal_one = value == 1.0;
+    } else if (value != 0.0) {
+      return false;
+    }
+  }
+  return diagonal_one;
+}
+
 }  // namespace
 
 struct CholmodSolver::Impl {
@@ -362,6 +408,7 @@ struct CholmodSolver::Impl {
 
   ~Impl() {
     FreeFactor();
+    FreeSymbolic();
     cholmod_free_dense(&x, &common);
     cholmod_free_dense(&y, &common);
     cholmod_free_dense(&e, &common);
@@ -371,6 +418,56 @@ struct CholmodSolver::Impl {
   void FreeFactor() {
     if (factor) cholmod_free_factor(&factor, &common);
     factor = nullptr;
+  }
+  void FreeSymbolic() {
+    if (symbolic) cholmod_free_factor(&symbolic, &common);
+    symbolic = nullptr;
+  }
+
+  // Keeps copies for Refactor() (the matrix also for check_residual).
+  bool keeps_copies() const { return options.refactor != RefactorChoice::kFull; }
+
+  // The numeric factorization of `view` into `factor` (symbolic on entry), timed.
+  void FactorNumeric(cholmod_sparse& view, const SparseMatrix& a) {
+    const Stopwatch clock;
+    cholmod_factorize(&view, factor, &common);
+    ThrowOnFailure("factorization", a);
+    info.numeric_seconds = clock.Seconds();
+  }
+
+  // After a numeric factorization or modification: the pivot check, the statistics, the
+  // parallel solve's plan, and the copy of `a`.
+  void FinishFactor(const SparseMatrix& a, const Eigen::VectorXd& diagonal,
+                    const Context& context) {
+    CheckPivots(a, diagonal);
+    info.supernodal = factor->is_super != 0;
+    info.ordering = OrderingName(factor->ordering);
+    info.nnz_l = common.lnz;
+    info.flops = common.fl;
+    use_tree_solve = false;
+    if (options.parallel_solve && !factor->is_super && !factor->is_ll) {
+      const cholmod_factor& f = *factor;
+      LdltFactorView view;
+      view.n = static_cast<Index>(f.n);
+      view.column_start = static_cast<const int*>(f.p);
+      view.column_count = static_cast<const int*>(f.nz);
+      view.row = static_cast<const int*>(f.i);
+      view.value = static_cast<const double*>(f.x);
+      view.permutation = static_cast<const int*>(f.Perm);
+      tree_solve.Setup(view, context.arena->max_concurrency());
+      use_tree_solve = true;
+      info.solve_blocks = tree_solve.num_blocks();
+      info.solve_critical_path = tree_solve.critical_path_fraction();
+    }
+    if (options.check_residual || keeps_copies()) {
+      if (SamePattern(matrix, a) && matrix.isCompressed() && a.isCompressed()) {
+        std::copy(a.valuePtr(), a.valuePtr() + a.nonZeros(), matrix.valuePtr());
+      } else {
+        matrix = a;
+        matrix.makeCompressed();
+      }
+    }
+    factorized = true;
   }
 
   // Throws for every failure status of the last CHOLMOD call; warnings other than NOT_POSDEF
@@ -432,7 +529,7 @@ struct CholmodSolver::Impl {
       summary.success = false;
       summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
     } else if (options.check_residual) {
-      summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy, b, x, residual);
+      summary.relative_residual = solver_checks::MaxRelativeResidual(matrix, b, x, residual);
     }
     summary.seconds = clock.Seconds();
     return summary;
@@ -441,6 +538,12 @@ struct CholmodSolver::Impl {
   Options options;
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
+  // With keeps_copies(): the analysis of the last Factorize() (a symbolic factor), which
+  // Refactor() factors anew.
+  cholmod_factor* symbolic = nullptr;
+  // Seconds per factor entry touched by cholmod_rowdel / cholmod_rowadd, as the last update
+  // measured it (see Refactor()).
+  double update_seconds_per_entry = kDefaultUpdateSecondsPerEntry;
   // Solve workspaces, kept so that Solve() allocates only on its first call (per column count).
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
@@ -451,9 +554,15 @@ struct CholmodSolver::Impl {
   int rows = 0;
   bool factorized = false;
   FactorInfo info;
-  // Only with check_residual.
-  SparseMatrix a_copy;
+  // The last factored matrix: with check_residual (for the residual) or keeps_copies() (for
+  // Refactor(): the pattern check and the changed rows' old values).
+  SparseMatrix matrix;
   Eigen::MatrixXd residual;
+  // Refactor() workspaces (factor order): path costs, the inverse permutation, marks, and the
+  // row handed to cholmod_rowadd / cholmod_rowdel.
+  std::vector<double> path_cost;
+  std::vector<int> inverse_permutation, mark, row_index;
+  std::vector<double> row_value;
 };
 
 CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
@@ -474,11 +583,26 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       "solve with a simplicial factor by substitution over independent subtrees of the "
       "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
+  options.refactor = FromName(
+      kRefactorNames,
+      node.GetChoice("refactor", ToName(kRefactorNames, options.refactor), Names(kRefactorNames),
+                     "how Refactor() (handle edits of a session) updates the factor: numeric = "
+                     "reuse the analysis, factor the values; update = modify the factor row by row "
+                     "(cholmod_rowdel/rowadd; not with mode supernodal); auto = the cheaper of the "
+                     "two by an estimate from the factor's elimination tree and measured times; "
+                     "full = factor from scratch (keeps no copies)"));
   options.native_threads = node.Get(
       "native_threads", options.native_threads,
       "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
       "own parallelism is TBB's, which native threads compete with)");
   node.RejectUnknownKeys();
+  if (options.refactor == RefactorChoice::kUpdate && options.mode == Mode::kSupernodal) {
+    throw ConfigError(fmt::format(
+        "{}: refactor = \"update\" modifies a simplicial LDLᵀ factor, but mode = \"supernodal\" "
+        "keeps a supernodal one; use mode = \"auto\" or \"simplicial\", or refactor = "
+        "\"numeric\"",
+        node.Where("refactor")));
+  }
   if (options.native_threads < 0) {
     throw ConfigError(fmt::format("{}: native_threads must be >= 0, got {}",
                                   node.Where("native_threads"), options.native_threads));
@@ -507,14 +631,19 @@ std::string_view CholmodSolver::ToString(Ordering ordering) {
   return ToName(kOrderingNames, ordering);
 }
 
+std::string_view CholmodSolver::ToString(RefactorChoice choice) {
+  return ToName(kRefactorNames, choice);
+}
+
 void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
   Impl& impl = *impl_;
   impl.factorized = false;
   impl.use_tree_solve = false;
   impl.FreeFactor();
+  impl.FreeSymbolic();
   impl.info = FactorInfo{};
-  impl.a_copy = SparseMatrix();
+  impl.matrix = SparseMatrix();
   impl.rows = static_cast<int>(a.rows());
   if (impl.rows == 0) {
     impl.factorized = true;
@@ -535,34 +664,216 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
+  const Stopwatch analysis_clock;
   impl.factor = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);
   HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
               impl.common.status);
-  cholmod_factorize(&view, impl.factor, &impl.common);
-  impl.ThrowOnFailure("factorization", a);
-  impl.CheckPivots(a, diagonal);
-
-  impl.info.supernodal = impl.factor->is_super != 0;
-  impl.info.ordering = OrderingName(impl.factor->ordering);
-  impl.info.nnz_l = impl.common.lnz;
-  impl.info.flops = impl.common.fl;
-  if (impl.options.check_residual) impl.a_copy = a;
-  if (impl.options.parallel_solve && !impl.factor->is_super && !impl.factor->is_ll) {
-    const cholmod_factor& f = *impl.factor;
-    LdltFactorView view;
-    view.n = static_cast<Index>(f.n);
-    view.column_start = static_cast<const int*>(f.p);
-    view.column_count = static_cast<const int*>(f.nz);
-    view.row = static_cast<const int*>(f.i);
-    view.value = static_cast<const double*>(f.x);
-    view.permutation = static_cast<const int*>(f.Perm);
-    impl.tree_solve.Setup(view, context.arena->max_concurrency());
-    impl.use_tree_solve = true;
-    impl.info.solve_blocks = impl.tree_solve.num_blocks();
-    impl.info.solve_critical_path = impl.tree_solve.critical_path_fraction();
+  if (impl.keeps_copies()) {
+    impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
+    impl.ThrowOnFailure("copy of the analysis", a);
   }
-  impl.factorized = true;
+  impl.info.analysis_seconds = analysis_clock.Seconds();
+  impl.FactorNumeric(view, a);
+  impl.FinishFactor(a, diagonal, context);
+}
+
+LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
+                                                      const std::vector<Index>& changed_rows,
+                                                      const Context& context) {
+  const Stopwatch clock;
+  Impl& impl = *impl_;
+  RefactorSummary summary;
+  summary.changed_rows = static_cast<Index>(changed_rows.size());
+  const auto full = [&] {
+    Factorize(a, context);
+    summary.route = RefactorRoute::kFull;
+    summary.seconds = clock.Seconds();
+    return summary;
+  };
+  // Without a factorization of the same pattern to start from, there is nothing to reuse.
+  if (!impl.factorized || impl.symbolic == nullptr || impl.rows == 0 ||
+      impl.options.refactor == RefactorChoice::kFull || !SamePattern(impl.matrix, a)) {
+    return full();
+  }
+  const Index n = impl.rows;
+  for (size_t k = 0; k < changed_rows.size(); ++k) {
+    HARAP_CHECK(changed_rows[k] >= 0 && changed_rows[k] < n &&
+                    (k == 0 || changed_rows[k] > changed_rows[k - 1]),
+                "Refactor: changed_rows must be sorted, unique and in [0, {}); entry {} is {}", n,
+                k, changed_rows[k]);
+  }
+  // The contract: values differ only in the changed rows and columns. The update route relies
+  // on it, so a caller's mistake is an error, not a wrong factor.
+  std::vector<int>& changed = impl.mark;
+  changed.assign(n, 0);
+  for (Index r : changed_rows) changed[r] = 1;
+  for (Index j = 0; j < n; ++j) {
+    if (changed[j]) continue;
+    const auto [begin, end] = ColumnRange(a, j);
+    const auto [old_begin, old_end] = ColumnRange(impl.matrix, j);
+    for (Index e = begin, o = old_begin; e < end; ++e, ++o) {
+      const Index i = a.innerIndexPtr()[e];
+      HARAP_CHECK(changed[i] || a.valuePtr()[e] == impl.matrix.valuePtr()[o],
+                  "Refactor: entry ({}, {}) changed from {} to {}, but neither row {} nor row {} "
+                  "is in changed_rows",
+                  i, j, impl.matrix.valuePtr()[o], a.valuePtr()[e], i, j);
+    }
+  }
+  const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "cholmod");
+
+  // What an update would touch (see the header for the rule).
+  const bool can_update = !impl.factor->is_super && !impl.factor->is_ll;
+  RefactorChoice route = impl.options.refactor;
+  if (route == RefactorChoice::kUpdate && !can_update) route = RefactorChoice::kNumeric;
+  impl.info.estimated_update_seconds = 0.0;
+  impl.info.estimated_numeric_seconds = impl.info.numeric_seconds;
+  const cholmod_factor& f = *impl.factor;
+  const auto* lp = static_cast<const int*>(f.p);
+  const auto* lnz = static_cast<const int*>(f.nz);
+  const auto* li = static_cast<const int*>(f.i);
+  const auto* perm = static_cast<const int*>(f.Perm);
+  const auto parent = [&](int j) { return lnz[j] > 1 ? li[lp[j] + 1] : -1; };
+  double update_entries = 0.0;
+  if (can_update) {
+    // path_cost[j]: the factor entries in the columns from j up to the root (parents have
+    // larger indices, so one descending sweep).
+    impl.path_cost.resize(n);
+    impl.inverse_permutation.resize(n);
+    for (Index j = n; j-- > 0;) {
+      const int p = parent(static_cast<int>(j));
+      impl.path_cost[j] = lnz[j] + (p >= 0 ? impl.path_cost[p] : 0.0);
+      impl.inverse_permutation[perm ? perm[j] : j] = static_cast<int>(j);
+    }
+    for (Index r : changed_rows) {
+      const int k = impl.inverse_permutation[r];
+      if (!IsIdentityRow(impl.matrix, r)) update_entries += impl.path_cost[k];
+      if (!IsIdentityRow(a, r)) {
+        double forward = 0.0;
+        const auto [begin, end] = ColumnRange(a, r);
+        for (Index e = begin; e < end; ++e) {
+          const int i = impl.inverse_permutation[a.innerIndexPtr()[e]];
+          if (i < k) forward = std::max(forward, impl.path_cost[i] - impl.path_cost[k]);
+        }
+        update_entries += forward + impl.path_cost[k];
+      }
+    }
+    impl.info.estimated_update_seconds = update_entries * impl.update_seconds_per_entry;
+    if (route == RefactorChoice::kAuto) {
+      route = impl.info.estimated_update_seconds < impl.info.estimated_numeric_seconds
+                  ? RefactorChoice::kUpdate
+                  : RefactorChoice::kNumeric;
+    }
+  } else if (route == RefactorChoice::kAuto) {
+    route = RefactorChoice::kNumeric;
+  }
+
+  // From here on the old factor is being replaced: a throw leaves the solver unfactored.
+  impl.factorized = false;
+  impl.use_tree_solve = false;
+  if (route == RefactorChoice::kNumeric) {
+    if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) return full();
+    const ScopedNativeThreads native_threads(impl.options.native_threads);
+    impl.FreeFactor();
+    impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
+    impl.ThrowOnFailure("copy of the analysis", a);
+    cholmod_sparse view = LowerTriangleView(a);
+    impl.FactorNumeric(view, a);
+    impl.FinishFactor(a, diagonal, context);
+    summary.route = RefactorRoute::kNumeric;
+    summary.seconds = clock.Seconds();
+    return summary;
+  }
+
+  // kUpdate. First every changed row that is not already the identity's becomes it
+  // (cholmod_rowdel, given the pattern of row k of L: the elimination-tree paths from the
+  // row's entries left of the diagonal up to k, as in a symbolic factorization); the factor
+  // then is that of a with all changed rows and columns replaced by the identity's, since a and
+  // the old matrix differ only there. Then each changed row that is not the identity's in `a`
+  // is added (cholmod_rowadd) with its entries in rows already added, keeping that invariant.
+  const Stopwatch update_clock;
+  const double modified_before = impl.common.nrealloc_col;
+  std::vector<int>& rows = impl.row_index;
+  std::vector<double>& values = impl.row_value;
+  std::vector<int>& visited = impl.mark;  // reused: `changed` is no longer needed
+  std::fill(visited.begin(), visited.end(), -1);
+  const auto fail = [&](std::string_view stage) {
+    impl.ThrowOnFailure(stage, a);
+    throw InternalError(fmt::format("cholmod: {} failed with status {}", stage,
+                                    impl.common.status));
+  };
+  int column_start[2] = {0, 0};
+  const auto column_vector = [&](size_t nnz) {
+    cholmod_sparse r{};
+    r.nrow = static_cast<size_t>(n);
+    r.ncol = 1;
+    r.nzmax = std::max<size_t>(nnz, 1);
+    column_start[1] = static_cast<int>(nnz);
+    r.p = column_start;
+    r.i = rows.data();
+    r.x = values.empty() ? nullptr : values.data();
+    r.stype = 0;
+    r.itype = CHOLMOD_INT;
+    r.xtype = values.empty() ? CHOLMOD_PATTERN : CHOLMOD_REAL;
+    r.dtype = CHOLMOD_DOUBLE;
+    r.sorted = 0;
+    r.packed = 1;
+    return r;
+  };
+  for (Index r : changed_rows) {
+    if (IsIdentityRow(impl.matrix, r)) continue;
+    const int k = impl.inverse_permutation[r];
+    rows.clear();
+    values.clear();
+    const auto [begin, end] = ColumnRange(a, r);
+    for (Index e = begin; e < end; ++e) {
+      for (int i = impl.inverse_permutation[a.innerIndexPtr()[e]]; i >= 0 && i < k && visited[i] != k;
+           i = parent(i)) {
+        visited[i] = k;
+        rows.push_back(i);
+      }
+    }
+    cholmod_sparse pattern = column_vector(rows.size());
+    if (!cholmod_rowdel(static_cast<size_t>(k), &pattern, impl.factor, &impl.common)) {
+      fail("row deletion (cholmod_rowdel)");
+    }
+  }
+  std::vector<int>& pending = visited;
+  std::fill(pending.begin(), pending.end(), 0);
+  for (Index r : changed_rows) pending[r] = 1;
+  for (Index r : changed_rows) {
+    pending[r] = 0;
+    if (IsIdentityRow(a, r)) continue;
+    rows.clear();
+    values.clear();
+    const auto [begin, end] = ColumnRange(a, r);
+    for (Index e = begin; e < end; ++e) {
+      const Index i = a.innerIndexPtr()[e];
+      if (pending[i]) continue;
+      rows.push_back(impl.inverse_permutation[i]);
+      values.push_back(a.valuePtr()[e]);
+    }
+    cholmod_sparse column = column_vector(rows.size());
+    if (!cholmod_rowadd(static_cast<size_t>(impl.inverse_permutation[r]), &column, impl.factor,
+                        &impl.common)) {
+      fail("row addition (cholmod_rowadd)");
+    }
+  }
+  // The pattern holds every entry the rows can need, so columns never grow; if one did
+  // (CHOLMOD moved it to the end), pack the factor again for the parallel solve.
+  if (impl.common.nrealloc_col != modified_before || !impl.factor->is_monotonic) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1, impl.factor,
+                               &impl.common)) {
+      fail("packing of the modified factor");
+    }
+  }
+  const double update_seconds = update_clock.Seconds();
+  // Calibrate on modifications large enough to time (a few milliseconds at least).
+  if (update_entries >= 1e6) impl.update_seconds_per_entry = update_seconds / update_entries;
+  impl.FinishFactor(a, diagonal, context);
+  summary.route = RefactorRoute::kUpdate;
+  summary.seconds = clock.Seconds();
+  return summary;
 }
 
 SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,

@@ -15,7 +15,7 @@ namespace harap {
 /// `a` is n×n SPD in full storage; CHOLMOD reads its lower triangle in place (no copy). B and X
 /// are n×k (k = 3 for the global step). Factorize() redoes the symbolic analysis (ordering,
 /// elimination tree) every time: each solver object factors one matrix (a hierarchy creates one
-/// solver per level). Solve() is allocation-free after its first call with a given k: the
+/// solver per level); Refactor() reuses it when only values change. Solve() is allocation-free after its first call with a given k: the
 /// permuted right-hand side and solution live in workspaces kept between calls. (BLAS, used by
 /// solves with a supernodal factor, may allocate: OpenBLAS 0.3.21's small-matrix dgemm kernel
 /// on AVX-512 machines takes a buffer from malloc on every call.)
@@ -41,6 +41,13 @@ class CholmodSolver final : public LinearSolver {
     kMetis,  ///< METIS nested dissection: least fill on meshes, but the slowest analysis.
     kAmd,    ///< Approximate minimum degree: fast analysis, 10–20% more fill on 2D meshes.
     kBest,   ///< CHOLMOD's default: AMD, then METIS too if AMD's fill is high; keeps the best.
+  };
+  /// Which route Refactor() takes (see Refactor() for the rule of kAuto).
+  enum class RefactorChoice {
+    kAuto,     ///< The cheaper of kNumeric and kUpdate by the cost estimate below.
+    kFull,     ///< Always Factorize() again (no copies kept between factorizations).
+    kNumeric,  ///< Always reuse the analysis and factor the values anew.
+    kUpdate,   ///< Always modify the factor row by row (cholmod_rowdel / cholmod_rowadd).
   };
 
   struct Options {
@@ -75,6 +82,11 @@ class CholmodSolver final : public LinearSolver {
     /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
     /// Factorize() sets it.
     int native_threads = 1;
+    /// Refactor()'s route. Anything but kFull keeps a copy of the analysis (the symbolic
+    /// factor, a few MB) and of the factored matrix (12 bytes per nonzero of A) between calls,
+    /// to reuse the one and to check the pattern and find the changed rows' old values with the
+    /// other. kUpdate needs a simplicial factor (modes auto and simplicial).
+    RefactorChoice refactor = RefactorChoice::kAuto;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
     static Options FromConfig(const ConfigNode& node);
@@ -92,6 +104,35 @@ class CholmodSolver final : public LinearSolver {
                      const Context& context) override;
   bool is_direct() const override { return true; }
 
+  /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
+  /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
+  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull).
+  ///
+  /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
+  /// supernodes): it saves the analysis and nothing else. kUpdate (simplicial LDLᵀ only) first
+  /// deletes every changed row whose old row was not the identity's (cholmod_rowdel: the row and
+  /// column become the identity's, a rank-1 update of the columns on the elimination-tree path
+  /// from the row to the root), then adds every changed row whose new row is not the identity's
+  /// (cholmod_rowadd: a sparse triangular solve for the row, then a rank-1 downdate along the
+  /// same path), each with the entries of the rows added so far. Because the factor keeps the
+  /// symbolic pattern of the whole matrix (explicit zeros included) the pattern never changes,
+  /// so the factor stays packed and the parallel solve's plan only needs new pivots.
+  ///
+  /// Rule of kAuto: kUpdate if its estimated time is below the numeric refactorization's, else
+  /// kNumeric. The estimate counts the factor entries the modification touches — for each
+  /// deletion the column counts summed along the path from the row's column to the root, for
+  /// each addition that plus the longest path from the row's entries up to its column (the
+  /// forward solve) — times the seconds per touched entry measured by this solver's last update
+  /// (before any: kDefaultUpdateSecondsPerEntry); the numeric time is the one measured by the last
+  /// numeric factorization of this pattern. Both are measured on the machine the solver runs on.
+  RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                           const Context& context) override;
+
+  /// Seconds per factor entry touched by a row deletion or addition before one was measured:
+  /// 2.5 ns (rank-1 updates touch each entry once, a few flops, memory-bound), measured on the
+  /// 2-vCPU test VM with grid Laplacians and armadillo-bend's finest matrix (docs/solvers.md).
+  static constexpr double kDefaultUpdateSecondsPerEntry = 2.5e-9;
+
   /// What the last successful Factorize() produced (for experiments and benchmarks).
   struct FactorInfo {
     bool supernodal = false;    ///< Which kind "auto" (or the fixed mode) produced.
@@ -103,6 +144,13 @@ class CholmodSolver final : public LinearSolver {
     /// that stays sequential).
     int solve_blocks = 0;
     double solve_critical_path = 0.0;
+    /// Wall time of the last analysis (ordering, symbolic factorization) and of the last
+    /// numeric factorization (including the conversion to simplicial form in mode auto).
+    double analysis_seconds = 0.0;
+    double numeric_seconds = 0.0;
+    /// The last Refactor()'s estimates (0 when it did not estimate), see Refactor().
+    double estimated_update_seconds = 0.0;
+    double estimated_numeric_seconds = 0.0;
   };
   const FactorInfo& factor_info() const;
 
@@ -110,6 +158,7 @@ class CholmodSolver final : public LinearSolver {
 
   static std::string_view ToString(Mode mode);
   static std::string_view ToString(Ordering ordering);
+  static std::string_view ToString(RefactorChoice choice);
 
  private:
   struct Impl;
