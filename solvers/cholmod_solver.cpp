@@ -436,9 +436,10 @@ struct CholmodSolver::Impl {
   }
 
   // After a numeric factorization or modification: the pivot check, the statistics, the
-  // parallel solve's plan, and the copy of `a`.
-  void FinishFactor(const SparseMatrix& a, const Eigen::VectorXd& diagonal,
-                    const Context& context) {
+  // parallel solve's plan (`same_arrays`: the factor was modified in place without changing its
+  // pattern, so the plan only needs the new pivots), and the copy of `a`.
+  void FinishFactor(const SparseMatrix& a, const Eigen::VectorXd& diagonal, const Context& context,
+                    bool same_arrays = false) {
     CheckPivots(a, diagonal);
     info.supernodal = factor->is_super != 0;
     info.ordering = OrderingName(factor->ordering);
@@ -454,7 +455,16 @@ struct CholmodSolver::Impl {
       view.row = static_cast<const int*>(f.i);
       view.value = static_cast<const double*>(f.x);
       view.permutation = static_cast<const int*>(f.Perm);
-      tree_solve.Setup(view, context.arena->max_concurrency());
+      const Stopwatch setup_clock;
+      if (same_arrays && tree_view.row == view.row && tree_view.value == view.value &&
+          tree_view.column_start == view.column_start &&
+          tree_view.column_count == view.column_count && tree_view.n == view.n) {
+        tree_solve.RefreshPivots();
+      } else {
+        tree_solve.Setup(view, context.arena->max_concurrency());
+        tree_view = view;
+      }
+      info.solve_setup_seconds = setup_clock.Seconds();
       use_tree_solve = true;
       info.solve_blocks = tree_solve.num_blocks();
       info.solve_critical_path = tree_solve.critical_path_fraction();
@@ -541,15 +551,17 @@ struct CholmodSolver::Impl {
   // With keeps_copies(): the analysis of the last Factorize() (a symbolic factor), which
   // Refactor() factors anew.
   cholmod_factor* symbolic = nullptr;
-  // Seconds per factor entry touched by cholmod_rowdel / cholmod_rowadd, as the last update
-  // measured it (see Refactor()).
-  double update_seconds_per_entry = kDefaultUpdateSecondsPerEntry;
+  // Seconds per factor entry touched by the deletions (cholmod_updown) and the additions
+  // (cholmod_rowadd), as the last update measured them (see Refactor()).
+  double delete_seconds_per_entry = kDefaultDeleteSecondsPerEntry;
+  double add_seconds_per_entry = kDefaultAddSecondsPerEntry;
   // Solve workspaces, kept so that Solve() allocates only on its first call (per column count).
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
   // With parallel_solve and a simplicial factor: solves with `factor` in place.
   EliminationTreeSolve tree_solve;
+  LdltFactorView tree_view;  // the arrays tree_solve was set up with
   bool use_tree_solve = false;
   int rows = 0;
   bool factorized = false;
@@ -563,6 +575,8 @@ struct CholmodSolver::Impl {
   std::vector<double> path_cost;
   std::vector<int> inverse_permutation, mark, row_index;
   std::vector<double> row_value;
+  std::vector<int> update_start, update_row;  // the columns of the deletions' update
+  std::vector<double> update_value;
 };
 
 CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
@@ -734,7 +748,8 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
   const auto* li = static_cast<const int*>(f.i);
   const auto* perm = static_cast<const int*>(f.Perm);
   const auto parent = [&](int j) { return lnz[j] > 1 ? li[lp[j] + 1] : -1; };
-  double update_entries = 0.0;
+  // Entries the deletions and the additions would touch (see the header for the rule).
+  double delete_entries = 0.0, add_entries = 0.0;
   if (can_update) {
     // path_cost[j]: the factor entries in the columns from j up to the root (parents have
     // larger indices, so one descending sweep).
@@ -747,7 +762,7 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
     }
     for (Index r : changed_rows) {
       const int k = impl.inverse_permutation[r];
-      if (!IsIdentityRow(impl.matrix, r)) update_entries += impl.path_cost[k];
+      if (!IsIdentityRow(impl.matrix, r)) delete_entries += impl.path_cost[k];
       if (!IsIdentityRow(a, r)) {
         double forward = 0.0;
         const auto [begin, end] = ColumnRange(a, r);
@@ -755,10 +770,11 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
           const int i = impl.inverse_permutation[a.innerIndexPtr()[e]];
           if (i < k) forward = std::max(forward, impl.path_cost[i] - impl.path_cost[k]);
         }
-        update_entries += forward + impl.path_cost[k];
+        add_entries += forward + impl.path_cost[k];
       }
     }
-    impl.info.estimated_update_seconds = update_entries * impl.update_seconds_per_entry;
+    impl.info.estimated_update_seconds = delete_entries * impl.delete_seconds_per_entry +
+                                         add_entries * impl.add_seconds_per_entry;
     if (route == RefactorChoice::kAuto) {
       route = impl.info.estimated_update_seconds < impl.info.estimated_numeric_seconds
                   ? RefactorChoice::kUpdate
@@ -785,62 +801,86 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
     return summary;
   }
 
-  // kUpdate. First every changed row that is not already the identity's becomes it
-  // (cholmod_rowdel, given the pattern of row k of L: the elimination-tree paths from the
-  // row's entries left of the diagonal up to k, as in a symbolic factorization); the factor
-  // then is that of a with all changed rows and columns replaced by the identity's, since a and
-  // the old matrix differ only there. Then each changed row that is not the identity's in `a`
-  // is added (cholmod_rowadd) with its entries in rows already added, keeping that invariant.
-  const Stopwatch update_clock;
-  const double modified_before = impl.common.nrealloc_col;
-  std::vector<int>& rows = impl.row_index;
-  std::vector<double>& values = impl.row_value;
-  std::vector<int>& visited = impl.mark;  // reused: `changed` is no longer needed
-  std::fill(visited.begin(), visited.end(), -1);
+  // kUpdate. First every changed row k that is not already the identity's becomes it, all at
+  // once: with F the other rows, the old P A Pᵀ restricted to F is
+  //   Σ_j d_j L(F,j) L(F,j)ᵀ = L̃ D̃ L̃ᵀ (F,F) + Σ_k d_k L(F,k) L(F,k)ᵀ,
+  // where L̃, D̃ are L, D with the deleted rows and columns replaced by the identity's. So
+  // setting those rows and columns to the identity's and updating with the columns
+  // sqrt(d_k) L(F,k) (cholmod_updown, up to 8 columns per sweep along the elimination tree)
+  // gives the factor of `a` with all changed rows and columns replaced by the identity's, since
+  // `a` and the old matrix differ only there. Then each changed row that is not the
+  // identity's in `a` is added (cholmod_rowadd) with its entries in the rows already added,
+  // which keeps that invariant.
+  const double reallocations_before = impl.common.nrealloc_col;
   const auto fail = [&](std::string_view stage) {
     impl.ThrowOnFailure(stage, a);
     throw InternalError(fmt::format("cholmod: {} failed with status {}", stage,
                                     impl.common.status));
   };
-  int column_start[2] = {0, 0};
-  const auto column_vector = [&](size_t nnz) {
-    cholmod_sparse r{};
-    r.nrow = static_cast<size_t>(n);
-    r.ncol = 1;
-    r.nzmax = std::max<size_t>(nnz, 1);
-    column_start[1] = static_cast<int>(nnz);
-    r.p = column_start;
-    r.i = rows.data();
-    r.x = values.empty() ? nullptr : values.data();
-    r.stype = 0;
-    r.itype = CHOLMOD_INT;
-    r.xtype = values.empty() ? CHOLMOD_PATTERN : CHOLMOD_REAL;
-    r.dtype = CHOLMOD_DOUBLE;
-    r.sorted = 0;
-    r.packed = 1;
-    return r;
-  };
+  Stopwatch phase_clock;
+  std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
+  std::fill(deleted.begin(), deleted.end(), 0);
+  std::vector<int>& deletions = impl.row_index;
+  deletions.clear();
   for (Index r : changed_rows) {
     if (IsIdentityRow(impl.matrix, r)) continue;
-    const int k = impl.inverse_permutation[r];
-    rows.clear();
-    values.clear();
-    const auto [begin, end] = ColumnRange(a, r);
-    for (Index e = begin; e < end; ++e) {
-      for (int i = impl.inverse_permutation[a.innerIndexPtr()[e]]; i >= 0 && i < k && visited[i] != k;
-           i = parent(i)) {
-        visited[i] = k;
-        rows.push_back(i);
+    deletions.push_back(impl.inverse_permutation[r]);
+    deleted[impl.inverse_permutation[r]] = 1;
+  }
+  if (!deletions.empty()) {
+    auto* lx = static_cast<double*>(impl.factor->x);
+    std::vector<int>& cp = impl.update_start;
+    std::vector<int>& ci = impl.update_row;
+    std::vector<double>& cx = impl.update_value;
+    cp.assign(1, 0);
+    ci.clear();
+    cx.clear();
+    for (int k : deletions) {
+      const double scale = std::sqrt(lx[lp[k]]);  // d_k > 0: the old factor passed the checks
+      for (int e = lp[k] + 1; e < lp[k] + lnz[k]; ++e) {
+        if (deleted[li[e]]) continue;
+        ci.push_back(li[e]);
+        cx.push_back(lx[e] * scale);
+      }
+      if (static_cast<int>(ci.size()) > cp.back()) cp.push_back(static_cast<int>(ci.size()));
+    }
+    // L̃, D̃: one pass over the factor (cheaper than searching each deleted row's columns).
+    for (Index j = 0; j < n; ++j) {
+      if (deleted[j]) {
+        lx[lp[j]] = 1.0;
+        std::fill(lx + lp[j] + 1, lx + lp[j] + lnz[j], 0.0);
+        continue;
+      }
+      for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
+        if (deleted[li[e]]) lx[e] = 0.0;
       }
     }
-    cholmod_sparse pattern = column_vector(rows.size());
-    if (!cholmod_rowdel(static_cast<size_t>(k), &pattern, impl.factor, &impl.common)) {
-      fail("row deletion (cholmod_rowdel)");
+    if (cp.size() > 1) {
+      cholmod_sparse c{};
+      c.nrow = static_cast<size_t>(n);
+      c.ncol = cp.size() - 1;
+      c.nzmax = ci.size();
+      c.p = cp.data();
+      c.i = ci.data();
+      c.x = cx.data();
+      c.stype = 0;
+      c.itype = CHOLMOD_INT;
+      c.xtype = CHOLMOD_REAL;
+      c.dtype = CHOLMOD_DOUBLE;
+      c.sorted = 1;  // the factor's columns are sorted
+      c.packed = 1;
+      if (!cholmod_updown(1, &c, impl.factor, &impl.common)) fail("update (cholmod_updown)");
     }
   }
-  std::vector<int>& pending = visited;
+  const double delete_seconds = phase_clock.Seconds();
+  phase_clock.Restart();
+
+  std::vector<int>& pending = impl.mark;
   std::fill(pending.begin(), pending.end(), 0);
   for (Index r : changed_rows) pending[r] = 1;
+  std::vector<int>& rows = impl.row_index;
+  std::vector<double>& values = impl.row_value;
+  int column_start[2] = {0, 0};
   for (Index r : changed_rows) {
     pending[r] = 0;
     if (IsIdentityRow(a, r)) continue;
@@ -853,24 +893,41 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
       rows.push_back(impl.inverse_permutation[i]);
       values.push_back(a.valuePtr()[e]);
     }
-    cholmod_sparse column = column_vector(rows.size());
+    cholmod_sparse column{};
+    column.nrow = static_cast<size_t>(n);
+    column.ncol = 1;
+    column.nzmax = std::max<size_t>(rows.size(), 1);
+    column_start[1] = static_cast<int>(rows.size());
+    column.p = column_start;
+    column.i = rows.data();
+    column.x = values.data();
+    column.stype = 0;
+    column.itype = CHOLMOD_INT;
+    column.xtype = CHOLMOD_REAL;
+    column.dtype = CHOLMOD_DOUBLE;
+    column.sorted = 0;
+    column.packed = 1;
     if (!cholmod_rowadd(static_cast<size_t>(impl.inverse_permutation[r]), &column, impl.factor,
                         &impl.common)) {
       fail("row addition (cholmod_rowadd)");
     }
   }
+  const double add_seconds = phase_clock.Seconds();
+  // Calibrate on modifications large enough to time (a few milliseconds at least).
+  constexpr double kCalibrationEntries = 1e6;
+  if (delete_entries >= kCalibrationEntries) {
+    impl.delete_seconds_per_entry = delete_seconds / delete_entries;
+  }
+  if (add_entries >= kCalibrationEntries) impl.add_seconds_per_entry = add_seconds / add_entries;
   // The pattern holds every entry the rows can need, so columns never grow; if one did
   // (CHOLMOD moved it to the end), pack the factor again for the parallel solve.
-  if (impl.common.nrealloc_col != modified_before || !impl.factor->is_monotonic) {
-    if (!cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1, impl.factor,
-                               &impl.common)) {
-      fail("packing of the modified factor");
-    }
+  const bool moved =
+      impl.common.nrealloc_col != reallocations_before || !impl.factor->is_monotonic;
+  if (moved && !cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1, impl.factor,
+                                      &impl.common)) {
+    fail("packing of the modified factor");
   }
-  const double update_seconds = update_clock.Seconds();
-  // Calibrate on modifications large enough to time (a few milliseconds at least).
-  if (update_entries >= 1e6) impl.update_seconds_per_entry = update_seconds / update_entries;
-  impl.FinishFactor(a, diagonal, context);
+  impl.FinishFactor(a, diagonal, context, /*same_arrays=*/!moved);
   summary.route = RefactorRoute::kUpdate;
   summary.seconds = clock.Seconds();
   return summary;

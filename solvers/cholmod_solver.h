@@ -110,28 +110,32 @@ class CholmodSolver final : public LinearSolver {
   ///
   /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
   /// supernodes): it saves the analysis and nothing else. kUpdate (simplicial LDLᵀ only) first
-  /// deletes every changed row whose old row was not the identity's (cholmod_rowdel: the row and
-  /// column become the identity's, a rank-1 update of the columns on the elimination-tree path
-  /// from the row to the root), then adds every changed row whose new row is not the identity's
+  /// turns every changed row whose old row was not the identity's into the identity's, all at
+  /// once: those rows and columns of L are replaced by the identity's and L D Lᵀ is updated with
+  /// their old columns scaled by sqrt(d_k) (cholmod_updown, 8 columns per sweep along the
+  /// elimination tree); then it adds every changed row whose new row is not the identity's
   /// (cholmod_rowadd: a sparse triangular solve for the row, then a rank-1 downdate along the
-  /// same path), each with the entries of the rows added so far. Because the factor keeps the
-  /// symbolic pattern of the whole matrix (explicit zeros included) the pattern never changes,
-  /// so the factor stays packed and the parallel solve's plan only needs new pivots.
+  /// path from the row to the root), each with its entries in the rows added so far. The factor
+  /// keeps the symbolic pattern of the whole matrix (explicit zeros included), so its pattern
+  /// never changes: it stays packed and the parallel solve's plan is rebuilt in place.
   ///
   /// Rule of kAuto: kUpdate if its estimated time is below the numeric refactorization's, else
   /// kNumeric. The estimate counts the factor entries the modification touches — for each
-  /// deletion the column counts summed along the path from the row's column to the root, for
-  /// each addition that plus the longest path from the row's entries up to its column (the
-  /// forward solve) — times the seconds per touched entry measured by this solver's last update
-  /// (before any: kDefaultUpdateSecondsPerEntry); the numeric time is the one measured by the last
-  /// numeric factorization of this pattern. Both are measured on the machine the solver runs on.
+  /// deletion the column counts summed along the elimination-tree path from the row's column
+  /// to the root, for each addition that plus the longest path from the row's entries up to its
+  /// column (the forward solve) — times the seconds per touched entry this solver measured in
+  /// its last deletions and additions of at least 10⁶ entries (before any:
+  /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry); the numeric time is the one
+  /// measured by the last numeric factorization of this pattern. Both sides are measured on the
+  /// machine the solver runs on; only the first estimate uses the defaults.
   RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                            const Context& context) override;
 
-  /// Seconds per factor entry touched by a row deletion or addition before one was measured:
-  /// 2.5 ns (rank-1 updates touch each entry once, a few flops, memory-bound), measured on the
-  /// 2-vCPU test VM with grid Laplacians and armadillo-bend's finest matrix (docs/solvers.md).
-  static constexpr double kDefaultUpdateSecondsPerEntry = 2.5e-9;
+  /// Seconds per factor entry touched by the deletions and by the additions of an update before
+  /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
+  /// ball of 1% of the vertices (docs/solvers.md).
+  static constexpr double kDefaultDeleteSecondsPerEntry = 1.0e-9;
+  static constexpr double kDefaultAddSecondsPerEntry = 1.5e-9;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).
   struct FactorInfo {
@@ -148,6 +152,8 @@ class CholmodSolver final : public LinearSolver {
     /// numeric factorization (including the conversion to simplicial form in mode auto).
     double analysis_seconds = 0.0;
     double numeric_seconds = 0.0;
+    /// Wall time of the last preparation of the parallel solve (EliminationTreeSolve::Setup).
+    double solve_setup_seconds = 0.0;
     /// The last Refactor()'s estimates (0 when it did not estimate), see Refactor().
     double estimated_update_seconds = 0.0;
     double estimated_numeric_seconds = 0.0;

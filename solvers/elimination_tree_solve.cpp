@@ -206,6 +206,15 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
   work_.clear();
 }
 
+void EliminationTreeSolve::RefreshPivots() {
+  for (Index j = 0; j < n_; ++j) {
+    const double pivot = factor_.value[factor_.column_start[j]];
+    HARAP_CHECK(pivot > 0.0 && std::isfinite(pivot),
+                "column {} of the factor does not start with a positive pivot", j);
+    inverse_pivot_[j] = 1.0 / pivot;
+  }
+}
+
 template <int kColumns>
 void EliminationTreeSolve::SolveInPlace(int columns, const Context& context) {
   // kColumns > 0 fixes the block width at compile time; 0 reads it from `columns`.

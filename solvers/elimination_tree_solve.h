@@ -56,6 +56,11 @@ class EliminationTreeSolve {
   /// a unit-lower LDLᵀ with positive pivots and the diagonal first in each column.
   void Setup(const LdltFactorView& factor, int num_threads);
 
+  /// After the factor's values changed in place (same arrays, same pattern, e.g. a row
+  /// update/downdate): takes the new pivots, keeping the cut and the renumbered rows. O(n).
+  /// Throws InternalError like Setup() if a pivot is not positive.
+  void RefreshPivots();
+
   void Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
              const Context& context);
 
