@@ -437,9 +437,11 @@ struct CholmodSolver::Impl {
 
   // After a numeric factorization or modification: the pivot check, the statistics, the
   // parallel solve's plan (`same_arrays`: the factor was modified in place without changing its
-  // pattern, so the plan only needs the new pivots), and the copy of `a`.
+  // pattern, so the plan only needs the new pivots; `same_pattern`: a numeric refactorization
+  // with the same analysis, whose pattern EliminationTreeSolve::Rebind verifies), and the copy
+  // of `a`.
   void FinishFactor(const SparseMatrix& a, const Eigen::VectorXd& diagonal, const Context& context,
-                    bool same_arrays = false) {
+                    bool same_arrays = false, bool same_pattern = false) {
     CheckPivots(a, diagonal);
     info.supernodal = factor->is_super != 0;
     info.ordering = OrderingName(factor->ordering);
@@ -460,10 +462,10 @@ struct CholmodSolver::Impl {
           tree_view.column_start == view.column_start &&
           tree_view.column_count == view.column_count && tree_view.n == view.n) {
         tree_solve.RefreshPivots();
-      } else {
+      } else if (!(same_pattern && tree_solve.Rebind(view))) {
         tree_solve.Setup(view, context.arena->max_concurrency());
-        tree_view = view;
       }
+      tree_view = view;
       info.solve_setup_seconds = setup_clock.Seconds();
       use_tree_solve = true;
       info.solve_blocks = tree_solve.num_blocks();
@@ -760,9 +762,21 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
       impl.path_cost[j] = lnz[j] + (p >= 0 ? impl.path_cost[p] : 0.0);
       impl.inverse_permutation[perm ? perm[j] : j] = static_cast<int>(j);
     }
+    // A deletion's column of the update starts at its first row that is not deleted too.
+    std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
+    std::fill(deleted.begin(), deleted.end(), 0);
+    for (Index r : changed_rows) {
+      if (!IsIdentityRow(impl.matrix, r)) deleted[impl.inverse_permutation[r]] = 1;
+    }
     for (Index r : changed_rows) {
       const int k = impl.inverse_permutation[r];
-      if (!IsIdentityRow(impl.matrix, r)) delete_entries += impl.path_cost[k];
+      if (deleted[k]) {
+        for (int e = lp[k] + 1; e < lp[k] + lnz[k]; ++e) {
+          if (deleted[li[e]]) continue;
+          delete_entries += impl.path_cost[li[e]];
+          break;
+        }
+      }
       if (!IsIdentityRow(a, r)) {
         double forward = 0.0;
         const auto [begin, end] = ColumnRange(a, r);
@@ -795,7 +809,7 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
     impl.ThrowOnFailure("copy of the analysis", a);
     cholmod_sparse view = LowerTriangleView(a);
     impl.FactorNumeric(view, a);
-    impl.FinishFactor(a, diagonal, context);
+    impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
     summary.route = RefactorRoute::kNumeric;
     summary.seconds = clock.Seconds();
     return summary;

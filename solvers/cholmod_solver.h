@@ -121,9 +121,10 @@ class CholmodSolver final : public LinearSolver {
   ///
   /// Rule of kAuto: kUpdate if its estimated time is below the numeric refactorization's, else
   /// kNumeric. The estimate counts the factor entries the modification touches — for each
-  /// deletion the column counts summed along the elimination-tree path from the row's column
-  /// to the root, for each addition that plus the longest path from the row's entries up to its
-  /// column (the forward solve) — times the seconds per touched entry this solver measured in
+  /// deletion the column counts summed along the elimination-tree path to the root from its
+  /// column's first row that is not deleted too (where its column of the update starts), for
+  /// each addition the path from its own column plus the longest path from the row's entries
+  /// up to that column (the forward solve) — times the seconds per touched entry this solver measured in
   /// its last deletions and additions of at least 10⁶ entries (before any:
   /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry); the numeric time is the one
   /// measured by the last numeric factorization of this pattern. Both sides are measured on the
@@ -135,7 +136,7 @@ class CholmodSolver final : public LinearSolver {
   /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
   /// ball of 1% of the vertices (docs/solvers.md).
   static constexpr double kDefaultDeleteSecondsPerEntry = 1.0e-9;
-  static constexpr double kDefaultAddSecondsPerEntry = 1.5e-9;
+  static constexpr double kDefaultAddSecondsPerEntry = 1.3e-9;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).
   struct FactorInfo {

@@ -10,8 +10,11 @@
 //                                          CholmodSolver option refactor = <route> (full,
 //                                          numeric, update, auto); counters per edit: add_ms,
 //                                          remove_ms, the route taken (0 full, 1 numeric,
-//                                          2 update), the estimates of auto's rule, and the
-//                                          relative residual of a solve after each edit.
+//                                          2 update), the estimates of auto's rule, the time
+//                                          the parallel solve's plan took after the last edit,
+//                                          and the relative residual of a solve after each edit.
+//
+//   HandleEditSmall_<route>/armadillo-bend  the same with a ball of 0.01% of the vertices (17)
 //
 // Compare with Factorization_auto_amd/armadillo-bend (the reduced matrix) in the same run:
 //   ./build/harap_benchmarks --benchmark_filter='HandleEdit|Factorization_auto_amd/armadillo'
@@ -65,7 +68,8 @@ struct EditFixture {
   std::vector<Index> ball;      ///< sorted, none of them a scenario handle
   Eigen::MatrixXd rhs;
 
-  EditFixture() {
+  /// `fraction`: the ball's share of the vertices.
+  explicit EditFixture(double fraction) {
     Scenario scenario = LoadScenario(ScenarioPath());
     // The optimizers renumber each level for locality; so do the other benchmarks.
     const MeshOrdering ordering = LocalityOrdering(scenario.mesh);
@@ -90,7 +94,7 @@ struct EditFixture {
     std::vector<Index> order(n);
     std::iota(order.begin(), order.end(), 0);
     const auto distance = [&](Index v) { return (p.row(v) - p.row(centre)).squaredNorm(); };
-    const size_t size = static_cast<size_t>(n / 100);
+    const size_t size = static_cast<size_t>(fraction * static_cast<double>(n));
     std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(size), order.end(),
                      [&](Index x, Index y) { return distance(x) < distance(y); });
     for (size_t k = 0; k < size; ++k) {
@@ -103,8 +107,13 @@ struct EditFixture {
   }
 };
 
-EditFixture& Fixture() {
-  static EditFixture fixture;
+// A ball of 1% of the vertices (the edit of issue 21), and one of 0.01% (17 vertices).
+EditFixture& Fixture(bool small = false) {
+  if (small) {
+    static EditFixture fixture(1e-4);
+    return fixture;
+  }
+  static EditFixture fixture(1e-2);
   return fixture;
 }
 
@@ -145,13 +154,14 @@ void Factorize(benchmark::State& state) {
   state.counters["ball"] = static_cast<double>(f.ball.size());
 }
 
-void Edit(benchmark::State& state, std::string refactor) {
-  EditFixture& f = Fixture();
+void Edit(benchmark::State& state, std::string refactor, bool small) {
+  EditFixture& f = Fixture(small);
   auto solver = MakeSolver(refactor);
   solver->Factorize(f.before, f.context);
   double add = 0.0, remove = 0.0, residual = 0.0;
   double add_route = 0.0, remove_route = 0.0;
   double add_estimate_update = 0.0, add_estimate_numeric = 0.0, remove_estimate_update = 0.0;
+  double solve_setup = 0.0;
   for (auto _ : state) {
     const auto added = solver->Refactor(f.after, f.ball, f.context);
     add += added.seconds;
@@ -165,6 +175,7 @@ void Edit(benchmark::State& state, std::string refactor) {
     remove += removed.seconds;
     remove_route = static_cast<double>(removed.route);
     remove_estimate_update = solver->factor_info().estimated_update_seconds;
+    solve_setup = solver->factor_info().solve_setup_seconds;
     state.PauseTiming();
     residual = std::max(residual, Residual(*solver, f.before, f));
     state.ResumeTiming();
@@ -178,6 +189,7 @@ void Edit(benchmark::State& state, std::string refactor) {
   state.counters["remove_est_update_ms"] = 1e3 * remove_estimate_update;
   state.counters["est_numeric_ms"] = 1e3 * add_estimate_numeric;
   state.counters["residual"] = residual;
+  state.counters["solve_setup_ms"] = 1e3 * solve_setup;
   state.counters["ball"] = static_cast<double>(f.ball.size());
 }
 
@@ -190,7 +202,10 @@ void Edit(benchmark::State& state, std::string refactor) {
   };
   add("HandleEdit_factorize", Factorize);
   for (const std::string route : {"full", "numeric", "update", "auto"}) {
-    add("HandleEdit_" + route, Edit, route);
+    add("HandleEdit_" + route, Edit, route, false);
+  }
+  for (const std::string route : {"numeric", "update", "auto"}) {
+    add("HandleEditSmall_" + route, Edit, route, true);
   }
   return true;
 }();
