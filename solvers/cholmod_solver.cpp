@@ -933,13 +933,22 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
     impl.delete_seconds_per_entry = delete_seconds / delete_entries;
   }
   if (add_entries >= kCalibrationEntries) impl.add_seconds_per_entry = add_seconds / add_entries;
-  // The pattern holds every entry the rows can need, so columns never grow; if one did
-  // (CHOLMOD moved it to the end), pack the factor again for the parallel solve.
+  // The pattern holds every entry a row can need, but cholmod_rowadd makes room for one more
+  // in every column of its forward solve that has no slack (all of them in a packed factor),
+  // moving it to the end of the factor's arrays: its solve plan must then be set up anew.
+  // Moved columns stay below the tail L->p[n], which is all EliminationTreeSolve reads; if
+  // a CHOLMOD version did otherwise, pack the factor first.
   const bool moved =
       impl.common.nrealloc_col != reallocations_before || !impl.factor->is_monotonic;
-  if (moved && !cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1, impl.factor,
-                                      &impl.common)) {
-    fail("packing of the modified factor");
+  if (moved) {
+    const auto* start = static_cast<const int*>(impl.factor->p);
+    const auto* count = static_cast<const int*>(impl.factor->nz);
+    bool below_tail = true;
+    for (Index j = 0; j < n && below_tail; ++j) below_tail = start[j] + count[j] <= start[n];
+    if (!below_tail && !cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1,
+                                              impl.factor, &impl.common)) {
+      fail("packing of the modified factor");
+    }
   }
   impl.FinishFactor(a, diagonal, context, /*same_arrays=*/!moved);
   summary.route = RefactorRoute::kUpdate;

@@ -117,7 +117,9 @@ class CholmodSolver final : public LinearSolver {
   /// (cholmod_rowadd: a sparse triangular solve for the row, then a rank-1 downdate along the
   /// path from the row to the root), each with its entries in the rows added so far. The factor
   /// keeps the symbolic pattern of the whole matrix (explicit zeros included), so its pattern
-  /// never changes: it stays packed and the parallel solve's plan is rebuilt in place.
+  /// never changes: after deletions only the parallel solve's pivots are refreshed; additions
+  /// move the columns they solve through to the end of the factor's arrays (cholmod_rowadd
+  /// makes room in columns without slack), so the solve's plan is set up again.
   ///
   /// Rule of kAuto: kUpdate if its estimated time is below the numeric refactorization's, else
   /// kNumeric. The estimate counts the factor entries the modification touches — for each
