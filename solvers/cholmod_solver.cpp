@@ -686,8 +686,13 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
               impl.common.status);
   if (impl.keeps_copies()) {
+    const size_t in_use = impl.common.memory_inuse;
     impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
     impl.ThrowOnFailure("copy of the analysis", a);
+    impl.info.refactor_bytes =
+        static_cast<double>(impl.common.memory_inuse - in_use) +
+        static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
+        static_cast<double>(a.cols() + 1) * sizeof(int);
   }
   impl.info.analysis_seconds = analysis_clock.Seconds();
   impl.FactorNumeric(view, a);

@@ -157,6 +157,8 @@ class CholmodSolver final : public LinearSolver {
     double numeric_seconds = 0.0;
     /// Wall time of the last preparation of the parallel solve (EliminationTreeSolve::Setup).
     double solve_setup_seconds = 0.0;
+    /// Bytes kept for Refactor() (the analysis and the matrix; 0 with refactor = "full").
+    double refactor_bytes = 0.0;
     /// The last Refactor()'s estimates (0 when it did not estimate), see Refactor().
     double estimated_update_seconds = 0.0;
     double estimated_numeric_seconds = 0.0;
