@@ -143,7 +143,7 @@ TEST_CASE("refactor: every cholmod route solves the new matrix after handle edit
   }
 }
 
-TEST_CASE("refactor: auto follows its estimate; a large change takes the numeric route",
+TEST_CASE("refactor: auto follows its estimate, a large change takes the numeric route",
           "[solvers][cholmod][refactor]") {
 #ifdef HARAP_HAVE_CHOLMOD
   const auto registry = LinearSolverRegistry();
@@ -220,7 +220,7 @@ TEST_CASE("refactor: a different pattern factors from scratch", "[solvers][cholm
   }
 }
 
-TEST_CASE("refactor: misuse is an error that keeps the factor; a non-SPD result throws",
+TEST_CASE("refactor: misuse is an error that keeps the factor, a non-SPD result throws",
           "[solvers][cholmod][refactor]") {
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
