@@ -143,7 +143,7 @@ TEST_CASE("refactor: every cholmod route solves the new matrix after handle edit
   }
 }
 
-TEST_CASE("refactor: auto follows its estimate, a large change takes the numeric route",
+TEST_CASE("refactor: auto takes the route its estimate says, large edits estimate far more",
           "[solvers][cholmod][refactor]") {
 #ifdef HARAP_HAVE_CHOLMOD
   const auto registry = LinearSolverRegistry();
