@@ -435,6 +435,69 @@ struct CholmodSolver::Impl {
     info.numeric_seconds = clock.Seconds();
   }
 
+  // Mode auto's numeric refactorization into the current simplicial LDLᵀ factor's own arrays:
+  // a supernodal LLᵀ factorization with a copy of the analysis, then d_j = L_jj² and
+  // l_ij = L_ij / L_jj for the entries of the simplicial pattern. That is what cholmod_factorize's
+  // conversion computes (cholmod_change_factor, then cholmod_resymbol to drop the relaxed
+  // supernodes' zeros), but the pattern is known from the last factorization of the same
+  // analysis, so neither the conversion's copy nor the re-symbolic pass is needed, and the
+  // solve's plan stays valid. Returns false, before changing anything, if the factor is not
+  // such a factor; throws like Factorize() (leaving the supernodal factor for the message).
+  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a) {
+    if (options.mode != Mode::kAuto || symbolic == nullptr || !symbolic->is_super ||
+        factor == nullptr || factor->is_super || factor->is_ll || factor->n != symbolic->n) {
+      return false;
+    }
+    const Stopwatch clock;
+    cholmod_factor* super = cholmod_copy_factor(symbolic, &common);
+    if (super == nullptr) {
+      ThrowOnFailure("copy of the analysis", a);
+      return false;
+    }
+    const int final_asis = common.final_asis;
+    common.final_asis = 1;  // keep the supernodal LLᵀ factor
+    cholmod_factorize(&view, super, &common);
+    common.final_asis = final_asis;
+    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
+      FreeFactor();
+      factor = super;  // ThrowOnFailure reports its failed pivot
+      ThrowOnFailure("factorization", a);
+    }
+    const auto* ls = static_cast<const int*>(super->s);
+    const auto* pi = static_cast<const int*>(super->pi);
+    const auto* px = static_cast<const int*>(super->px);
+    const auto* first = static_cast<const int*>(super->super);
+    const auto* sx = static_cast<const double*>(super->x);
+    const auto* lp = static_cast<const int*>(factor->p);
+    const auto* lnz = static_cast<const int*>(factor->nz);
+    const auto* li = static_cast<const int*>(factor->i);
+    auto* lx = static_cast<double*>(factor->x);
+    bool matches = true;
+    for (size_t s = 0; s < super->nsuper && matches; ++s) {
+      const int rows = pi[s + 1] - pi[s];
+      for (int j = first[s]; j < first[s + 1] && matches; ++j) {
+        const int local = j - first[s];
+        const double* column = sx + px[s] + static_cast<size_t>(local) * rows;
+        const double diagonal = column[local];
+        lx[lp[j]] = diagonal * diagonal;
+        // Both row lists are sorted; the simplicial one is a subset of the supernode's.
+        int r = local + 1;
+        for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
+          while (r < rows && ls[pi[s] + r] < li[e]) ++r;
+          if (r == rows || ls[pi[s] + r] != li[e]) {
+            matches = false;
+            break;
+          }
+          lx[e] = column[r] / diagonal;
+        }
+      }
+    }
+    cholmod_free_factor(&super, &common);
+    if (!matches) return false;  // the caller factors the usual way, overwriting the values
+    info.numeric_seconds = clock.Seconds();
+    return true;
+  }
+
   // After a numeric factorization or modification: the pivot check, the statistics, the
   // parallel solve's plan (`same_arrays`: the factor was modified in place without changing its
   // pattern, so the plan only needs the new pivots; `same_pattern`: a numeric refactorization
@@ -809,12 +872,16 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
   if (route == RefactorChoice::kNumeric) {
     if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) return full();
     const ScopedNativeThreads native_threads(impl.options.native_threads);
-    impl.FreeFactor();
-    impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
-    impl.ThrowOnFailure("copy of the analysis", a);
     cholmod_sparse view = LowerTriangleView(a);
-    impl.FactorNumeric(view, a);
-    impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
+    if (impl.FactorNumericInPlace(view, a)) {
+      impl.FinishFactor(a, diagonal, context, /*same_arrays=*/true);
+    } else {
+      impl.FreeFactor();
+      impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
+      impl.ThrowOnFailure("copy of the analysis", a);
+      impl.FactorNumeric(view, a);
+      impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
+    }
     summary.route = RefactorRoute::kNumeric;
     summary.seconds = clock.Seconds();
     return summary;
