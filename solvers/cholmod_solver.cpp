@@ -704,6 +704,12 @@ const CholmodSolver::Options& CholmodSolver::options() const { return impl_->opt
 
 const CholmodSolver::FactorInfo& CholmodSolver::factor_info() const { return impl_->info; }
 
+void CholmodSolver::set_refactor(RefactorChoice choice) {
+  HARAP_CHECK(choice != RefactorChoice::kUpdate || impl_->options.mode != Mode::kSupernodal,
+              "refactor = \"update\" needs a simplicial factor (mode auto or simplicial)");
+  impl_->options.refactor = choice;
+}
+
 std::string_view CholmodSolver::ToString(Mode mode) { return ToName(kModeNames, mode); }
 
 std::string_view CholmodSolver::ToString(Ordering ordering) {

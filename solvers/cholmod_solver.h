@@ -47,7 +47,7 @@ class CholmodSolver final : public LinearSolver {
     kAuto,     ///< The cheaper of kNumeric and kUpdate by the cost estimate below.
     kFull,     ///< Always Factorize() again (no copies kept between factorizations).
     kNumeric,  ///< Always reuse the analysis and factor the values anew.
-    kUpdate,   ///< Always modify the factor row by row (cholmod_rowdel / cholmod_rowadd).
+    kUpdate,   ///< Always modify the factor (cholmod_updown / cholmod_rowadd).
   };
 
   struct Options {
@@ -166,6 +166,9 @@ class CholmodSolver final : public LinearSolver {
   const FactorInfo& factor_info() const;
 
   const Options& options() const;
+  /// Changes Options::refactor for the next Refactor() calls (experiments, tests). Switching
+  /// from "full" takes effect after the next Factorize(), which keeps the copies.
+  void set_refactor(RefactorChoice choice);
 
   static std::string_view ToString(Mode mode);
   static std::string_view ToString(Ordering ordering);

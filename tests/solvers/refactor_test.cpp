@@ -192,6 +192,44 @@ TEST_CASE("refactor: auto takes the route its estimate says, large edits estimat
 #endif
 }
 
+TEST_CASE("refactor: routes can follow each other on one factor", "[solvers][cholmod][refactor]") {
+#ifdef HARAP_HAVE_CHOLMOD
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const Context context;
+  const SparseMatrix laplacian = GridLaplacian(kSide, kSide, 13);
+  using Choice = CholmodSolver::RefactorChoice;
+  for (const std::string mode : {"auto", "simplicial"}) {
+    auto solver = MakeSolver(registry, "cholmod", "mode = \"" + mode + "\"");
+    auto& cholmod = dynamic_cast<CholmodSolver&>(*solver);
+    std::set<Index> current = FirstRow();
+    SparseMatrix a = Masked(laplacian, current);
+    solver->Factorize(a, context);
+    // Deletions, then additions (they move columns of the factor), then numeric on that
+    // factor, then an update of the numerically refactored one, numeric again, then full.
+    const std::vector<std::pair<std::set<Index>, Choice>> steps = {
+        {Ball(10, 10, 6.0), Choice::kUpdate}, {Ball(10, 14, 3.0), Choice::kUpdate},
+        {Ball(30, 30, 5.0), Choice::kNumeric}, {Ball(25, 20, 4.0), Choice::kUpdate},
+        {Ball(20, 20, 2.0), Choice::kNumeric}, {Ball(5, 35, 4.0), Choice::kFull}};
+    for (const auto& [ball, choice] : steps) {
+      std::set<Index> next = FirstRow();
+      next.insert(ball.begin(), ball.end());
+      cholmod.set_refactor(choice);
+      a = Masked(laplacian, next);
+      const auto summary = solver->Refactor(a, SymmetricDifference(current, next), context);
+      CHECK(summary.route == (choice == Choice::kUpdate    ? Route::kUpdate
+                              : choice == Choice::kNumeric ? Route::kNumeric
+                                                           : Route::kFull));
+      RequireSolves(*solver, a, context);
+      current = next;
+    }
+  }
+  auto supernodal = MakeSolver(registry, "cholmod", "mode = \"supernodal\"");
+  CHECK_THROWS_AS(dynamic_cast<CholmodSolver&>(*supernodal).set_refactor(Choice::kUpdate),
+                  InternalError);
+#endif
+}
+
 TEST_CASE("refactor: a different pattern factors from scratch", "[solvers][cholmod][refactor]") {
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
