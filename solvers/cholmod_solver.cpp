@@ -527,6 +527,7 @@ struct CholmodSolver::Impl {
         tree_solve.RefreshPivots();
       } else if (!(same_pattern && tree_solve.Rebind(view))) {
         tree_solve.Setup(view, context.arena->max_concurrency());
+        plan_seconds = setup_clock.Seconds();
       }
       tree_view = view;
       info.solve_setup_seconds = setup_clock.Seconds();
@@ -620,6 +621,8 @@ struct CholmodSolver::Impl {
   // (cholmod_rowadd), as the last update measured them (see Refactor()).
   double delete_seconds_per_entry = kDefaultDeleteSecondsPerEntry;
   double add_seconds_per_entry = kDefaultAddSecondsPerEntry;
+  // Wall time of the last full set-up of the parallel solve's plan, which additions cause.
+  double plan_seconds = 0.0;
   // Solve workspaces, kept so that Solve() allocates only on its first call (per column count).
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
@@ -861,8 +864,10 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
         add_entries += forward + impl.path_cost[k];
       }
     }
+    // Additions move columns of a packed factor, so the parallel solve's plan is set up again.
+    const double plan = add_entries > 0.0 && impl.use_tree_solve ? impl.plan_seconds : 0.0;
     impl.info.estimated_update_seconds = delete_entries * impl.delete_seconds_per_entry +
-                                         add_entries * impl.add_seconds_per_entry;
+                                         add_entries * impl.add_seconds_per_entry + plan;
     if (route == RefactorChoice::kAuto) {
       route = impl.info.estimated_update_seconds < impl.info.estimated_numeric_seconds
                   ? RefactorChoice::kUpdate

@@ -126,11 +126,12 @@ class CholmodSolver final : public LinearSolver {
   /// deletion the column counts summed along the elimination-tree path to the root from its
   /// column's first row that is not deleted too (where its column of the update starts), for
   /// each addition the path from its own column plus the longest path from the row's entries
-  /// up to that column (the forward solve) — times the seconds per touched entry this solver measured in
-  /// its last deletions and additions of at least 10⁶ entries (before any:
-  /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry); the numeric time is the one
-  /// measured by the last numeric factorization of this pattern. Both sides are measured on the
-  /// machine the solver runs on; only the first estimate uses the defaults.
+  /// up to that column (the forward solve) — times the seconds per touched entry this solver
+  /// measured in its last deletions and additions of at least 10⁶ entries (before any:
+  /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry), plus, if there are additions,
+  /// the last measured set-up of the parallel solve's plan; the numeric time is the one measured
+  /// by the last numeric factorization of this pattern. Both sides are measured on the machine
+  /// the solver runs on; only the first estimate uses the defaults.
   RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                            const Context& context) override;
 
