@@ -138,8 +138,8 @@ class CholmodSolver final : public LinearSolver {
   /// Seconds per factor entry touched by the deletions and by the additions of an update before
   /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
   /// ball of 1% of the vertices (docs/solvers.md).
-  static constexpr double kDefaultDeleteSecondsPerEntry = 1.0e-9;
-  static constexpr double kDefaultAddSecondsPerEntry = 1.3e-9;
+  static constexpr double kDefaultDeleteSecondsPerEntry = 0.8e-9;
+  static constexpr double kDefaultAddSecondsPerEntry = 0.8e-9;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).
   struct FactorInfo {
