@@ -19,6 +19,8 @@
 //                                          unpacked, with moved columns).
 //
 //   HandleEditSmall_<route>/armadillo-bend  the same with a ball of 0.01% of the vertices (17)
+//   HandleEdit_{factorize,numeric}_native2  with native_threads = 2 (CHOLMOD's BLAS and OpenMP
+//                                          on both cores)
 //
 // Compare with Factorization_auto_amd/armadillo-bend (the reduced matrix) in the same run:
 //   ./build/harap_benchmarks --benchmark_filter='HandleEdit|Factorization_auto_amd/armadillo'
@@ -121,10 +123,11 @@ EditFixture& Fixture(bool small = false) {
   return fixture;
 }
 
-std::unique_ptr<CholmodSolver> MakeSolver(const std::string& refactor) {
+std::unique_ptr<CholmodSolver> MakeSolver(const std::string& refactor, int native_threads = 1) {
   // The defaults (mode auto, AMD, native_threads 1) and the route, as a config would set them.
   ConfigNode node;
   node.Set("refactor", "\"" + refactor + "\"");
+  node.Set("native_threads", std::to_string(native_threads));
   return std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(node));
 }
 
@@ -145,11 +148,11 @@ double Residual(CholmodSolver& solver, const SparseMatrix& a, EditFixture& f, do
   return worst;
 }
 
-void Factorize(benchmark::State& state) {
+void Factorize(benchmark::State& state, int native_threads) {
   EditFixture& f = Fixture();
   double analysis = 0.0, numeric = 0.0, setup = 0.0, kept = 0.0;
   for (auto _ : state) {
-    auto solver = MakeSolver("auto");
+    auto solver = MakeSolver("auto", native_threads);
     solver->Factorize(f.before, f.context);
     analysis += solver->factor_info().analysis_seconds;
     numeric += solver->factor_info().numeric_seconds;
@@ -167,9 +170,9 @@ void Factorize(benchmark::State& state) {
   state.counters["ball"] = static_cast<double>(f.ball.size());
 }
 
-void Edit(benchmark::State& state, std::string refactor, bool small) {
+void Edit(benchmark::State& state, std::string refactor, bool small, int native_threads) {
   EditFixture& f = Fixture(small);
-  auto solver = MakeSolver(refactor);
+  auto solver = MakeSolver(refactor, native_threads);
   solver->Factorize(f.before, f.context);
   double add = 0.0, remove = 0.0, residual = 0.0;
   double add_route = 0.0, remove_route = 0.0;
@@ -215,13 +218,17 @@ void Edit(benchmark::State& state, std::string refactor, bool small) {
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
   };
-  add("HandleEdit_factorize", Factorize);
+  add("HandleEdit_factorize", Factorize, 1);
   for (const std::string route : {"full", "numeric", "update", "auto"}) {
-    add("HandleEdit_" + route, Edit, route, false);
+    add("HandleEdit_" + route, Edit, route, false, 1);
   }
   for (const std::string route : {"numeric", "update", "auto"}) {
-    add("HandleEditSmall_" + route, Edit, route, true);
+    add("HandleEditSmall_" + route, Edit, route, true, 1);
   }
+  // With both cores for CHOLMOD's BLAS and OpenMP, as a session could run an edit when nothing
+  // else runs.
+  add("HandleEdit_factorize_native2", Factorize, 2);
+  add("HandleEdit_numeric_native2", Edit, std::string("numeric"), false, 2);
   return true;
 }();
 
