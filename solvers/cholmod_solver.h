@@ -15,8 +15,9 @@ namespace harap {
 /// `a` is n×n SPD in full storage; CHOLMOD reads its lower triangle in place (no copy). B and X
 /// are n×k (k = 3 for the global step). Factorize() redoes the symbolic analysis (ordering,
 /// elimination tree) every time: each solver object factors one matrix (a hierarchy creates one
-/// solver per level); Refactor() reuses it when only values change. Solve() is allocation-free after its first call with a given k: the
-/// permuted right-hand side and solution live in workspaces kept between calls. (BLAS, used by
+/// solver per level); Refactor() reuses it when only values change. Solve() is allocation-free
+/// after its first call with a given k: the permuted right-hand side and solution live in
+/// workspaces kept between calls. (BLAS, used by
 /// solves with a supernodal factor, may allocate: OpenBLAS 0.3.21's small-matrix dgemm kernel
 /// on AVX-512 machines takes a buffer from malloc on every call.)
 ///
@@ -106,10 +107,14 @@ class CholmodSolver final : public LinearSolver {
 
   /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
   /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
-  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull).
+  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull). For handle edits
+  /// of a masked matrix, name only the rows of the vertices that become or stop being handles:
+  /// their neighbours' changed entries lie in those columns, and every row named costs work.
   ///
   /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
-  /// supernodes): it saves the analysis and nothing else. kUpdate (simplicial LDLᵀ only) first
+  /// supernodes); in mode auto the supernodal factor's values go straight into the simplicial
+  /// factor's known pattern (no conversion, the solve's plan kept). It saves the analysis and
+  /// nothing else. kUpdate (simplicial LDLᵀ only) first
   /// turns every changed row whose old row was not the identity's into the identity's, all at
   /// once: those rows and columns of L are replaced by the identity's and L D Lᵀ is updated with
   /// their old columns scaled by sqrt(d_k) (cholmod_updown, 8 columns per sweep along the
@@ -156,7 +161,8 @@ class CholmodSolver final : public LinearSolver {
     /// numeric factorization (including the conversion to simplicial form in mode auto).
     double analysis_seconds = 0.0;
     double numeric_seconds = 0.0;
-    /// Wall time of the last preparation of the parallel solve (EliminationTreeSolve::Setup).
+    /// Wall time of the last preparation of the parallel solve (EliminationTreeSolve::Setup,
+    /// or only new pivots when Refactor() kept the factor's pattern).
     double solve_setup_seconds = 0.0;
     /// Bytes kept for Refactor() (the analysis and the matrix; 0 with refactor = "full").
     double refactor_bytes = 0.0;
