@@ -63,8 +63,8 @@ constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kO
     {CholmodSolver::Ordering::kBest, "best"},
 }};
 
-constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 4>
-    kRefactorNames = {{
+constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 4> kRefactorNames =
+    {{
         {CholmodSolver::RefactorChoice::kAuto, "auto"},
         {CholmodSolver::RefactorChoice::kFull, "full"},
         {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
@@ -322,7 +322,6 @@ class ScopedNativeThreads {
   int saved_dynamic_ = 0;
   int saved_threads_ = 0;  // 0: nothing to restore
 };
-
 
 // The entries of column j of `a` (compressed or not): [begin, end) into its index/value arrays.
 std::pair<Index, Index> ColumnRange(const SparseMatrix& a, Index j) {
@@ -761,10 +760,9 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
     const size_t in_use = impl.common.memory_inuse;
     impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
     impl.ThrowOnFailure("copy of the analysis", a);
-    impl.info.refactor_bytes =
-        static_cast<double>(impl.common.memory_inuse - in_use) +
-        static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
-        static_cast<double>(a.cols() + 1) * sizeof(int);
+    impl.info.refactor_bytes = static_cast<double>(impl.common.memory_inuse - in_use) +
+                               static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
+                               static_cast<double>(a.cols() + 1) * sizeof(int);
   }
   impl.info.analysis_seconds = analysis_clock.Seconds();
   impl.FactorNumeric(view, a);
@@ -911,8 +909,8 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
   const double reallocations_before = impl.common.nrealloc_col;
   const auto fail = [&](std::string_view stage) {
     impl.ThrowOnFailure(stage, a);
-    throw InternalError(fmt::format("cholmod: {} failed with status {}", stage,
-                                    impl.common.status));
+    throw InternalError(
+        fmt::format("cholmod: {} failed with status {}", stage, impl.common.status));
   };
   Stopwatch phase_clock;
   std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
@@ -1021,8 +1019,7 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
   // moving it to the end of the factor's arrays: its solve plan must then be set up anew.
   // Moved columns stay below the tail L->p[n], which is all EliminationTreeSolve reads; if
   // a CHOLMOD version did otherwise, pack the factor first.
-  const bool moved =
-      impl.common.nrealloc_col != reallocations_before || !impl.factor->is_monotonic;
+  const bool moved = impl.common.nrealloc_col != reallocations_before || !impl.factor->is_monotonic;
   if (moved) {
     const auto* start = static_cast<const int*>(impl.factor->p);
     const auto* count = static_cast<const int*>(impl.factor->nz);

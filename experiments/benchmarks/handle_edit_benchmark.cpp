@@ -69,9 +69,9 @@ SparseMatrix Masked(const SparseMatrix& a, const std::vector<char>& handle) {
 
 struct EditFixture {
   Context context;
-  SparseMatrix before;          ///< masked with the scenario's handles
-  SparseMatrix after;           ///< and with the ball
-  std::vector<Index> ball;      ///< sorted, none of them a scenario handle
+  SparseMatrix before;      ///< masked with the scenario's handles
+  SparseMatrix after;       ///< and with the ball
+  std::vector<Index> ball;  ///< sorted, none of them a scenario handle
   Eigen::MatrixXd rhs;
 
   /// `fraction`: the ball's share of the vertices.

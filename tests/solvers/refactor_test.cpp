@@ -3,9 +3,8 @@
 // become the identity's, the pattern stays), every CHOLMOD route (full, numeric, update, auto)
 // and the default of the other solvers. Each refactored solver must solve the NEW matrix.
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -182,7 +181,7 @@ TEST_CASE("refactor: auto takes the route its estimate says, large edits estimat
                             : Route::kNumeric));
   if (large.route != Route::kNumeric) {
     WARN("the numeric factorization was timed slower than " << large_estimate
-                                                              << " s (a loaded machine?)");
+                                                            << " s (a loaded machine?)");
   }
   RequireSolves(*solver, a, context);
   // And back to the first handles: as many rows, each now an addition.
@@ -208,7 +207,7 @@ TEST_CASE("refactor: routes can follow each other on one factor", "[solvers][cho
     // Deletions, then additions (they move columns of the factor), then numeric on that
     // factor, then an update of the numerically refactored one, numeric again, then full.
     const std::vector<std::pair<std::set<Index>, Choice>> steps = {
-        {Ball(10, 10, 6.0), Choice::kUpdate}, {Ball(10, 14, 3.0), Choice::kUpdate},
+        {Ball(10, 10, 6.0), Choice::kUpdate},  {Ball(10, 14, 3.0), Choice::kUpdate},
         {Ball(30, 30, 5.0), Choice::kNumeric}, {Ball(25, 20, 4.0), Choice::kUpdate},
         {Ball(20, 20, 2.0), Choice::kNumeric}, {Ball(5, 35, 4.0), Choice::kFull}};
     for (const auto& [ball, choice] : steps) {
@@ -274,8 +273,7 @@ TEST_CASE("refactor: misuse is an error that keeps the factor, a non-SPD result 
   more.insert(200);
   const SparseMatrix b = Masked(laplacian, more);
   // Unsorted or out of range rows, and a change outside the rows named.
-  CHECK_THROWS_WITH(solver->Refactor(b, {200, 100}, context),
-                    Catch::Contains("sorted, unique"));
+  CHECK_THROWS_WITH(solver->Refactor(b, {200, 100}, context), Catch::Contains("sorted, unique"));
   CHECK_THROWS_WITH(solver->Refactor(b, {100, 200, 1600}, context),
                     Catch::Contains("sorted, unique"));
   CHECK_THROWS_WITH(solver->Refactor(b, {100}, context),
