@@ -6,6 +6,7 @@
 #include "solvers/cholmod_solver.h"
 
 #include <cholmod.h>
+#include <cholmod_modify.h>
 #include <dlfcn.h>
 #include <fmt/format.h>
 
@@ -61,6 +62,14 @@ constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kO
     {CholmodSolver::Ordering::kAmd, "amd"},
     {CholmodSolver::Ordering::kBest, "best"},
 }};
+
+constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 4> kRefactorNames =
+    {{
+        {CholmodSolver::RefactorChoice::kAuto, "auto"},
+        {CholmodSolver::RefactorChoice::kFull, "full"},
+        {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
+        {CholmodSolver::RefactorChoice::kUpdate, "update"},
+    }};
 
 template <class Enum, size_t N>
 std::vector<std::string> Names(const std::array<std::pair<Enum, std::string_view>, N>& table) {
@@ -314,6 +323,42 @@ class ScopedNativeThreads {
   int saved_threads_ = 0;  // 0: nothing to restore
 };
 
+// The entries of column j of `a` (compressed or not): [begin, end) into its index/value arrays.
+std::pair<Index, Index> ColumnRange(const SparseMatrix& a, Index j) {
+  const Index begin = a.outerIndexPtr()[j];
+  const Index end = a.isCompressed() ? a.outerIndexPtr()[j + 1] : begin + a.innerNonZeroPtr()[j];
+  return {begin, end};
+}
+
+bool SamePattern(const SparseMatrix& x, const SparseMatrix& y) {
+  if (x.rows() != y.rows() || x.cols() != y.cols()) return false;
+  for (Index j = 0; j < x.cols(); ++j) {
+    const auto [xb, xe] = ColumnRange(x, j);
+    const auto [yb, ye] = ColumnRange(y, j);
+    if (xe - xb != ye - yb ||
+        !std::equal(x.innerIndexPtr() + xb, x.innerIndexPtr() + xe, y.innerIndexPtr() + yb)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Row (= column, `a` is symmetric) j of `a` is the identity's: what a handle's row becomes in
+// the masked matrix, and what cholmod_rowdel leaves in the factor.
+bool IsIdentityRow(const SparseMatrix& a, Index j) {
+  const auto [begin, end] = ColumnRange(a, j);
+  bool diagonal_one = false;
+  for (Index e = begin; e < end; ++e) {
+    const double value = a.valuePtr()[e];
+    if (a.innerIndexPtr()[e] == j) {
+      diagonal_one = value == 1.0;
+    } else if (value != 0.0) {
+      return false;
+    }
+  }
+  return diagonal_one;
+}
+
 }  // namespace
 
 struct CholmodSolver::Impl {
@@ -362,6 +407,7 @@ struct CholmodSolver::Impl {
 
   ~Impl() {
     FreeFactor();
+    FreeSymbolic();
     cholmod_free_dense(&x, &common);
     cholmod_free_dense(&y, &common);
     cholmod_free_dense(&e, &common);
@@ -371,6 +417,132 @@ struct CholmodSolver::Impl {
   void FreeFactor() {
     if (factor) cholmod_free_factor(&factor, &common);
     factor = nullptr;
+  }
+  void FreeSymbolic() {
+    if (symbolic) cholmod_free_factor(&symbolic, &common);
+    symbolic = nullptr;
+  }
+
+  // Keeps copies for Refactor() (the matrix also for check_residual).
+  bool keeps_copies() const { return options.refactor != RefactorChoice::kFull; }
+
+  // The numeric factorization of `view` into `factor` (symbolic on entry), timed.
+  void FactorNumeric(cholmod_sparse& view, const SparseMatrix& a) {
+    const Stopwatch clock;
+    cholmod_factorize(&view, factor, &common);
+    ThrowOnFailure("factorization", a);
+    info.numeric_seconds = clock.Seconds();
+  }
+
+  // Mode auto's numeric refactorization into the current simplicial LDLᵀ factor's own arrays:
+  // a supernodal LLᵀ factorization with a copy of the analysis, then d_j = L_jj² and
+  // l_ij = L_ij / L_jj for the entries of the simplicial pattern. That is what cholmod_factorize's
+  // conversion computes (cholmod_change_factor, then cholmod_resymbol to drop the relaxed
+  // supernodes' zeros), but the pattern is known from the last factorization of the same
+  // analysis, so neither the conversion's copy nor the re-symbolic pass is needed, and the
+  // solve's plan stays valid. Returns false, before changing anything, if the factor is not
+  // such a factor; throws like Factorize() (leaving the supernodal factor for the message).
+  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a) {
+    if (options.mode != Mode::kAuto || symbolic == nullptr || !symbolic->is_super ||
+        factor == nullptr || factor->is_super || factor->is_ll || factor->n != symbolic->n) {
+      return false;
+    }
+    const Stopwatch clock;
+    cholmod_factor* super = cholmod_copy_factor(symbolic, &common);
+    if (super == nullptr) {
+      ThrowOnFailure("copy of the analysis", a);
+      return false;
+    }
+    const int final_asis = common.final_asis;
+    common.final_asis = 1;  // keep the supernodal LLᵀ factor
+    cholmod_factorize(&view, super, &common);
+    common.final_asis = final_asis;
+    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
+      FreeFactor();
+      factor = super;  // ThrowOnFailure reports its failed pivot
+      ThrowOnFailure("factorization", a);
+    }
+    const auto* ls = static_cast<const int*>(super->s);
+    const auto* pi = static_cast<const int*>(super->pi);
+    const auto* px = static_cast<const int*>(super->px);
+    const auto* first = static_cast<const int*>(super->super);
+    const auto* sx = static_cast<const double*>(super->x);
+    const auto* lp = static_cast<const int*>(factor->p);
+    const auto* lnz = static_cast<const int*>(factor->nz);
+    const auto* li = static_cast<const int*>(factor->i);
+    auto* lx = static_cast<double*>(factor->x);
+    bool matches = true;
+    for (size_t s = 0; s < super->nsuper && matches; ++s) {
+      const int rows = pi[s + 1] - pi[s];
+      for (int j = first[s]; j < first[s + 1] && matches; ++j) {
+        const int local = j - first[s];
+        const double* column = sx + px[s] + static_cast<size_t>(local) * rows;
+        const double diagonal = column[local];
+        lx[lp[j]] = diagonal * diagonal;
+        // Both row lists are sorted; the simplicial one is a subset of the supernode's.
+        int r = local + 1;
+        for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
+          while (r < rows && ls[pi[s] + r] < li[e]) ++r;
+          if (r == rows || ls[pi[s] + r] != li[e]) {
+            matches = false;
+            break;
+          }
+          lx[e] = column[r] / diagonal;
+        }
+      }
+    }
+    cholmod_free_factor(&super, &common);
+    if (!matches) return false;  // the caller factors the usual way, overwriting the values
+    info.numeric_seconds = clock.Seconds();
+    return true;
+  }
+
+  // After a numeric factorization or modification: the pivot check, the statistics, the
+  // parallel solve's plan (`same_arrays`: the factor was modified in place without changing its
+  // pattern, so the plan only needs the new pivots; `same_pattern`: a numeric refactorization
+  // with the same analysis, whose pattern EliminationTreeSolve::Rebind verifies), and the copy
+  // of `a`.
+  void FinishFactor(const SparseMatrix& a, const Eigen::VectorXd& diagonal, const Context& context,
+                    bool same_arrays = false, bool same_pattern = false) {
+    CheckPivots(a, diagonal);
+    info.supernodal = factor->is_super != 0;
+    info.ordering = OrderingName(factor->ordering);
+    info.nnz_l = common.lnz;
+    info.flops = common.fl;
+    use_tree_solve = false;
+    if (options.parallel_solve && !factor->is_super && !factor->is_ll) {
+      const cholmod_factor& f = *factor;
+      LdltFactorView view;
+      view.n = static_cast<Index>(f.n);
+      view.column_start = static_cast<const int*>(f.p);
+      view.column_count = static_cast<const int*>(f.nz);
+      view.row = static_cast<const int*>(f.i);
+      view.value = static_cast<const double*>(f.x);
+      view.permutation = static_cast<const int*>(f.Perm);
+      const Stopwatch setup_clock;
+      if (same_arrays && tree_view.row == view.row && tree_view.value == view.value &&
+          tree_view.column_start == view.column_start &&
+          tree_view.column_count == view.column_count && tree_view.n == view.n) {
+        tree_solve.RefreshPivots();
+      } else if (!(same_pattern && tree_solve.Rebind(view))) {
+        tree_solve.Setup(view, context.arena->max_concurrency());
+        plan_seconds = setup_clock.Seconds();
+      }
+      tree_view = view;
+      info.solve_setup_seconds = setup_clock.Seconds();
+      use_tree_solve = true;
+      info.solve_blocks = tree_solve.num_blocks();
+      info.solve_critical_path = tree_solve.critical_path_fraction();
+    }
+    if (options.check_residual || keeps_copies()) {
+      if (SamePattern(matrix, a) && matrix.isCompressed() && a.isCompressed()) {
+        std::copy(a.valuePtr(), a.valuePtr() + a.nonZeros(), matrix.valuePtr());
+      } else {
+        matrix = a;
+        matrix.makeCompressed();
+      }
+    }
+    factorized = true;
   }
 
   // Throws for every failure status of the last CHOLMOD call; warnings other than NOT_POSDEF
@@ -432,7 +604,7 @@ struct CholmodSolver::Impl {
       summary.success = false;
       summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
     } else if (options.check_residual) {
-      summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy, b, x, residual);
+      summary.relative_residual = solver_checks::MaxRelativeResidual(matrix, b, x, residual);
       summary.residual_computed = true;
     }
     summary.seconds = clock.Seconds();
@@ -442,19 +614,37 @@ struct CholmodSolver::Impl {
   Options options;
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
+  // With keeps_copies(): the analysis of the last Factorize() (a symbolic factor), which
+  // Refactor() factors anew.
+  cholmod_factor* symbolic = nullptr;
+  // Seconds per factor entry touched by the deletions (cholmod_updown) and the additions
+  // (cholmod_rowadd), as the last update measured them (see Refactor()).
+  double delete_seconds_per_entry = kDefaultDeleteSecondsPerEntry;
+  double add_seconds_per_entry = kDefaultAddSecondsPerEntry;
+  // Wall time of the last full set-up of the parallel solve's plan, which additions cause.
+  double plan_seconds = 0.0;
   // Solve workspaces, kept so that Solve() allocates only on its first call (per column count).
   cholmod_dense* x = nullptr;
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
   // With parallel_solve and a simplicial factor: solves with `factor` in place.
   EliminationTreeSolve tree_solve;
+  LdltFactorView tree_view;  // the arrays tree_solve was set up with
   bool use_tree_solve = false;
   int rows = 0;
   bool factorized = false;
   FactorInfo info;
-  // Only with check_residual.
-  SparseMatrix a_copy;
+  // The last factored matrix: with check_residual (for the residual) or keeps_copies() (for
+  // Refactor(): the pattern check and the changed rows' old values).
+  SparseMatrix matrix;
   Eigen::MatrixXd residual;
+  // Refactor() workspaces (factor order): path costs, the inverse permutation, marks, and the
+  // row handed to cholmod_rowadd / cholmod_rowdel.
+  std::vector<double> path_cost;
+  std::vector<int> inverse_permutation, mark, row_index;
+  std::vector<double> row_value;
+  std::vector<int> update_start, update_row;  // the columns of the deletions' update
+  std::vector<double> update_value;
 };
 
 CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
@@ -475,11 +665,26 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       "solve with a simplicial factor by substitution over independent subtrees of the "
       "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
+  options.refactor = FromName(
+      kRefactorNames,
+      node.GetChoice("refactor", ToName(kRefactorNames, options.refactor), Names(kRefactorNames),
+                     "how Refactor() (handle edits of a session) updates the factor: numeric = "
+                     "reuse the analysis, factor the values; update = modify the factor row by row "
+                     "(cholmod_rowdel/rowadd; not with mode supernodal); auto = the cheaper of the "
+                     "two by an estimate from the factor's elimination tree and measured times; "
+                     "full = factor from scratch (keeps no copies)"));
   options.native_threads = node.Get(
       "native_threads", options.native_threads,
       "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
       "own parallelism is TBB's, which native threads compete with)");
   node.RejectUnknownKeys();
+  if (options.refactor == RefactorChoice::kUpdate && options.mode == Mode::kSupernodal) {
+    throw ConfigError(fmt::format(
+        "{}: refactor = \"update\" modifies a simplicial LDLᵀ factor, but mode = \"supernodal\" "
+        "keeps a supernodal one; use mode = \"auto\" or \"simplicial\", or refactor = "
+        "\"numeric\"",
+        node.Where("refactor")));
+  }
   if (options.native_threads < 0) {
     throw ConfigError(fmt::format("{}: native_threads must be >= 0, got {}",
                                   node.Where("native_threads"), options.native_threads));
@@ -502,10 +707,20 @@ const CholmodSolver::Options& CholmodSolver::options() const { return impl_->opt
 
 const CholmodSolver::FactorInfo& CholmodSolver::factor_info() const { return impl_->info; }
 
+void CholmodSolver::set_refactor(RefactorChoice choice) {
+  HARAP_CHECK(choice != RefactorChoice::kUpdate || impl_->options.mode != Mode::kSupernodal,
+              "refactor = \"update\" needs a simplicial factor (mode auto or simplicial)");
+  impl_->options.refactor = choice;
+}
+
 std::string_view CholmodSolver::ToString(Mode mode) { return ToName(kModeNames, mode); }
 
 std::string_view CholmodSolver::ToString(Ordering ordering) {
   return ToName(kOrderingNames, ordering);
+}
+
+std::string_view CholmodSolver::ToString(RefactorChoice choice) {
+  return ToName(kRefactorNames, choice);
 }
 
 void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
@@ -514,8 +729,9 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   impl.factorized = false;
   impl.use_tree_solve = false;
   impl.FreeFactor();
+  impl.FreeSymbolic();
   impl.info = FactorInfo{};
-  impl.a_copy = SparseMatrix();
+  impl.matrix = SparseMatrix();
   impl.rows = static_cast<int>(a.rows());
   if (impl.rows == 0) {
     impl.factorized = true;
@@ -536,34 +752,289 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
+  const Stopwatch analysis_clock;
   impl.factor = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);
   HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
               impl.common.status);
-  cholmod_factorize(&view, impl.factor, &impl.common);
-  impl.ThrowOnFailure("factorization", a);
-  impl.CheckPivots(a, diagonal);
-
-  impl.info.supernodal = impl.factor->is_super != 0;
-  impl.info.ordering = OrderingName(impl.factor->ordering);
-  impl.info.nnz_l = impl.common.lnz;
-  impl.info.flops = impl.common.fl;
-  if (impl.options.check_residual) impl.a_copy = a;
-  if (impl.options.parallel_solve && !impl.factor->is_super && !impl.factor->is_ll) {
-    const cholmod_factor& f = *impl.factor;
-    LdltFactorView view;
-    view.n = static_cast<Index>(f.n);
-    view.column_start = static_cast<const int*>(f.p);
-    view.column_count = static_cast<const int*>(f.nz);
-    view.row = static_cast<const int*>(f.i);
-    view.value = static_cast<const double*>(f.x);
-    view.permutation = static_cast<const int*>(f.Perm);
-    impl.tree_solve.Setup(view, context.arena->max_concurrency());
-    impl.use_tree_solve = true;
-    impl.info.solve_blocks = impl.tree_solve.num_blocks();
-    impl.info.solve_critical_path = impl.tree_solve.critical_path_fraction();
+  if (impl.keeps_copies()) {
+    const size_t in_use = impl.common.memory_inuse;
+    impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
+    impl.ThrowOnFailure("copy of the analysis", a);
+    impl.info.refactor_bytes = static_cast<double>(impl.common.memory_inuse - in_use) +
+                               static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
+                               static_cast<double>(a.cols() + 1) * sizeof(int);
   }
-  impl.factorized = true;
+  impl.info.analysis_seconds = analysis_clock.Seconds();
+  impl.FactorNumeric(view, a);
+  impl.FinishFactor(a, diagonal, context);
+}
+
+LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
+                                                      const std::vector<Index>& changed_rows,
+                                                      const Context& context) {
+  const Stopwatch clock;
+  Impl& impl = *impl_;
+  RefactorSummary summary;
+  summary.changed_rows = static_cast<Index>(changed_rows.size());
+  const auto full = [&] {
+    Factorize(a, context);
+    summary.route = RefactorRoute::kFull;
+    summary.seconds = clock.Seconds();
+    return summary;
+  };
+  // Without a factorization of the same pattern to start from, there is nothing to reuse.
+  if (!impl.factorized || impl.symbolic == nullptr || impl.rows == 0 ||
+      impl.options.refactor == RefactorChoice::kFull || !SamePattern(impl.matrix, a)) {
+    return full();
+  }
+  const Index n = impl.rows;
+  for (size_t k = 0; k < changed_rows.size(); ++k) {
+    HARAP_CHECK(changed_rows[k] >= 0 && changed_rows[k] < n &&
+                    (k == 0 || changed_rows[k] > changed_rows[k - 1]),
+                "Refactor: changed_rows must be sorted, unique and in [0, {}); entry {} is {}", n,
+                k, changed_rows[k]);
+  }
+  // The contract: values differ only in the changed rows and columns. The update route relies
+  // on it, so a caller's mistake is an error, not a wrong factor.
+  std::vector<int>& changed = impl.mark;
+  changed.assign(n, 0);
+  for (Index r : changed_rows) changed[r] = 1;
+  for (Index j = 0; j < n; ++j) {
+    if (changed[j]) continue;
+    const auto [begin, end] = ColumnRange(a, j);
+    const auto [old_begin, old_end] = ColumnRange(impl.matrix, j);
+    for (Index e = begin, o = old_begin; e < end; ++e, ++o) {
+      const Index i = a.innerIndexPtr()[e];
+      HARAP_CHECK(changed[i] || a.valuePtr()[e] == impl.matrix.valuePtr()[o],
+                  "Refactor: entry ({}, {}) changed from {} to {}, but neither row {} nor row {} "
+                  "is in changed_rows",
+                  i, j, impl.matrix.valuePtr()[o], a.valuePtr()[e], i, j);
+    }
+  }
+  const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "cholmod");
+
+  // What an update would touch (see the header for the rule).
+  const bool can_update = !impl.factor->is_super && !impl.factor->is_ll;
+  RefactorChoice route = impl.options.refactor;
+  if (route == RefactorChoice::kUpdate && !can_update) route = RefactorChoice::kNumeric;
+  impl.info.estimated_update_seconds = 0.0;
+  impl.info.estimated_numeric_seconds = impl.info.numeric_seconds;
+  const cholmod_factor& f = *impl.factor;
+  const auto* lp = static_cast<const int*>(f.p);
+  const auto* lnz = static_cast<const int*>(f.nz);
+  const auto* li = static_cast<const int*>(f.i);
+  const auto* perm = static_cast<const int*>(f.Perm);
+  const auto parent = [&](int j) { return lnz[j] > 1 ? li[lp[j] + 1] : -1; };
+  // Entries the deletions and the additions would touch (see the header for the rule).
+  double delete_entries = 0.0, add_entries = 0.0;
+  if (can_update) {
+    // path_cost[j]: the factor entries in the columns from j up to the root (parents have
+    // larger indices, so one descending sweep).
+    impl.path_cost.resize(n);
+    impl.inverse_permutation.resize(n);
+    for (Index j = n; j-- > 0;) {
+      const int p = parent(static_cast<int>(j));
+      impl.path_cost[j] = lnz[j] + (p >= 0 ? impl.path_cost[p] : 0.0);
+      impl.inverse_permutation[perm ? perm[j] : j] = static_cast<int>(j);
+    }
+    // A deletion's column of the update starts at its first row that is not deleted too.
+    std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
+    std::fill(deleted.begin(), deleted.end(), 0);
+    for (Index r : changed_rows) {
+      if (!IsIdentityRow(impl.matrix, r)) deleted[impl.inverse_permutation[r]] = 1;
+    }
+    for (Index r : changed_rows) {
+      const int k = impl.inverse_permutation[r];
+      if (deleted[k]) {
+        for (int e = lp[k] + 1; e < lp[k] + lnz[k]; ++e) {
+          if (deleted[li[e]]) continue;
+          delete_entries += impl.path_cost[li[e]];
+          break;
+        }
+      }
+      if (!IsIdentityRow(a, r)) {
+        double forward = 0.0;
+        const auto [begin, end] = ColumnRange(a, r);
+        for (Index e = begin; e < end; ++e) {
+          const int i = impl.inverse_permutation[a.innerIndexPtr()[e]];
+          if (i < k) forward = std::max(forward, impl.path_cost[i] - impl.path_cost[k]);
+        }
+        add_entries += forward + impl.path_cost[k];
+      }
+    }
+    // Additions move columns of a packed factor, so the parallel solve's plan is set up again.
+    const double plan = add_entries > 0.0 && impl.use_tree_solve ? impl.plan_seconds : 0.0;
+    impl.info.estimated_update_seconds = delete_entries * impl.delete_seconds_per_entry +
+                                         add_entries * impl.add_seconds_per_entry + plan;
+    if (route == RefactorChoice::kAuto) {
+      route = impl.info.estimated_update_seconds < impl.info.estimated_numeric_seconds
+                  ? RefactorChoice::kUpdate
+                  : RefactorChoice::kNumeric;
+    }
+  } else if (route == RefactorChoice::kAuto) {
+    route = RefactorChoice::kNumeric;
+  }
+
+  // From here on the old factor is being replaced: a throw leaves the solver unfactored.
+  impl.factorized = false;
+  impl.use_tree_solve = false;
+  if (route == RefactorChoice::kNumeric) {
+    if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) return full();
+    const ScopedNativeThreads native_threads(impl.options.native_threads);
+    cholmod_sparse view = LowerTriangleView(a);
+    if (impl.FactorNumericInPlace(view, a)) {
+      impl.FinishFactor(a, diagonal, context, /*same_arrays=*/true);
+    } else {
+      impl.FreeFactor();
+      impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
+      impl.ThrowOnFailure("copy of the analysis", a);
+      impl.FactorNumeric(view, a);
+      impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
+    }
+    summary.route = RefactorRoute::kNumeric;
+    summary.seconds = clock.Seconds();
+    return summary;
+  }
+
+  // kUpdate. First every changed row k that is not already the identity's becomes it, all at
+  // once: with F the other rows, the old P A Pᵀ restricted to F is
+  //   Σ_j d_j L(F,j) L(F,j)ᵀ = L̃ D̃ L̃ᵀ (F,F) + Σ_k d_k L(F,k) L(F,k)ᵀ,
+  // where L̃, D̃ are L, D with the deleted rows and columns replaced by the identity's. So
+  // setting those rows and columns to the identity's and updating with the columns
+  // sqrt(d_k) L(F,k) (cholmod_updown, up to 8 columns per sweep along the elimination tree)
+  // gives the factor of `a` with all changed rows and columns replaced by the identity's, since
+  // `a` and the old matrix differ only there. Then each changed row that is not the
+  // identity's in `a` is added (cholmod_rowadd) with its entries in the rows already added,
+  // which keeps that invariant.
+  const double reallocations_before = impl.common.nrealloc_col;
+  const auto fail = [&](std::string_view stage) {
+    impl.ThrowOnFailure(stage, a);
+    throw InternalError(
+        fmt::format("cholmod: {} failed with status {}", stage, impl.common.status));
+  };
+  Stopwatch phase_clock;
+  std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
+  std::fill(deleted.begin(), deleted.end(), 0);
+  std::vector<int>& deletions = impl.row_index;
+  deletions.clear();
+  for (Index r : changed_rows) {
+    if (IsIdentityRow(impl.matrix, r)) continue;
+    deletions.push_back(impl.inverse_permutation[r]);
+    deleted[impl.inverse_permutation[r]] = 1;
+  }
+  if (!deletions.empty()) {
+    auto* lx = static_cast<double*>(impl.factor->x);
+    std::vector<int>& cp = impl.update_start;
+    std::vector<int>& ci = impl.update_row;
+    std::vector<double>& cx = impl.update_value;
+    cp.assign(1, 0);
+    ci.clear();
+    cx.clear();
+    for (int k : deletions) {
+      const double scale = std::sqrt(lx[lp[k]]);  // d_k > 0: the old factor passed the checks
+      for (int e = lp[k] + 1; e < lp[k] + lnz[k]; ++e) {
+        if (deleted[li[e]]) continue;
+        ci.push_back(li[e]);
+        cx.push_back(lx[e] * scale);
+      }
+      if (static_cast<int>(ci.size()) > cp.back()) cp.push_back(static_cast<int>(ci.size()));
+    }
+    // L̃, D̃: one pass over the factor (cheaper than searching each deleted row's columns).
+    for (Index j = 0; j < n; ++j) {
+      if (deleted[j]) {
+        lx[lp[j]] = 1.0;
+        std::fill(lx + lp[j] + 1, lx + lp[j] + lnz[j], 0.0);
+        continue;
+      }
+      for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
+        if (deleted[li[e]]) lx[e] = 0.0;
+      }
+    }
+    if (cp.size() > 1) {
+      cholmod_sparse c{};
+      c.nrow = static_cast<size_t>(n);
+      c.ncol = cp.size() - 1;
+      c.nzmax = ci.size();
+      c.p = cp.data();
+      c.i = ci.data();
+      c.x = cx.data();
+      c.stype = 0;
+      c.itype = CHOLMOD_INT;
+      c.xtype = CHOLMOD_REAL;
+      c.dtype = CHOLMOD_DOUBLE;
+      c.sorted = 1;  // the factor's columns are sorted
+      c.packed = 1;
+      if (!cholmod_updown(1, &c, impl.factor, &impl.common)) fail("update (cholmod_updown)");
+    }
+  }
+  const double delete_seconds = phase_clock.Seconds();
+  phase_clock.Restart();
+
+  std::vector<int>& pending = impl.mark;
+  std::fill(pending.begin(), pending.end(), 0);
+  for (Index r : changed_rows) pending[r] = 1;
+  std::vector<int>& rows = impl.row_index;
+  std::vector<double>& values = impl.row_value;
+  int column_start[2] = {0, 0};
+  for (Index r : changed_rows) {
+    pending[r] = 0;
+    if (IsIdentityRow(a, r)) continue;
+    rows.clear();
+    values.clear();
+    const auto [begin, end] = ColumnRange(a, r);
+    for (Index e = begin; e < end; ++e) {
+      const Index i = a.innerIndexPtr()[e];
+      if (pending[i]) continue;
+      rows.push_back(impl.inverse_permutation[i]);
+      values.push_back(a.valuePtr()[e]);
+    }
+    cholmod_sparse column{};
+    column.nrow = static_cast<size_t>(n);
+    column.ncol = 1;
+    column.nzmax = std::max<size_t>(rows.size(), 1);
+    column_start[1] = static_cast<int>(rows.size());
+    column.p = column_start;
+    column.i = rows.data();
+    column.x = values.data();
+    column.stype = 0;
+    column.itype = CHOLMOD_INT;
+    column.xtype = CHOLMOD_REAL;
+    column.dtype = CHOLMOD_DOUBLE;
+    column.sorted = 0;
+    column.packed = 1;
+    if (!cholmod_rowadd(static_cast<size_t>(impl.inverse_permutation[r]), &column, impl.factor,
+                        &impl.common)) {
+      fail("row addition (cholmod_rowadd)");
+    }
+  }
+  const double add_seconds = phase_clock.Seconds();
+  // Calibrate on modifications large enough to time (a few milliseconds at least).
+  constexpr double kCalibrationEntries = 1e6;
+  if (delete_entries >= kCalibrationEntries) {
+    impl.delete_seconds_per_entry = delete_seconds / delete_entries;
+  }
+  if (add_entries >= kCalibrationEntries) impl.add_seconds_per_entry = add_seconds / add_entries;
+  // The pattern holds every entry a row can need, but cholmod_rowadd makes room for one more
+  // in every column of its forward solve that has no slack (all of them in a packed factor),
+  // moving it to the end of the factor's arrays: its solve plan must then be set up anew.
+  // Moved columns stay below the tail L->p[n], which is all EliminationTreeSolve reads; if
+  // a CHOLMOD version did otherwise, pack the factor first.
+  const bool moved = impl.common.nrealloc_col != reallocations_before || !impl.factor->is_monotonic;
+  if (moved) {
+    const auto* start = static_cast<const int*>(impl.factor->p);
+    const auto* count = static_cast<const int*>(impl.factor->nz);
+    bool below_tail = true;
+    for (Index j = 0; j < n && below_tail; ++j) below_tail = start[j] + count[j] <= start[n];
+    if (!below_tail && !cholmod_change_factor(CHOLMOD_REAL, impl.factor->is_ll, 0, 1, 1,
+                                              impl.factor, &impl.common)) {
+      fail("packing of the modified factor");
+    }
+  }
+  impl.FinishFactor(a, diagonal, context, /*same_arrays=*/!moved);
+  summary.route = RefactorRoute::kUpdate;
+  summary.seconds = clock.Seconds();
+  return summary;
 }
 
 SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,

@@ -15,8 +15,9 @@ namespace harap {
 /// `a` is n×n SPD in full storage; CHOLMOD reads its lower triangle in place (no copy). B and X
 /// are n×k (k = 3 for the global step). Factorize() redoes the symbolic analysis (ordering,
 /// elimination tree) every time: each solver object factors one matrix (a hierarchy creates one
-/// solver per level). Solve() is allocation-free after its first call with a given k: the
-/// permuted right-hand side and solution live in workspaces kept between calls. (BLAS, used by
+/// solver per level); Refactor() reuses it when only values change. Solve() is allocation-free
+/// after its first call with a given k: the permuted right-hand side and solution live in
+/// workspaces kept between calls. (BLAS, used by
 /// solves with a supernodal factor, may allocate: OpenBLAS 0.3.21's small-matrix dgemm kernel
 /// on AVX-512 machines takes a buffer from malloc on every call.)
 ///
@@ -41,6 +42,13 @@ class CholmodSolver final : public LinearSolver {
     kMetis,  ///< METIS nested dissection: least fill on meshes, but the slowest analysis.
     kAmd,    ///< Approximate minimum degree: fast analysis, 10–20% more fill on 2D meshes.
     kBest,   ///< CHOLMOD's default: AMD, then METIS too if AMD's fill is high; keeps the best.
+  };
+  /// Which route Refactor() takes (see Refactor() for the rule of kAuto).
+  enum class RefactorChoice {
+    kAuto,     ///< The cheaper of kNumeric and kUpdate by the cost estimate below.
+    kFull,     ///< Always Factorize() again (no copies kept between factorizations).
+    kNumeric,  ///< Always reuse the analysis and factor the values anew.
+    kUpdate,   ///< Always modify the factor (cholmod_updown / cholmod_rowadd).
   };
 
   struct Options {
@@ -75,6 +83,11 @@ class CholmodSolver final : public LinearSolver {
     /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
     /// Factorize() sets it.
     int native_threads = 1;
+    /// Refactor()'s route. Anything but kFull keeps a copy of the analysis (the symbolic
+    /// factor, a few MB) and of the factored matrix (12 bytes per nonzero of A) between calls,
+    /// to reuse the one and to check the pattern and find the changed rows' old values with the
+    /// other. kUpdate needs a simplicial factor (modes auto and simplicial).
+    RefactorChoice refactor = RefactorChoice::kAuto;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
     static Options FromConfig(const ConfigNode& node);
@@ -92,6 +105,47 @@ class CholmodSolver final : public LinearSolver {
                      const Context& context) override;
   bool is_direct() const override { return true; }
 
+  /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
+  /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
+  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull). For handle edits
+  /// of a masked matrix, name only the rows of the vertices that become or stop being handles:
+  /// their neighbours' changed entries lie in those columns, and every row named costs work.
+  ///
+  /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
+  /// supernodes); in mode auto the supernodal factor's values go straight into the simplicial
+  /// factor's known pattern (no conversion, the solve's plan kept). It saves the analysis and
+  /// nothing else. kUpdate (simplicial LDLᵀ only) first
+  /// turns every changed row whose old row was not the identity's into the identity's, all at
+  /// once: those rows and columns of L are replaced by the identity's and L D Lᵀ is updated with
+  /// their old columns scaled by sqrt(d_k) (cholmod_updown, 8 columns per sweep along the
+  /// elimination tree); then it adds every changed row whose new row is not the identity's
+  /// (cholmod_rowadd: a sparse triangular solve for the row, then a rank-1 downdate along the
+  /// path from the row to the root), each with its entries in the rows added so far. The factor
+  /// keeps the symbolic pattern of the whole matrix (explicit zeros included), so its pattern
+  /// never changes: after deletions only the parallel solve's pivots are refreshed; additions
+  /// move the columns they solve through to the end of the factor's arrays (cholmod_rowadd
+  /// makes room in columns without slack), so the solve's plan is set up again.
+  ///
+  /// Rule of kAuto: kUpdate if its estimated time is below the numeric refactorization's, else
+  /// kNumeric. The estimate counts the factor entries the modification touches — for each
+  /// deletion the column counts summed along the elimination-tree path to the root from its
+  /// column's first row that is not deleted too (where its column of the update starts), for
+  /// each addition the path from its own column plus the longest path from the row's entries
+  /// up to that column (the forward solve) — times the seconds per touched entry this solver
+  /// measured in its last deletions and additions of at least 10⁶ entries (before any:
+  /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry), plus, if there are additions,
+  /// the last measured set-up of the parallel solve's plan; the numeric time is the one measured
+  /// by the last numeric factorization of this pattern. Both sides are measured on the machine
+  /// the solver runs on; only the first estimate uses the defaults.
+  RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                           const Context& context) override;
+
+  /// Seconds per factor entry touched by the deletions and by the additions of an update before
+  /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
+  /// ball of 1% of the vertices (docs/solvers.md).
+  static constexpr double kDefaultDeleteSecondsPerEntry = 0.8e-9;
+  static constexpr double kDefaultAddSecondsPerEntry = 0.8e-9;
+
   /// What the last successful Factorize() produced (for experiments and benchmarks).
   struct FactorInfo {
     bool supernodal = false;    ///< Which kind "auto" (or the fixed mode) produced.
@@ -103,13 +157,29 @@ class CholmodSolver final : public LinearSolver {
     /// that stays sequential).
     int solve_blocks = 0;
     double solve_critical_path = 0.0;
+    /// Wall time of the last analysis (ordering, symbolic factorization) and of the last
+    /// numeric factorization (including the conversion to simplicial form in mode auto).
+    double analysis_seconds = 0.0;
+    double numeric_seconds = 0.0;
+    /// Wall time of the last preparation of the parallel solve (EliminationTreeSolve::Setup,
+    /// or only new pivots when Refactor() kept the factor's pattern).
+    double solve_setup_seconds = 0.0;
+    /// Bytes kept for Refactor() (the analysis and the matrix; 0 with refactor = "full").
+    double refactor_bytes = 0.0;
+    /// The last Refactor()'s estimates (0 when it did not estimate), see Refactor().
+    double estimated_update_seconds = 0.0;
+    double estimated_numeric_seconds = 0.0;
   };
   const FactorInfo& factor_info() const;
 
   const Options& options() const;
+  /// Changes Options::refactor for the next Refactor() calls (experiments, tests). Switching
+  /// from "full" takes effect after the next Factorize(), which keeps the copies.
+  void set_refactor(RefactorChoice choice);
 
   static std::string_view ToString(Mode mode);
   static std::string_view ToString(Ordering ordering);
+  static std::string_view ToString(RefactorChoice choice);
 
  private:
   struct Impl;

@@ -25,7 +25,37 @@ constexpr double kMinTaskWork = 2000.0;
 // Largest block of right-hand-side columns solved in one sweep over the factor.
 constexpr int kMaxBlockColumns = 4;
 
+// FNV-1a over the factor's pattern (offsets, counts, row indices of the used entries).
+std::uint64_t PatternHash(const LdltFactorView& factor) {
+  std::uint64_t hash = 14695981039346656037ull;
+  const auto mix = [&hash](std::uint64_t value) {
+    hash ^= value;
+    hash *= 1099511628211ull;
+  };
+  mix(static_cast<std::uint64_t>(factor.n));
+  for (Index j = 0; j < factor.n; ++j) {
+    mix(static_cast<std::uint32_t>(factor.column_start[j]));
+    mix(static_cast<std::uint32_t>(factor.column_count[j]));
+    const int* row = factor.row + factor.column_start[j];
+    for (int e = 0; e < factor.column_count[j]; ++e) mix(static_cast<std::uint32_t>(row[e]));
+  }
+  return hash;
+}
+
 }  // namespace
+
+bool EliminationTreeSolve::Rebind(const LdltFactorView& factor) {
+  if (factor.n != n_ || !factor.column_start || !factor.column_count || !factor.row ||
+      !factor.value || PatternHash(factor) != pattern_hash_) {
+    return false;
+  }
+  for (Index k = 0; k < n_; ++k) {
+    if (permutation_[k] != (factor.permutation ? factor.permutation[k] : k)) return false;
+  }
+  factor_ = factor;
+  RefreshPivots();
+  return true;
+}
 
 void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) {
   const Index n = factor.n;
@@ -33,6 +63,7 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
               "incomplete factor view");
   n_ = n;
   factor_ = factor;
+  pattern_hash_ = PatternHash(factor);
   const int* start = factor.column_start;
   const int* count = factor.column_count;
 
@@ -204,6 +235,15 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
     blocks_[b].gather_end = static_cast<int>(gather_slot_.size());
   }
   work_.clear();
+}
+
+void EliminationTreeSolve::RefreshPivots() {
+  for (Index j = 0; j < n_; ++j) {
+    const double pivot = factor_.value[factor_.column_start[j]];
+    HARAP_CHECK(pivot > 0.0 && std::isfinite(pivot),
+                "column {} of the factor does not start with a positive pivot", j);
+    inverse_pivot_[j] = 1.0 / pivot;
+  }
 }
 
 template <int kColumns>

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 
+#include <cstdint>
 #include <vector>
 
 #include "framework/context.h"
@@ -56,6 +57,17 @@ class EliminationTreeSolve {
   /// a unit-lower LDLᵀ with positive pivots and the diagonal first in each column.
   void Setup(const LdltFactorView& factor, int num_threads);
 
+  /// After the factor's values changed in place (same arrays, same pattern, e.g. a row
+  /// update/downdate): takes the new pivots, keeping the cut and the renumbered rows. O(n).
+  /// Throws InternalError like Setup() if a pivot is not positive.
+  void RefreshPivots();
+
+  /// The same for a factor in other arrays: if `factor` has the pattern Setup() saw (compared by
+  /// size and a 64-bit hash of its offsets, counts and rows), solves with its arrays from now on
+  /// and refreshes the pivots; returns false (and changes nothing) otherwise. A numeric
+  /// refactorization with the same analysis produces the same pattern, and this saves the cut.
+  bool Rebind(const LdltFactorView& factor);
+
   void Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
              const Context& context);
 
@@ -88,6 +100,7 @@ class EliminationTreeSolve {
   std::vector<int> slot_row_;     ///< the row each slot stands for
   std::vector<int> gather_slot_;  ///< per block, sorted by (row, slot)
   double critical_path_fraction_ = 0.0;
+  std::uint64_t pattern_hash_ = 0;
   // Solve workspace: the permuted right-hand side (n_ rows) and the slots, row-major.
   std::vector<double> work_;
 };
