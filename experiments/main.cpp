@@ -16,6 +16,7 @@
 #include "experiments/builtins.h"
 #include "experiments/component_factory.h"
 #include "experiments/deform.h"
+#include "experiments/drag_command.h"
 #include "experiments/experiment.h"
 #include "experiments/process.h"
 #include "experiments/runner.h"
@@ -387,6 +388,9 @@ int main(int argc, char** argv) {
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
 
+  DragCommandArguments drag_args;
+  auto* drag = AddDragCommand(app, drag_args);
+
   std::string hierarchy_out;
   auto* hierarchy = app.add_subcommand("hierarchy", "build a scenario's mesh hierarchy, write each "
                                                     "level as PLY, print a per-level table");
@@ -431,6 +435,7 @@ int main(int argc, char** argv) {
     if (*hierarchy) return WriteHierarchy(args, hierarchy_out);
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
+    if (*drag) return RunDragCommand(drag_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

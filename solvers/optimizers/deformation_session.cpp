@@ -43,6 +43,8 @@ struct DeformationSession::Level {
   LevelConstraints internal;     ///< the same in the solver's numbering (moving targets)
   LevelState state;              ///< the last solution, in the mesh's numbering
   bool has_solution = false;
+  /// The session's problem version `state` solves (DeformationSession::version_).
+  long long version = -1;
 };
 
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
@@ -147,6 +149,7 @@ void DeformationSession::SetTargets(const Positions& targets) {
   if (handles_.empty()) throw InputError("SetTargets: the session has no handles yet (SetHandles)");
   ValidateTargets(targets, handles_.size(), "SetTargets");
   targets_ = targets;
+  ++version_;
   UpdateCoarseTargets();
 }
 
@@ -203,6 +206,7 @@ void DeformationSession::SetPositions(const Positions& positions) {
     throw InputError("SetPositions: the mesh is planar (z = 0) but the positions are not");
   }
   start_positions_ = positions;
+  ++version_;
   for (const auto& level : levels_) {
     if (level) {
       level->has_solution = false;
@@ -216,6 +220,7 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
   Positions old_targets = std::move(targets_);
   handles_ = std::move(indices);
   targets_ = std::move(targets);
+  ++version_;
   try {
     return ConstrainLevels();
   } catch (...) {
@@ -304,54 +309,6 @@ OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
 
 OptimizeResult DeformationSession::Preview() { return Run({}, /*preview=*/true); }
 
-LocalGlobalSolver::RunResult DeformationSession::RaceStarts(Level& level, LevelState& state,
-                                                           bool start_with_global_step,
-                                                           const LocalGlobalOptions& options,
-                                                           const Context& context,
-                                                           std::vector<std::string>& notes) {
-  LocalGlobalSolver& solver = *level.solver;
-  // One iteration from each start (the handles are at their targets in both); the better one
-  // goes on. The loser costs one iteration; a good start saves many (docs: measured).
-  LocalGlobalOptions one = options;
-  one.max_iterations = 1;
-  LevelState previous = level.state;
-  for (size_t k = 0; k < handles_.size(); ++k) {
-    previous.positions.row(handles_[k]) = targets_.row(static_cast<Index>(k));
-  }
-  LocalGlobalSolver::RunResult from_previous =
-      solver.Run(previous, /*start_with_global_step=*/true, one, diagonal_, context);
-  if (from_previous.stopped_by_callback) {
-    state = std::move(previous);
-    return from_previous;
-  }
-  LocalGlobalSolver::RunResult run =
-      solver.Run(state, start_with_global_step, one, diagonal_, context);
-  if (run.stopped_by_callback) return run;
-  if (from_previous.energy < run.energy) {
-    state = std::move(previous);
-    std::swap(run, from_previous);
-    notes.push_back("the finest level went on from its previous solution (lower energy after "
-                    "one iteration than from the up-sampled one)");
-  }
-  // The loser's iteration counts as work done.
-  run.iterations += from_previous.iterations;
-  run.linear_solves.solves += from_previous.linear_solves.solves;
-  run.linear_solves.seconds += from_previous.linear_solves.seconds;
-  run.linear_solves.iterations += from_previous.linear_solves.iterations;
-  if (run.converged || options.max_iterations <= 2) return run;
-  LocalGlobalOptions rest = options;
-  rest.max_iterations = options.max_iterations - 2;
-  // The state's rotations are fitted to its positions: the next step is a global one.
-  LocalGlobalSolver::RunResult more = solver.Run(state, /*start_with_global_step=*/true, rest,
-                                                 diagonal_, context);
-  more.iterations += run.iterations;
-  more.linear_solves.solves += run.linear_solves.solves;
-  more.linear_solves.seconds += run.linear_solves.seconds;
-  more.linear_solves.iterations += run.linear_solves.iterations;
-  more.accelerated_iterations += run.accelerated_iterations;
-  return more;
-}
-
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -402,6 +359,12 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
           state.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
           start_with_global_step = false;
         }
+      } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
+                 !preview) {
+        // Nothing changed since this level's last solution: it is the best start there is (an
+        // up-sampled one would start the level's iterations over).
+        state = levels_[l]->state;
+        start_with_global_step = true;
       } else {
         LevelState coarse_state = std::move(state);
         state = LevelState();
@@ -445,16 +408,12 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         }
       }
       const bool was_out_of_time = out_of_time;
-      LocalGlobalSolver::RunResult run;
-      if (l == 0 && top > 0 && !preview && !was_out_of_time && level->has_solution &&
-          options_.frame_start == SessionOptions::FrameStart::kBest) {
-        run = RaceStarts(*level, state, start_with_global_step, options, context,
-                         result.notes);
-      } else {
-        run = solver.Run(state, start_with_global_step, options, diagonal_, context, update);
-      }
+      const LocalGlobalSolver::RunResult run =
+          solver.Run(state, start_with_global_step, options, diagonal_, context, update);
       level->state = state;
       level->has_solution = true;
+      // A stopped run or a preview is no finished solution: the next solve redoes the level.
+      level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
       if (run.targets_frozen_at > 0) {
         frozen_target_notes.push_back(fmt::format(
             "level {}: coarse constraint targets stopped following the rotations after "
