@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,29 @@
 
 namespace harap {
 
+/// A handle edit during a drag (`--edits FILE.toml`): before frame `frame`'s solve, either add a
+/// handle (the vertices a scenario selection picks that are no handles yet, held where the last
+/// frame left them) or remove the handle an earlier edit added under `name`.
+///
+///   [[edit]]
+///   frame = 10
+///   add = { name = "knee", select.ball = { center = [0.5, 0.3, 0.5], radius = 0.05 } }
+///   [[edit]]
+///   frame = 20
+///   remove = "knee"
+///
+/// Selections as in scenarios (select.ball, select.slab, select.indices; box fractions of the
+/// mesh's referenced vertices, ball radius in units of the box diagonal).
+struct DragEdit {
+  int frame = 0;
+  std::string name;
+  bool add = true;
+  std::vector<Index> vertices;  ///< add: the selected vertices (ascending)
+};
+
+/// Reads an edits file for `mesh`; ConfigError naming the file and entry for anything wrong.
+std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh);
+
 /// `harap drag`: replays an interaction with a scenario's handles.
 struct DragOptions {
   int frames = 30;  ///< the handles reach the scenario's end pose at the last frame
@@ -20,6 +44,7 @@ struct DragOptions {
   bool from_scratch = false;     ///< a fresh one-shot run per frame (the baseline)
   SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kUpsampled;
   std::string out_frames;        ///< folder for frame_NNN.ply (empty: none)
+  std::vector<DragEdit> edits;   ///< session modes only
   IterationCallback progress;
 };
 
@@ -32,6 +57,9 @@ struct DragFrame {
   bool converged = false;
   std::vector<LevelResult> levels;  ///< finest first
   std::vector<std::string> notes;
+  /// An edit frame: what the edit did (seconds of all levels' refactorization, per level route).
+  std::optional<HandleEditResult> edit;
+  std::string edit_description;
 };
 
 struct DragOutcome {
@@ -58,7 +86,9 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
 
 /// The JSON report: {"mode", "optimizer", "setup_seconds", "constrain_seconds", "frames_seconds",
 /// "frames": [{"frame", "seconds", "energy", "iterations", "total_iterations", "converged",
-/// "levels": [{"level", "iterations", "energy", "seconds"}], "notes"}], ...}.
+/// "levels": [{"level", "iterations", "energy", "seconds"}], "notes", and on edit frames
+/// "edit_seconds", "edit": {"description", "levels": [{"level", "route", "changed_rows",
+/// "seconds"}]}}], ...}.
 std::string DragReportJson(const Scenario& scenario, const DragOutcome& outcome);
 
 /// The per-frame table for the terminal.

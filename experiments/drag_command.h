@@ -23,7 +23,7 @@ struct DragCommandArguments {
   std::optional<double> tolerance;
   std::optional<int> max_iterations;
   std::vector<std::string> settings;
-  std::string report, frame_start = "upsampled";
+  std::string report, edits, frame_start = "upsampled";
   bool quiet = false;
   DragOptions options;
 };
@@ -51,6 +51,9 @@ inline CLI::App* AddDragCommand(CLI::App& app, DragCommandArguments& a) {
   drag->add_option("--frame-start", a.frame_start,
                    "where a hierarchical session's finer levels start a frame: upsampled (default: "
                    "the cascade) or previous (the finest level alone, from its last solution)");
+  drag->add_option("--edits", a.edits,
+                   "TOML file of handle edits: [[edit]] frame = N, add = {name, select} or "
+                   "remove = \"name\" (see experiments/drag.h)");
   drag->add_option("--report", a.report, "write a JSON report with a `frames` array");
   drag->add_option("--out-frames", a.options.out_frames, "folder for frame_NNN.ply");
   drag->add_option("--threads", a.options.threads, "worker threads (default: all cores)");
@@ -91,6 +94,7 @@ inline int RunDragCommand(const DragCommandArguments& a) {
   }
   const Registries registries = MakeBuiltinRegistries();
   const Scenario scenario = LoadScenario(a.scenario);
+  if (!a.edits.empty()) options.edits = LoadDragEdits(a.edits, scenario.mesh);
   const DragOutcome outcome = RunDrag(registries, scenario, config, options);
   if (!a.report.empty()) {
     std::ofstream file(a.report);

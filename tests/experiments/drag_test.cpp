@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -76,6 +77,39 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
   const double session_energy = report["frames"][2]["energy"];
   const double scratch_energy = from_scratch["frames"][2]["energy"];
   CHECK(session_energy < scratch_energy * 1.05);
+  // Handle edits: a ball added before frame 2 and removed before frame 3.
+  {
+    std::ofstream edits(dir / "edits.toml");
+    edits << "[[edit]]\nframe = 2\nadd = { name = \"ball\", select.ball = { center = [0.5, 0.0, "
+             "0.5], radius = 0.1 } }\n[[edit]]\nframe = 3\nremove = \"ball\"\n";
+  }
+  const CommandResult edited = RunHarap(
+      "drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 --edits " +
+      (dir / "edits.toml").string() + " --report " + (dir / "edited.json").string());
+  INFO(edited.output);
+  REQUIRE(edited.status == 0);
+  std::ifstream edited_file(dir / "edited.json");
+  const nlohmann::json with_edits = nlohmann::json::parse(edited_file);
+  CHECK_FALSE(with_edits["frames"][0].contains("edit_seconds"));
+  for (int frame : {1, 2}) {
+    const auto& entry = with_edits["frames"][frame];
+    REQUIRE(entry.contains("edit_seconds"));
+    CHECK(entry["edit_seconds"].get<double>() > 0.0);
+    REQUIRE(entry["edit"]["levels"].size() >= 2);
+    for (const auto& level : entry["edit"]["levels"]) CHECK(level["changed_rows"].get<int>() > 0);
+  }
+  // Removing the ball restores the scenario's handles: the last frame lands where it would
+  // without the edits (the same problem, a different warm-start path).
+  const double edited_energy = with_edits["frames"][2]["energy"];
+  CHECK(std::abs(edited_energy - session_energy) < 0.05 * session_energy);
+  {
+    std::ofstream bad(dir / "bad.toml");
+    bad << "[[edit]]\nframe = 2\nremove = \"nothing\"\n";
+  }
+  const CommandResult bad = RunHarap("drag " + kCylinder + " --frames 3 --edits " +
+                                     (dir / "bad.toml").string());
+  CHECK(bad.status == 1);
+  CHECK(bad.output.find("no handle 'nothing'") != std::string::npos);
   CHECK(RunHarap("drag " + kCylinder + " --frames 0").status == 1);
   CHECK(RunHarap("drag " + kCylinder + " --frame-start sideways").output.find("upsampled") !=
         std::string::npos);
