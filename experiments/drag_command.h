@@ -50,7 +50,8 @@ inline CLI::App* AddDragCommand(CLI::App& app, DragCommandArguments& a) {
                  "a fresh one-shot run per frame (the baseline)");
   drag->add_option("--frame-start", a.frame_start,
                    "where a hierarchical session's finer levels start a frame: upsampled (default: "
-                   "the cascade) or previous (the finest level alone, from its last solution)");
+                   "the cascade), corrected (each level's last solution plus the up-sampled coarse "
+                   "change) or previous (the finest level alone, from its last solution)");
   drag->add_option("--edits", a.edits,
                    "TOML file of handle edits: [[edit]] frame = N, add = {name, select} or "
                    "remove = \"name\" (see experiments/drag.h)");
@@ -86,10 +87,12 @@ inline int RunDragCommand(const DragCommandArguments& a) {
   DragOptions options = a.options;
   if (a.frame_start == "upsampled") {
     options.frame_start = SessionOptions::FrameStart::kUpsampled;
+  } else if (a.frame_start == "corrected") {
+    options.frame_start = SessionOptions::FrameStart::kCorrected;
   } else if (a.frame_start == "previous") {
     options.frame_start = SessionOptions::FrameStart::kPrevious;
   } else {
-    throw ConfigError(fmt::format("--frame-start '{}': expected upsampled or previous",
+    throw ConfigError(fmt::format("--frame-start '{}': expected upsampled, corrected or previous",
                                   a.frame_start));
   }
   const Registries registries = MakeBuiltinRegistries();

@@ -319,7 +319,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   const int coarsest = num_levels() - 1;
   const HierarchicalOptimizer::Options& o = options_.optimizer;
   // The cascade from the coarsest level, or the finest level alone from its previous solution.
-  const bool cascade = preview || options_.frame_start == SessionOptions::FrameStart::kUpsampled ||
+  const bool cascade = preview || options_.frame_start != SessionOptions::FrameStart::kPrevious ||
                        !levels_[0]->has_solution;
   const int top = cascade ? coarsest : 0;
 
@@ -345,6 +345,9 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   std::vector<std::string> frozen_target_notes;
   LevelState state;
   bool start_with_global_step = false;
+  // FrameStart::kCorrected: the last solved level's solution before this solve.
+  LevelState coarse_before;
+  bool coarse_before_valid = false;
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       if (l == top) {
@@ -365,6 +368,18 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         // up-sampled one would start the level's iterations over).
         state = levels_[l]->state;
         start_with_global_step = true;
+      } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
+                 levels_[l] && levels_[l]->has_solution && coarse_before_valid) {
+        // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
+        // the coarser level's solution changed since then (the smooth motion), up-sampled.
+        LevelState now, before;
+        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, state, now,
+                             context);
+        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_,
+                             coarse_before, before, context);
+        state.positions = levels_[l]->state.positions + now.positions - before.positions;
+        state.rotations = levels_[l]->state.rotations;
+        start_with_global_step = false;
       } else {
         LevelState coarse_state = std::move(state);
         state = LevelState();
@@ -408,10 +423,18 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         }
       }
       const bool was_out_of_time = out_of_time;
+      // This level's solution before this solve, for the next finer level's correction.
+      LevelState before_this_solve;
+      const bool had_solution = level->has_solution;
+      if (options_.frame_start == SessionOptions::FrameStart::kCorrected && had_solution) {
+        before_this_solve = level->state;
+      }
       const LocalGlobalSolver::RunResult run =
           solver.Run(state, start_with_global_step, options, diagonal_, context, update);
       level->state = state;
       level->has_solution = true;
+      coarse_before = std::move(before_this_solve);
+      coarse_before_valid = had_solution;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
       level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
       if (run.targets_frozen_at > 0) {

@@ -35,6 +35,10 @@ struct SessionOptions {
     /// convergence test stops while the slow, smooth modes still lag behind the handles: on a
     /// 10-frame bend the last frame's energy was 50% above the cascade's (docs/session.md).
     kPrevious,
+    /// The cascade, but a finer level with a previous solution starts from it moved by the
+    /// up-sampled change of the coarser level's solution (a coarse-grid correction: the old fine
+    /// detail plus the new smooth motion), with a local step.
+    kCorrected,
   };
   FrameStart frame_start = FrameStart::kUpsampled;
 

@@ -183,7 +183,8 @@ TEST_CASE("session: a warm-started solve with unchanged targets takes very few i
   TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
                   "[hierarchy]\nmin_vertices = 60\n");
   for (const auto start :
-       {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kPrevious}) {
+       {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kPrevious,
+        SessionOptions::FrameStart::kCorrected}) {
     DYNAMIC_SECTION("frame start " << static_cast<int>(start)) {
       auto configured = Session(setup, tube.mesh, start);
       DeformationSession& session = configured->session();
@@ -300,4 +301,31 @@ TEST_CASE("session: options a session cannot run are rejected clearly", "[sessio
       anderson.MakeOptimizer()->Optimize(tube.problem, anderson.factory, Context());
   CHECK(accelerated.converged);
   CHECK(Close(accelerated.energy, reference.energy, 1e-6));
+}
+
+TEST_CASE("session: a drag in frames ends near the one-shot solution with the cascade starts",
+          "[session]") {
+  SmallBentTube tube;
+  TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n"
+                  "[hierarchy]\nmin_vertices = 60\n");
+  const OptimizeResult reference =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context::WithThreads(2));
+  const Constraints& handles = tube.problem.constraints;
+  const Positions rest = tube.mesh.vertices(handles.indices, Eigen::all);
+  for (const auto start :
+       {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kCorrected}) {
+    DYNAMIC_SECTION("frame start " << static_cast<int>(start)) {
+      auto configured = Session(setup, tube.mesh, start);
+      DeformationSession& session = configured->session();
+      session.SetHandles(handles.indices);
+      OptimizeResult last;
+      for (int frame = 1; frame <= 4; ++frame) {
+        session.SetTargets(rest + (handles.targets - rest) * (frame / 4.0));
+        last = session.Solve();
+        CHECK(last.converged);
+      }
+      INFO("last frame " << last.energy << ", one-shot " << reference.energy);
+      CHECK(Close(last.energy, reference.energy, 1e-2));
+    }
+  }
 }
