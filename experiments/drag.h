@@ -42,7 +42,7 @@ struct DragOptions {
   double frame_budget_ms = 0.0;  ///< per-frame time budget of a session solve (0: none)
   bool preview = false;          ///< session Preview() frames instead of Solve()
   bool from_scratch = false;     ///< a fresh one-shot run per frame (the baseline)
-  SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kUpsampled;
+  SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected;
   std::string out_frames;        ///< folder for frame_NNN.ply (empty: none)
   std::vector<DragEdit> edits;   ///< session modes only
   IterationCallback progress;

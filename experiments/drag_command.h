@@ -23,7 +23,7 @@ struct DragCommandArguments {
   std::optional<double> tolerance;
   std::optional<int> max_iterations;
   std::vector<std::string> settings;
-  std::string report, edits, frame_start = "upsampled";
+  std::string report, edits, frame_start = "corrected";
   bool quiet = false;
   DragOptions options;
 };
@@ -49,9 +49,10 @@ inline CLI::App* AddDragCommand(CLI::App& app, DragCommandArguments& a) {
   drag->add_flag("--from-scratch", a.options.from_scratch,
                  "a fresh one-shot run per frame (the baseline)");
   drag->add_option("--frame-start", a.frame_start,
-                   "where a hierarchical session's finer levels start a frame: upsampled (default: "
-                   "the cascade), corrected (each level's last solution plus the up-sampled coarse "
-                   "change) or previous (the finest level alone, from its last solution)");
+                   "where a hierarchical session's finer levels start a frame: corrected (default: "
+                   "each level's last solution plus the up-sampled coarse change), upsampled (the "
+                   "one-shot cascade) or previous (the finest level alone, from its last "
+                   "solution)");
   drag->add_option("--edits", a.edits,
                    "TOML file of handle edits: [[edit]] frame = N, add = {name, select} or "
                    "remove = \"name\" (see experiments/drag.h)");

@@ -60,6 +60,6 @@ class ConfiguredSession {
 /// precomputation are done here; call SetHandles() next.
 std::unique_ptr<ConfiguredSession> MakeSession(
     const Registries& registries, const Mesh& mesh, const ConfigNode& run_config, int threads,
-    SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kUpsampled);
+    SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected);
 
 }  // namespace harap

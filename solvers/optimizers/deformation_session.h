@@ -23,24 +23,24 @@ struct SessionOptions {
   HierarchicalOptimizer::Options optimizer;
 
   /// Where the finer levels of a hierarchical session start a frame (the coarsest level always
-  /// starts from its own previous solution):
+  /// starts from its own previous solution, and a level whose last solution is for the current
+  /// handles and targets starts from it). Measured on 30-frame drags (docs/session.md):
+  /// kCorrected gave the lowest energies (no frame above the one-shot run's) at about the
+  /// kUpsampled time; kPrevious the fewest iterations but energies up to 60% above.
   enum class FrameStart {
-    /// Every level is solved from the coarsest down, each finer one from the up-sampled
-    /// solution of the coarser one, as in a one-shot run (the paper's cascade); a level whose
-    /// last solution is for the current handles and targets starts from it instead. Measured
-    /// (docs/session.md): the only start whose frame energies stay at the one-shot runs'.
+    /// Every level solved from the coarsest down, each finer one from the up-sampled solution of
+    /// the coarser one, as in a one-shot run (the paper's cascade).
     kUpsampled,
-    /// Only the finest level is solved, from its own previous solution (the coarse levels are
-    /// not solved; the first frame runs the cascade). Fewer iterations per frame, but the
-    /// convergence test stops while the slow, smooth modes still lag behind the handles: on a
-    /// 10-frame bend the last frame's energy was 50% above the cascade's (docs/session.md).
+    /// Only the finest level is solved, from its own previous solution (the first frame runs
+    /// the cascade). The convergence test stops while the slow, smooth modes still lag behind
+    /// the handles, and the lag accumulates over frames.
     kPrevious,
     /// The cascade, but a finer level with a previous solution starts from it moved by the
-    /// up-sampled change of the coarser level's solution (a coarse-grid correction: the old fine
-    /// detail plus the new smooth motion), with a local step.
+    /// up-sampled change of the coarser level's solution since then (a coarse-grid correction:
+    /// the old fine detail plus the new smooth motion), with a local step.
     kCorrected,
   };
-  FrameStart frame_start = FrameStart::kUpsampled;
+  FrameStart frame_start = FrameStart::kCorrected;
 
   /// Reads `type` (classic or hierarchical) and that optimizer's options from an `[optimizer]`
   /// table; other optimizers and options a session cannot run are rejected (ConfigError).

@@ -29,7 +29,7 @@ bool Close(double a, double b, double relative) {
 
 std::unique_ptr<ConfiguredSession> Session(const TestSetup& setup, const Mesh& mesh,
                                            SessionOptions::FrameStart start =
-                                               SessionOptions::FrameStart::kUpsampled) {
+                                               SessionOptions::FrameStart::kCorrected) {
   return MakeSession(setup.registries, mesh, setup.config, 2, start);
 }
 
