@@ -347,7 +347,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   bool start_with_global_step = false;
   // FrameStart::kCorrected: the last solved level's solution before this solve.
   LevelState coarse_before;
-  bool coarse_before_valid = false;
+  int coarse_before_level = -1;  ///< the level coarse_before belongs to (-1: none)
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       if (l == top) {
@@ -369,7 +369,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         state = levels_[l]->state;
         start_with_global_step = true;
       } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
-                 levels_[l] && levels_[l]->has_solution && coarse_before_valid) {
+                 levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
+                 coarse_before.rotations.size() == state.rotations.size()) {
         // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
         // the coarser level's solution changed since then (the smooth motion), up-sampled.
         LevelState now, before;
@@ -434,7 +435,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       level->state = state;
       level->has_solution = true;
       coarse_before = std::move(before_this_solve);
-      coarse_before_valid = had_solution;
+      coarse_before_level = had_solution ? l : -1;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
       level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
       if (run.targets_frozen_at > 0) {
