@@ -86,16 +86,7 @@ inline int RunDragCommand(const DragCommandArguments& a) {
     config.Set(setting.substr(0, eq), setting.substr(eq + 1));
   }
   DragOptions options = a.options;
-  if (a.frame_start == "upsampled") {
-    options.frame_start = SessionOptions::FrameStart::kUpsampled;
-  } else if (a.frame_start == "corrected") {
-    options.frame_start = SessionOptions::FrameStart::kCorrected;
-  } else if (a.frame_start == "previous") {
-    options.frame_start = SessionOptions::FrameStart::kPrevious;
-  } else {
-    throw ConfigError(fmt::format("--frame-start '{}': expected upsampled, corrected or previous",
-                                  a.frame_start));
-  }
+  options.frame_start = SessionOptions::ParseFrameStart(a.frame_start);
   const Registries registries = MakeBuiltinRegistries();
   const Scenario scenario = LoadScenario(a.scenario);
   if (!a.edits.empty()) options.edits = LoadDragEdits(a.edits, scenario.mesh);

@@ -37,6 +37,26 @@ SessionOptions SessionOptions::FromConfig(const ConfigNode& node) {
   return options;
 }
 
+SessionOptions::FrameStart SessionOptions::ParseFrameStart(std::string_view name) {
+  if (name == "corrected") return FrameStart::kCorrected;
+  if (name == "upsampled") return FrameStart::kUpsampled;
+  if (name == "previous") return FrameStart::kPrevious;
+  throw ConfigError(fmt::format("unknown frame start '{}': valid are corrected, upsampled, previous",
+                                name));
+}
+
+std::string_view SessionOptions::FrameStartName(FrameStart start) {
+  switch (start) {
+    case FrameStart::kCorrected:
+      return "corrected";
+    case FrameStart::kUpsampled:
+      return "upsampled";
+    case FrameStart::kPrevious:
+      return "previous";
+  }
+  return "?";
+}
+
 struct DeformationSession::Level {
   std::unique_ptr<LocalGlobalSolver> solver;
   LevelConstraints constraints;  ///< coarse levels: in the mesh's numbering
@@ -427,7 +447,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       // This level's solution before this solve, for the next finer level's correction.
       LevelState before_this_solve;
       const bool had_solution = level->has_solution;
-      if (options_.frame_start == SessionOptions::FrameStart::kCorrected && had_solution) {
+      if (options_.frame_start == SessionOptions::FrameStart::kCorrected && had_solution &&
+          l > 0) {
         before_this_solve = level->state;
       }
       const LocalGlobalSolver::RunResult run =

@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "framework/config.h"
@@ -41,6 +42,9 @@ struct SessionOptions {
     kCorrected,
   };
   FrameStart frame_start = FrameStart::kCorrected;
+  /// "corrected", "upsampled", "previous" (ConfigError listing them for anything else).
+  static FrameStart ParseFrameStart(std::string_view name);
+  static std::string_view FrameStartName(FrameStart start);
 
   /// Reads `type` (classic or hierarchical) and that optimizer's options from an `[optimizer]`
   /// table; other optimizers and options a session cannot run are rejected (ConfigError).
