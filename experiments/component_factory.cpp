@@ -47,6 +47,7 @@ RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
                                     defaults_.solver);
   if (root_.Has("hierarchy")) MakeHierarchy();
   if (root_.Has("upsampler")) MakeUpsampler();
+  made_hierarchy_ = made_upsampler_ = false;
 }
 
 std::unique_ptr<Energy> RegistryComponentFactory::MakeEnergy() const {
@@ -67,10 +68,12 @@ std::unique_ptr<LinearSolver> RegistryComponentFactory::MakeLinearSolver(
 }
 
 std::unique_ptr<Hierarchy> RegistryComponentFactory::MakeHierarchy() const {
+  made_hierarchy_ = true;
   return registries_.hierarchies.Create(root_.Child("hierarchy"), defaults_.hierarchy);
 }
 
 std::unique_ptr<Upsampler> RegistryComponentFactory::MakeUpsampler() const {
+  made_upsampler_ = true;
   return registries_.upsamplers.Create(root_.Child("upsampler"), defaults_.upsampler);
 }
 

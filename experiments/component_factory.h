@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <atomic>
 #include <string>
 
 #include "framework/config.h"
@@ -52,6 +53,10 @@ class RegistryComponentFactory final : public ComponentFactory {
   std::string solver_name_for(Index num_unknowns) const;
   std::string hierarchy_name() const;
   std::string upsampler_name() const;
+  /// Whether an optimizer asked for a hierarchy / an up-sampler (the checks of the constructor
+  /// do not count), so a summary names exactly the pieces a run used.
+  bool made_hierarchy() const { return made_hierarchy_; }
+  bool made_upsampler() const { return made_upsampler_; }
 
  private:
   /// The table whose solver a system of `num_unknowns` unknowns gets.
@@ -60,6 +65,8 @@ class RegistryComponentFactory final : public ComponentFactory {
   const Registries& registries_;
   ConfigNode root_;
   DefaultComponents defaults_;
+  mutable std::atomic<bool> made_hierarchy_{false};
+  mutable std::atomic<bool> made_upsampler_{false};
 };
 
 /// Creates the optimizer named by the `[optimizer]` table.

@@ -10,7 +10,7 @@
 #include "framework/error.h"
 
 #include "experiments/component_factory.h"
-#include "framework/error.h"
+#include "experiments/run_warnings.h"
 
 namespace harap {
 
@@ -38,13 +38,12 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   outcome.optimizer = config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
   outcome.energy_type = factory.energy_name();
   outcome.solver = factory.solver_name();
-  if (config.Has("hierarchy")) outcome.hierarchy = factory.hierarchy_name();
-  if (config.Has("upsampler")) outcome.upsampler = factory.upsampler_name();
   outcome.threads = options.threads > 0 ? options.threads
                                         : static_cast<int>(std::thread::hardware_concurrency());
   outcome.resolved_config = config.ToToml();
 
   Context context = Context::WithThreads(options.threads);
+  context.phase_callback = options.phase;
   context.iteration_callback = [&](const IterationSummary& summary) {
     outcome.trace.push_back(
         {summary.seconds, summary.energy, summary.level, summary.inverted_elements});
@@ -61,6 +60,7 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
   Stopwatch check_clock;
+  context.ReportPhase("checking the mesh");
   // Built inside the run's arena so the checks' parallel sorts keep to --threads.
   const std::unique_ptr<const PreparedProblem> prepared_problem = [&] {
     try {
@@ -77,6 +77,10 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   outcome.mesh_repaired = prepared.changed();
   outcome.solved_vertices = prepared.problem().mesh->num_vertices();
   outcome.solved_elements = prepared.problem().mesh->num_elements();
+  if (const MeshCheckReport* repaired = prepared.repaired_checks()) {
+    outcome.repaired_mesh_checks = *repaired;
+    outcome.repaired_mesh_summary = prepared.RepairedSummary();
+  }
 
   context.run_clock.Restart();
   outcome.result =
@@ -84,7 +88,21 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
   for (const LevelResult& level : outcome.result.levels) {
     outcome.level_solvers.push_back(factory.solver_name_for(level.unknowns));
+    // Creating a solver is cheap (no factorization); it knows whether it is direct.
+    outcome.level_solver_direct.push_back(factory.MakeLinearSolver(level.level, level.unknowns)
+                                              ->is_direct());
   }
+  // The pieces the optimizer asked for, whether or not their tables were written.
+  if (factory.made_hierarchy()) outcome.hierarchy = factory.hierarchy_name();
+  if (factory.made_upsampler()) outcome.upsampler = factory.upsampler_name();
+  RunWarningInput warning_input;
+  warning_input.scenario = &scenario;
+  warning_input.input_checks = &outcome.mesh_checks;
+  warning_input.solved_checks =
+      outcome.mesh_repaired ? &outcome.repaired_mesh_checks : &outcome.mesh_checks;
+  warning_input.result = &outcome.result;
+  warning_input.hierarchical = factory.made_hierarchy();
+  outcome.warnings = RunWarnings(warning_input);
   for (auto& [level, matrix] : level_matrices) {
     outcome.spectra[level] = AnalyzeSystemSpectrum(matrix, EigenSolverOptions{}, context);
     matrix = SparseMatrix();  // release it
@@ -94,9 +112,8 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
 
 namespace {
 
-nlohmann::json MeshChecksJson(const DeformOutcome& outcome) {
+nlohmann::json FindingsJson(const MeshCheckReport& checks) {
   using nlohmann::json;
-  const MeshCheckReport& checks = outcome.mesh_checks;
   json result;
   for (const MeshFinding* finding : checks.Findings()) {
     result[finding->name] = {{"count", finding->count},
@@ -119,11 +136,21 @@ nlohmann::json MeshChecksJson(const DeformOutcome& outcome) {
                            checks.components.size() - checks.components_without_constraints},
                           {"without_handles", checks.components_without_constraints},
                           {"largest", listed}};
+  return result;
+}
+
+nlohmann::json MeshChecksJson(const DeformOutcome& outcome) {
+  nlohmann::json result = FindingsJson(outcome.mesh_checks);
   result["repaired"] = outcome.mesh_repaired;
   result["solved_vertices"] = outcome.solved_vertices;
   result["solved_elements"] = outcome.solved_elements;
   result["seconds"] = outcome.mesh_check_seconds;
   result["summary"] = outcome.mesh_summary;
+  if (outcome.mesh_repaired) {
+    nlohmann::json after = FindingsJson(outcome.repaired_mesh_checks);
+    after["summary"] = outcome.repaired_mesh_summary;
+    result["after_repair"] = after;
+  }
   return result;
 }
 
@@ -134,6 +161,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   using nlohmann::json;
   const OptimizeResult& r = outcome.result;
   json report;
+  report["status"] = outcome.interrupted ? "interrupted" : "ok";
   report["scenario"] = scenario.file.string();
   report["mesh"] = {{"source", scenario.mesh_source},
                     {"vertices", scenario.mesh.num_vertices()},
@@ -187,8 +215,13 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                   {"solver", k < outcome.level_solvers.size() ? outcome.level_solvers[k] : ""},
                   {"solves", solves.solves},
                   {"solver_iterations", solves.iterations},
-                  {"max_relative_residual", solves.max_relative_residual},
-                  {"last_relative_residual", solves.last_relative_residual},
+                  // null: no solve measured its residual (direct solvers by default).
+                  {"max_relative_residual", solves.residuals_computed > 0
+                                                ? json(solves.max_relative_residual)
+                                                : json(nullptr)},
+                  {"last_relative_residual", solves.residuals_computed > 0
+                                                 ? json(solves.last_relative_residual)
+                                                 : json(nullptr)},
                   {"solve_seconds", solves.seconds}};
     if (level.inverted_elements >= 0) entry["inverted_elements"] = level.inverted_elements;
     if (level.accelerated_iterations >= 0) {
@@ -219,6 +252,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   std::vector<std::string> notes = scenario.notes;
   notes.insert(notes.end(), r.notes.begin(), r.notes.end());
   report["notes"] = notes;
+  report["warnings"] = outcome.warnings;
   report["config"] = outcome.resolved_config;
   if (include_trace) {
     json trace = json::array();

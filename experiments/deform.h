@@ -25,8 +25,12 @@ struct TraceEntry {
 
 struct DeformOptions {
   int threads = 0;  ///< 0: all hardware threads.
-  /// Called for every iteration (after the trace is recorded), e.g. for a progress display.
+  /// Called for every iteration (after the trace is recorded), e.g. for a progress display;
+  /// returning kStop ends the run after that iteration (e.g. on Ctrl-C).
   IterationCallback progress;
+  /// Receives the phases of the run (checking the mesh, the optimizer's hierarchy, precompute
+  /// and factorization per level); see Context::phase_callback. May be empty.
+  PhaseCallback phase;
   /// Compute the extreme eigenvalues of every solved level's reduced global-step matrix (A and
   /// its Jacobi scaling; Spectra, see solvers/spectral_bounds.h). The matrices are copied during
   /// the run and analysed after it, so the run's timings do not include the analysis.
@@ -41,6 +45,7 @@ struct DeformOutcome {
   std::string hierarchy;  ///< Empty for single-level optimizers.
   std::string upsampler;
   std::vector<std::string> level_solvers;  ///< Solver name per entry of result.levels.
+  std::vector<bool> level_solver_direct;   ///< Whether that solver factors (no iterations).
   int threads = 0;
   OptimizeResult result;
   std::vector<TraceEntry> trace;
@@ -52,6 +57,13 @@ struct DeformOutcome {
   bool mesh_repaired = false;  ///< Welded or dropped something: the solved mesh differs.
   Index solved_vertices = 0;
   Index solved_elements = 0;
+  /// When mesh_repaired: the checks of the solved (repaired) mesh and their summary lines.
+  MeshCheckReport repaired_mesh_checks;
+  std::vector<std::string> repaired_mesh_summary;
+  /// RunWarnings (run_warnings.h): results that probably do not mean what they seem to.
+  std::vector<std::string> warnings;
+  /// Set by the caller when the run was stopped by Ctrl-C (the report's status "interrupted").
+  bool interrupted = false;
 };
 
 /// Solves the scenario's deformation with the pieces named in `config` (tables `optimizer`,

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -29,6 +30,7 @@
 #include "experiments/component_factory.h"
 #include "framework/config.h"
 #include "framework/error.h"
+#include "framework/io/scenario.h"
 
 namespace harap {
 
@@ -132,6 +134,9 @@ class ExperimentParser {
         }
       }
       for (const fs::path& file : matches) {
+        // The scenario's text now (a typo should not fail every run of it after the sweep
+        // started); its mesh and other files are read by the runs.
+        CheckScenarioText(file);
         ExperimentScenario scenario;
         scenario.name = file.stem().string();
         scenario.file = fs::absolute(file).lexically_normal();
@@ -318,6 +323,7 @@ class ExperimentParser {
       report_json["report"] = nlohmann::json::object();
     }
     experiment_.report_json = report_json.dump();
+    const toml::node* report_node = root.get("report");
 
     // [scenarios]
     const toml::table* scenarios = root["scenarios"].as_table();
@@ -458,10 +464,111 @@ class ExperimentParser {
         }
       }
     }
+    if (report_node) ValidateReport(*report_node->as_table(), !root.contains("variant"));
+    WarnAboutDifferentEnergies();
     return std::move(experiment_);
   }
 
  private:
+  // [report] as the report script reads it (report.py), so that a typo fails now and not after
+  // the runs: known keys and figure names (one list for both sides), compare/panel naming a
+  // [grid] key (or "variant"), value types.
+  void ValidateReport(const toml::table& report, bool no_variants) const {
+    const ReportKeys known = LoadReportKeys();
+    for (const auto& [key, value] : report) {
+      if (std::find(known.keys.begin(), known.keys.end(), key.str()) == known.keys.end()) {
+        throw ConfigError(fmt::format("{}: unknown key '{}' in [report]; valid keys: {}",
+                                      Where(source_, key.source()), key.str(),
+                                      fmt::join(known.keys, ", ")));
+      }
+    }
+    for (const std::string& figure : Strings(report, "figures")) {
+      if (std::find(known.figures.begin(), known.figures.end(), figure) == known.figures.end()) {
+        Fail(*report.get("figures"),
+             fmt::format("[report] figures: unknown figure '{}'; valid figures: {}", figure,
+                         fmt::join(known.figures, ", ")));
+      }
+    }
+    const auto& grid = experiment_.grid_keys;
+    auto grid_key = [&](std::string_view key, bool variant_allowed) {
+      const toml::node* node = report.get(key);
+      if (!node) return;
+      if (!node->is_string()) Fail(*node, fmt::format("[report] '{}' must be a string", key));
+      const std::string value = node->as_string()->get();
+      if (std::find(grid.begin(), grid.end(), value) != grid.end()) return;
+      if (variant_allowed && value == "variant" && !no_variants) return;
+      std::vector<std::string> valid;
+      if (variant_allowed && !no_variants) valid.push_back("\"variant\"");
+      for (const std::string& g : grid) valid.push_back(fmt::format("\"{}\"", g));
+      Fail(*node, fmt::format("[report] {} = \"{}\" names no {}; valid: {}", key, value,
+                              variant_allowed ? "[grid] key or variants" : "[grid] key",
+                              valid.empty() ? std::string("none (the config has no [grid]"
+                                                          " and no [[variant]])")
+                                            : fmt::format("{}", fmt::join(valid, ", "))));
+    };
+    grid_key("compare", true);
+    grid_key("panel", false);
+    for (const char* text_key : {"claim", "notes", "baseline"}) {
+      if (const toml::node* node = report.get(text_key); node && !node->is_string()) {
+        Fail(*node, fmt::format("[report] '{}' must be a string", text_key));
+      }
+    }
+    if (const toml::node* render = report.get("render")) {
+      if (!render->is_boolean()) {
+        const std::vector<std::string> names = Strings(report, "render");
+        for (const std::string& name : names) {
+          const bool known_scenario = std::any_of(
+              experiment_.scenarios.begin(), experiment_.scenarios.end(),
+              [&](const ExperimentScenario& scenario) { return scenario.name == name; });
+          if (!known_scenario) {
+            Fail(*render, fmt::format("[report] render names '{}', which is no scenario of this "
+                                      "experiment",
+                                      name));
+          }
+        }
+      }
+    }
+    if (const toml::node* runs = report.get("render_runs")) {
+      if (!runs->is_integer() || runs->as_integer()->get() < 1) {
+        Fail(*runs, "[report] render_runs must be an integer >= 1");
+      }
+    }
+  }
+
+  // Runs whose [energy] tables differ measure different energies: their values must not be
+  // compared (the report gives no energy ratio between them either).
+  void WarnAboutDifferentEnergies() {
+    std::vector<std::pair<std::string, std::string>> energies;  // (table, first label)
+    for (const ExperimentRun& run : experiment_.runs) {
+      std::string table = "(the default energy)";
+      try {
+        const toml::table config = toml::parse(run.config_toml);
+        if (const toml::table* energy = config["energy"].as_table(); energy && !energy->empty()) {
+          std::ostringstream text;
+          text << toml::toml_formatter(*energy, toml::format_flags::none);
+          table = text.str();
+          std::replace(table.begin(), table.end(), '\n', ' ');
+          while (!table.empty() && table.back() == ' ') table.pop_back();
+        }
+      } catch (const toml::parse_error&) {
+        continue;  // cannot happen: the config was written by ConfigNode
+      }
+      const bool seen = std::any_of(energies.begin(), energies.end(),
+                                    [&](const auto& entry) { return entry.first == table; });
+      if (!seen) energies.emplace_back(table, run.label.empty() ? std::string("base") : run.label);
+    }
+    if (energies.size() < 2) return;
+    std::vector<std::string> parts;
+    for (const auto& [table, label] : energies) {
+      parts.push_back(fmt::format("[energy] {} (e.g. '{}')", table, label));
+    }
+    experiment_.warnings.push_back(fmt::format(
+        "the runs use {} different energies: {}. Energies of different functionals are not "
+        "comparable: harap report compares their times, iterations and pictures but gives no "
+        "energy ratio between them",
+        energies.size(), fmt::join(parts, "; ")));
+  }
+
   void Validate(const Registries& registries, const ExperimentRun& run) const {
     // Line numbers in the messages would refer to the generated run config, not to the file.
     const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
@@ -527,6 +634,29 @@ Shard ParseShard(std::string_view text) {
     throw ConfigError(fmt::format("--shard '{}': expected I/N with 0 <= I < N, e.g. 0/4", text));
   }
   return shard;
+}
+
+ReportKeys LoadReportKeys() {
+  // The report script's folder: next to HARAP_REPORT_SCRIPT if that names one, else the source
+  // tree's experiments/scripts.
+  fs::path file = fs::path(HARAP_SCRIPTS_DIR) / "report_keys.json";
+  if (const char* script = std::getenv("HARAP_REPORT_SCRIPT")) {
+    const fs::path beside = fs::path(script).parent_path() / "report_keys.json";
+    if (fs::exists(beside)) file = beside;
+  }
+  std::ifstream stream(file);
+  if (!stream) {
+    throw InputError(fmt::format("{}: cannot read the report's figure names and keys (the file "
+                                 "report.py reads too)",
+                                 file.string()));
+  }
+  try {
+    const nlohmann::json json = nlohmann::json::parse(stream);
+    return {json.at("figures").get<std::vector<std::string>>(),
+            json.at("report_keys").get<std::vector<std::string>>()};
+  } catch (const nlohmann::json::exception& error) {
+    throw InputError(fmt::format("{}: {}", file.string(), error.what()));
+  }
 }
 
 std::string TemplateScenarioToml(const ExperimentScenario& scenario, const double extent[3]) {

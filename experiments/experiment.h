@@ -63,10 +63,14 @@ struct Experiment {
   std::vector<ExperimentScenario> scenarios;
   std::vector<ExperimentRun> runs;
   ExperimentRunSettings settings;
+  /// Things that are allowed but probably not meant, for `harap run` to print before it starts
+  /// (e.g. runs that compare different energies).
+  std::vector<std::string> warnings;
 };
 
 /// Parses and expands an experiment config; every run config is validated against the
-/// registries (unknown names and keys fail before any run starts). Relative paths start at
+/// registries and the [report] table against the report script's keys and figure names
+/// (experiments/scripts/report_keys.json), so unknown names and keys fail before any run starts. Relative paths start at
 /// `[scenarios] relative_to` (itself relative to the config's folder; default the folder).
 Experiment LoadExperiment(const std::filesystem::path& file);
 Experiment ParseExperiment(std::string_view toml_text, const std::string& source_name,
@@ -83,6 +87,14 @@ Shard ParseShard(std::string_view text);
 
 /// The scenario file text a handle template makes for a mesh whose bounding box has the given
 /// extent (needed for "longest" and "auto").
+/// The figure names and [report] keys the report script knows, read from
+/// experiments/scripts/report_keys.json (the file report.py reads too).
+struct ReportKeys {
+  std::vector<std::string> figures;
+  std::vector<std::string> keys;
+};
+ReportKeys LoadReportKeys();
+
 std::string TemplateScenarioToml(const ExperimentScenario& scenario, const double extent[3]);
 
 }  // namespace harap

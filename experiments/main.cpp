@@ -14,62 +14,26 @@
 #include <new>
 
 #include "experiments/builtins.h"
+#include "experiments/cli_output.h"
 #include "experiments/component_factory.h"
 #include "experiments/deform.h"
 #include "experiments/drag_command.h"
 #include "experiments/experiment.h"
+#include "experiments/handles_command.h"
+#include "experiments/interrupt.h"
+#include "experiments/output_checks.h"
 #include "experiments/process.h"
+#include "experiments/progress.h"
 #include "experiments/runner.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 #include "framework/io/scenario.h"
 
 namespace {
 
 using namespace harap;
-
-template <class Interface>
-void ListRegistry(const Registry<Interface>& registry) {
-  fmt::print("{}:\n", registry.kind());
-  for (const auto& name : registry.Names()) {
-    fmt::print("  {:<20} {}\n", name, registry.Description(name));
-    for (const auto& option : registry.DescribeOptions(name)) {
-      if (option.key == "type") continue;
-      fmt::print("      {}.{} = {}\n          {}\n", registry.kind(), option.key,
-                 option.default_value, option.help);
-    }
-  }
-  fmt::print("\n");
-}
-
-int List() {
-  const Registries registries = MakeBuiltinRegistries();
-  ListRegistry(registries.optimizers);
-  ListRegistry(registries.energies);
-  ListRegistry(registries.linear_solvers);
-  fmt::print("solver.small_systems (optional table: a second solver for small reduced systems):\n");
-  for (const auto& option : DescribeSmallSystemsOptions()) {
-    fmt::print("      solver.small_systems.{} = {}\n          {}\n", option.key,
-               option.default_value, option.help);
-  }
-  fmt::print("\n");
-  ListRegistry(registries.hierarchies);
-  ListRegistry(registries.upsamplers);
-  const ConfigNode describing = ConfigNode::Describing();
-  MeshRepairOptions::FromConfig(describing.Child("mesh"));
-  fmt::print("mesh (run config [mesh] table, applied before solving):\n");
-  for (const auto& option : describing.Child("mesh").Options()) {
-    fmt::print("      mesh.{} = {}\n          {}\n", option.key, option.default_value, option.help);
-  }
-  fmt::print("\n");
-  fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
-  for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
-  fmt::print("volumetric twins of surfaces (scenario: mesh = {{ tetrahedralize = FILE or "
-             "{{ builtin = NAME, ... }}, max_volume, max_radius_edge_ratio, "
-             "min_dihedral_angle }}, see docs/input.md)\n");
-  return 0;
-}
 
 struct DeformArguments {
   std::string scenario;
@@ -85,78 +49,6 @@ struct DeformArguments {
   bool quiet = false;
   int threads = 0;
 };
-
-// Progress on a terminal for runs that take longer than a second: one overwritten line.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled) : enabled_(enabled && isatty(fileno(stderr))) {}
-  ~ProgressLine() { Finish(); }
-  CallbackAction operator()(const IterationSummary& s) {
-    if (!enabled_ || s.seconds < 1.0 || s.seconds - last_ < 0.2) return CallbackAction::kContinue;
-    last_ = s.seconds;
-    shown_ = true;
-    fmt::print(stderr, "\r  {:6.1f} s  level {}  iteration {:5}  energy {:.6e}  step {:.2e}   ",
-               s.seconds, s.level, s.iteration, s.energy, s.displacement);
-    std::fflush(stderr);
-    return CallbackAction::kContinue;
-  }
-  void Finish() {
-    if (shown_) fmt::print(stderr, "\r{:80}\r", "");
-    shown_ = false;
-  }
-
- private:
-  bool enabled_;
-  bool shown_ = false;
-  double last_ = 0.0;
-};
-
-void PrintSummary(const Scenario& scenario, const DeformOutcome& outcome) {
-  const OptimizeResult& r = outcome.result;
-  fmt::print("scenario    {}\n", scenario.file.string());
-  fmt::print("mesh        {} ({} vertices, {} {})\n", scenario.mesh_source,
-             scenario.mesh.num_vertices(), scenario.mesh.num_elements(),
-             scenario.mesh.kind() == ElementKind::kTetrahedron ? "tetrahedra" : "faces");
-  fmt::print("pieces      optimizer {} | energy {} | solver {}{}\n", outcome.optimizer,
-             outcome.energy_type, outcome.solver,
-             outcome.hierarchy.empty() ? "" : fmt::format(" | hierarchy {} | upsampler {}",
-                                                          outcome.hierarchy, outcome.upsampler));
-  fmt::print("iterations  {} ({})\n", r.iterations,
-             r.converged ? "converged" : (r.stopped_by_callback ? "stopped" : "not converged"));
-  fmt::print("energy      {:.9e}\n", r.energy);
-  for (const auto& [name, value] : r.measures) fmt::print("{:<11} {:.9e}\n", name, value);
-  fmt::print("time [s]    hierarchy {:.3f} | precompute {:.3f} | constrain {:.3f} | solve {:.3f} "
-             "| total {:.3f}\n",
-             r.timings.hierarchy, r.timings.precompute, r.timings.constrain, r.timings.solve,
-             r.timings.total);
-  fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
-  for (const auto& note : scenario.notes) fmt::print("note        {}\n", note);
-  for (size_t k = 0; k < r.levels.size(); ++k) {
-    const LevelResult& level = r.levels[k];
-    const SolveStatistics& solves = level.linear_solves;
-    fmt::print("level {:<5} {:>8} unknowns | {:<12} {:4} solves {:7} iterations {:7.3f} s | max "
-               "residual {:.2e}\n",
-               level.level, level.unknowns, outcome.level_solvers[k], solves.solves,
-               solves.iterations, solves.seconds, solves.max_relative_residual);
-    if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
-      const SystemSpectrum& spectrum = it->second;
-      fmt::print("            A: λ [{:.4e}, {:.4e}] κ {:.3e} | D^-1/2 A D^-1/2: λ [{:.4e}, "
-                 "{:.4e}] κ {:.3e} | {:.2f} s\n",
-                 spectrum.matrix.smallest, spectrum.matrix.largest,
-                 spectrum.matrix.condition_number(), spectrum.jacobi.smallest,
-                 spectrum.jacobi.largest, spectrum.jacobi.condition_number(), spectrum.seconds);
-    }
-  }
-  if (outcome.mesh_summary.empty()) fmt::print("checks      no findings\n");
-  for (const auto& line : outcome.mesh_summary) fmt::print("checks      {}\n", line);
-  if (outcome.mesh_repaired) {
-    fmt::print("solved on   {} vertices, {} {} (results written for all {} input vertices)\n",
-               outcome.solved_vertices, outcome.solved_elements,
-               scenario.mesh.kind() == ElementKind::kTetrahedron ? "tetrahedra" : "faces",
-               scenario.mesh.num_vertices());
-  }
-  for (const auto& note : r.notes) fmt::print("note        {}\n", note);
-}
 
 // The run config: --config file, then the shortcut flags, then --set KEY=VALUE.
 ConfigNode BuildRunConfig(const DeformArguments& args) {
@@ -191,18 +83,44 @@ std::string_view current_stage = "starting";
 int Deform(const DeformArguments& args) {
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = BuildRunConfig(args);
+  RefuseMeshAsScenario(args.scenario);
+  // Output names are checked before any long work (the mesh format below, once it is known).
+  const std::pair<const std::string*, const char*> outputs[] = {
+      {&args.report, "--report"}, {&args.out, "--out"}, {&args.out_rest, "--out-rest"},
+      {&args.out_handles, "--out-handles"}};
+  for (const auto& [file, option] : outputs) {
+    if (!file->empty()) CheckWritable(*file, option);
+  }
+  // Mesh outputs: an extension no mesh can be written as fails now; whether it suits this mesh
+  // (tetrahedra-only formats) once the mesh is read, still before solving.
+  for (const auto& [out, option] : {outputs[1], outputs[2]}) {
+    if (!out->empty()) CheckMeshOutputFormat(*out, ElementKind::kTetrahedron);
+  }
+  ProgressDisplay progress(stderr, ProgressOptions::For(stderr, args.quiet));
   current_stage = "reading the scenario and its mesh";
+  progress.Phase(ScenarioLoadingPhase(args.scenario));
   const Scenario scenario = LoadScenario(args.scenario);
+  for (const auto& [out, option] : {outputs[1], outputs[2]}) {
+    if (out->empty()) continue;
+    CheckMeshOutputFormat(*out, scenario.mesh.kind());
+    for (const auto& file : MeshOutputFiles(*out)) CheckWritable(file, option);
+  }
   current_stage = "checking the mesh and solving (precomputation, factorization, iterations)";
-  ProgressLine progress(!args.quiet);
+  // Ctrl-C stops after the current iteration; the report and the mesh so far are still written.
+  const InterruptGuard interrupt;
   DeformOptions options;
   options.threads = args.threads;
   options.diagnostics = args.diagnostics;
-  options.progress = [&](const IterationSummary& s) { return progress(s); };
-  const DeformOutcome outcome = RunDeform(registries, scenario, config, options);
-  progress.Finish();
+  options.phase = progress.AsPhaseCallback();
+  options.progress = [&](const IterationSummary& s) {
+    progress.Iteration(s);
+    return InterruptGuard::Requested() ? CallbackAction::kStop : CallbackAction::kContinue;
+  };
+  DeformOutcome outcome = RunDeform(registries, scenario, config, options);
+  outcome.interrupted = InterruptGuard::Requested();
 
   current_stage = "writing the results";
+  progress.Phase("writing the results");
   // The report first: it is the smallest and records the whole run, so a mesh file that cannot be
   // written loses nothing else.
   if (!args.report.empty()) {
@@ -210,15 +128,17 @@ int Deform(const DeformArguments& args) {
     file << DeformReportJson(scenario, outcome, args.trace) << "\n";
     if (!file) throw InputError(fmt::format("{}: cannot write the report", args.report));
   }
-  if (!args.out.empty()) WritePly(args.out, outcome.result.positions, scenario.mesh.elements);
-  if (!args.out_rest.empty()) WritePly(args.out_rest, scenario.mesh.vertices, scenario.mesh.elements);
+  if (!args.out.empty()) WriteMesh(args.out, outcome.result.positions, scenario.mesh.elements);
+  if (!args.out_rest.empty()) WriteMesh(args.out_rest, scenario.mesh.vertices, scenario.mesh.elements);
   if (!args.out_handles.empty()) {
     std::ofstream file(args.out_handles);
     file << HandlesJson(scenario) << "\n";
     if (!file) throw InputError(fmt::format("{}: cannot write the handles", args.out_handles));
   }
-  if (!args.quiet) PrintSummary(scenario, outcome);
-  return 0;
+  progress.Finish();
+  if (!args.quiet) PrintDeformSummary(scenario, outcome);
+  // An interrupted run wrote what it had, but did not finish: say so to scripts (128 + SIGINT).
+  return outcome.interrupted ? 130 : 0;
 }
 
 // `harap hierarchy`: builds the hierarchy of a scenario's mesh, writes each level as PLY and
@@ -227,14 +147,19 @@ int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = BuildRunConfig(args);
   ValidateRunConfig(config);
+  RefuseMeshAsScenario(args.scenario);
+  ProgressDisplay progress(stderr, ProgressOptions::For(stderr, false));
   current_stage = "reading the scenario and its mesh";
+  progress.Phase(ScenarioLoadingPhase(args.scenario));
   const Scenario scenario = LoadScenario(args.scenario);
   current_stage = "building the hierarchy";
   auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
   Context context = Context::WithThreads(args.threads);
+  progress.Phase("building the hierarchy");
   Stopwatch clock;
   const MeshHierarchy levels = hierarchy->Build(scenario.mesh, context);
   const double seconds = clock.Seconds();
+  progress.Finish();
   if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
   fmt::print("{:>5} {:>10} {:>10} {:>10}  {}\n", "level", "vertices", "faces", "reduction", "file");
   for (int l = 0; l < levels.num_levels(); ++l) {
@@ -357,7 +282,12 @@ int main(int argc, char** argv) {
   CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
   app.require_subcommand(1);
 
+  app.set_version_flag("--version", VersionString(), "print the version and exit");
   auto* list = app.add_subcommand("list", "list every registered piece with its options");
+  std::string list_kind;
+  list->add_option("kind", list_kind,
+                   "only this kind: optimizers, energies, solvers, hierarchies, upsamplers, "
+                   "mesh, builtins");
 
   DeformArguments args;
   auto* deform = app.add_subcommand("deform", "deform a mesh as a scenario file describes");
@@ -376,9 +306,12 @@ int main(int argc, char** argv) {
   deform->add_option("--max-iterations", args.max_iterations, "iteration cap (per level)");
   deform->add_option("--set", args.settings,
                      "set any option by its config key, e.g. --set energy.lambda=0.5");
-  deform->add_option("--out", args.out, "write the deformed mesh (binary PLY, double precision)");
+  deform->add_option("--out", args.out,
+                     "write the deformed mesh; the extension picks the format: .ply (binary, "
+                     "double), .obj, .off, .stl; tetrahedra also .mesh, .node");
   deform->add_option("--report", args.report, "write a JSON report");
-  deform->add_option("--out-rest", args.out_rest, "write the rest mesh (after refine) as PLY");
+  deform->add_option("--out-rest", args.out_rest,
+                     "write the rest mesh (after refine); formats as --out");
   deform->add_option("--out-handles", args.out_handles,
                      "write the handles' vertex indices as JSON (for pictures)");
   deform->add_flag("--trace", args.trace, "include the per-iteration energy trace in the report");
@@ -400,6 +333,15 @@ int main(int argc, char** argv) {
   hierarchy->add_option("--config", args.config_file, "TOML file with a [hierarchy] table");
   hierarchy->add_option("--set", args.settings, "set an option, e.g. hierarchy.min_vertices=500");
   hierarchy->add_option("--threads", args.threads, "worker threads (default: all cores)");
+
+  std::string handles_scenario, handles_out;
+  auto* handles = app.add_subcommand(
+      "handles", "show what a scenario's handles select and where they go, without solving: "
+                 "bounding box, per handle vertex count, centroid and motion; --out writes the "
+                 "mesh with the handles coloured");
+  handles->add_option("scenario", handles_scenario, "scenario TOML file")->required();
+  handles->add_option("--out", handles_out,
+                      "write the rest mesh as PLY with each handle's vertices coloured");
 
   RunArguments run_args;
   auto* run = app.add_subcommand("run", "run an experiment config: every scenario x variant x grid "
@@ -431,8 +373,12 @@ int main(int argc, char** argv) {
     return app.exit(error);
   }
   try {
-    if (*list) return List();
+    if (*list) return ListPieces(list_kind);
     if (*hierarchy) return WriteHierarchy(args, hierarchy_out);
+    if (*handles) {
+      RefuseMeshAsScenario(handles_scenario);
+      return HandlesCommand(handles_scenario, handles_out);
+    }
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
     if (*drag) return RunDragCommand(drag_args);

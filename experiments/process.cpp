@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,7 +34,33 @@ ProcessResult RunProcess(const std::vector<std::string>& arguments, const Proces
   for (const std::string& variable : environment) envp.push_back(const_cast<char*>(variable.c_str()));
   envp.push_back(nullptr);
 
-  posix_spawn_file_actions_t actions;
+  pid_t pid = 0;
+  if (options.die_with_parent) {
+    // fork + exec instead of posix_spawn, which cannot set the parent-death signal. Between fork
+    // and exec the child only makes async-signal-safe calls (the strings are built above).
+    const pid_t parent = getpid();
+    pid = fork();
+    if (pid == 0) {
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(127);  // the parent died before prctl
+      const int input = open("/dev/null", O_RDONLY);
+      if (input >= 0) dup2(input, STDIN_FILENO);
+      if (!options.output_file.empty()) {
+        const int output = open(options.output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (output < 0) _exit(127);
+        dup2(output, STDOUT_FILENO);
+        dup2(output, STDERR_FILENO);
+      }
+      if (std::string_view(argv[0]).find('/') != std::string_view::npos) {
+        execve(argv[0], argv.data(), envp.data());
+      } else {
+        execvpe(argv[0], argv.data(), envp.data());
+      }
+      _exit(127);
+    }
+    if (pid < 0) return result;
+  } else {
+    posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   if (!options.output_file.empty()) {
@@ -41,11 +68,11 @@ ProcessResult RunProcess(const std::vector<std::string>& arguments, const Proces
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   }
-  pid_t pid = 0;
-  const int spawn_error =
-      posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawn_error != 0) return result;
+    const int spawn_error =
+        posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawn_error != 0) return result;
+  }
   result.started = true;
 
   using Clock = std::chrono::steady_clock;

@@ -22,6 +22,10 @@ struct ProcessOptions {
   std::vector<std::string> default_environment;
   /// Seconds after which the process is killed (SIGKILL); 0: no limit.
   double timeout = 0.0;
+  /// Linux: the process gets SIGKILL when the calling thread's process dies (prctl
+  /// PR_SET_PDEATHSIG), so a sweep killed with SIGKILL leaves no run behind that goes on
+  /// writing into its folder.
+  bool die_with_parent = false;
 };
 
 /// Runs `arguments[0]` (searched on PATH when it has no '/') with the given arguments and waits

@@ -14,7 +14,11 @@
 #include "experiments/runner.h"
 
 #include <fnmatch.h>
+#include <signal.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <atomic>
@@ -255,20 +259,42 @@ class Progress {
     if (bar_) fmt::print(stderr, "\n");
   }
 
-  void Finished(const std::string& id, const std::string& status, const std::string& detail) {
+  // `name`: scenario and variant/grid label, as in the report.
+  void Started(const std::string& name) {
+    std::lock_guard lock(mutex_);
+    running_.push_back(name);
+    if (bar_) Draw();
+  }
+
+  void Finished(const std::string& name, const std::string& status, const std::string& detail) {
     std::lock_guard lock(mutex_);
     ++done_;
     ++finished_now_;
     failed_ += status != "ok";
+    if (const auto it = std::find(running_.begin(), running_.end(), name); it != running_.end()) {
+      running_.erase(it);
+    }
     if (bar_) {
+      // The finished run on its own line above the bar, so the names stay readable.
+      fmt::print(stderr, "\r{:<{}}\r[{}/{}] {:7} {}  {}\n", "", TerminalWidth(), done_, total_,
+                 status, name, detail);
       Draw();
     } else if (!quiet_) {
-      fmt::print(stderr, "[{}/{}] {:7} {}  {}\n", done_, total_, status, id, detail);
+      fmt::print(stderr, "[{}/{}] {:7} {}  {}\n", done_, total_, status, name, detail);
       std::fflush(stderr);
     }
   }
 
  private:
+  // Columns of the terminal less one (a full line would wrap), 79 if unknown.
+  static size_t TerminalWidth() {
+    winsize size{};
+    if (ioctl(fileno(stderr), TIOCGWINSZ, &size) == 0 && size.ws_col > 1) {
+      return static_cast<size_t>(size.ws_col) - 1;
+    }
+    return 79;
+  }
+
   void Tick() {
     std::unique_lock lock(mutex_);
     while (!stop_) {
@@ -285,13 +311,21 @@ class Progress {
                                 : std::string("--:--");
     constexpr int kWidth = 28;
     const int filled = total_ > 0 ? kWidth * done_ / total_ : kWidth;
-    fmt::print(stderr, "\r[{}{}] {}/{} runs  {} failed  {} skipped  elapsed {}  ETA {}   ",
-               std::string(filled, '#'), std::string(kWidth - filled, '.'), done_, total_,
-               failed_, skipped_, FormatDuration(elapsed), eta);
+    std::string running = running_.empty() ? std::string() : "  running " + running_.front();
+    if (running_.size() > 1) running += fmt::format(" (+{})", running_.size() - 1);
+    if (running.size() > 60) running = running.substr(0, 57) + "...";
+    // Padded to a fixed width: a shorter line (the running run gone) leaves nothing behind.
+    const std::string line =
+        fmt::format("[{}{}] {}/{} runs  {} failed  {} skipped  elapsed {}  ETA {}{}",
+                    std::string(filled, '#'), std::string(kWidth - filled, '.'), done_, total_,
+                    failed_, skipped_, FormatDuration(elapsed), eta, running);
+    const size_t width = TerminalWidth();
+    fmt::print(stderr, "\r{:<{}}", line.substr(0, width), width);
     std::fflush(stderr);
   }
 
   int total_, done_, skipped_, failed_ = 0, finished_now_ = 0;
+  std::vector<std::string> running_;
   bool quiet_, bar_;
   bool stop_ = false;
   Clock::time_point start_;
@@ -321,6 +355,12 @@ class Sweep {
                         fmt::format("# {} as run by harap run\n{}", experiment_.file.string(),
                                     experiment_.source_text));
 
+    RemoveStaleTemporaries();
+    if (!options_.quiet) {
+      for (const std::string& warning : experiment_.warnings) {
+        fmt::print(stderr, "harap run: warning: {}\n", warning);
+      }
+    }
     SweepSummary summary;
     summary.planned = static_cast<int>(experiment_.runs.size());
     std::vector<const ExperimentRun*> pending;
@@ -351,6 +391,7 @@ class Sweep {
     auto worker = [&] {
       for (size_t k; (k = next++) < pending.size();) {
         const ExperimentRun& run = *pending[k];
+        progress.Started(RunName(run));
         const json report = Execute(run);
         const std::string status = report["run"]["status"];
         (status == "ok" ? succeeded : failed)++;
@@ -363,7 +404,7 @@ class Sweep {
             status == "ok" ? fmt::format("E = {:.6g}, {:.2f} s", report["energy"].get<double>(),
                                          report["timings"]["total"].get<double>())
                            : report["run"]["error"].get<std::string>();
-        progress.Finished(run.id, status, detail);
+        progress.Finished(RunName(run), status, detail);
       }
     };
     std::vector<std::thread> workers;
@@ -376,6 +417,41 @@ class Sweep {
   }
 
  private:
+  // "scenario | label" (variant and grid values) for progress lines; the id when unlabelled.
+  std::string RunName(const ExperimentRun& run) const {
+    const std::string& scenario = experiment_.scenarios[run.scenario].name;
+    return run.label.empty() ? fmt::format("{} ({})", scenario, run.id)
+                             : fmt::format("{} | {}", scenario, run.label);
+  }
+
+  // Temporary files of sweeps that were killed (SIGKILL, power loss) before they could rename
+  // or remove them: ".NAME.PID.*" in runs/, meshes/ and the folder itself, whose PID is no
+  // longer a running process. Files of live processes (another shard sharing the folder) stay.
+  void RemoveStaleTemporaries() const {
+    for (const fs::path& folder : {dir_, dir_ / "runs", dir_ / "meshes", dir_ / "scenarios"}) {
+      std::error_code error;
+      for (const auto& entry : fs::directory_iterator(folder, error)) {
+        const std::string name = entry.path().filename().string();
+        if (name.size() < 2 || name[0] != '.') continue;
+        // The PID is the last all-digit part between dots.
+        long pid = 0;
+        size_t start = 1;
+        while (start < name.size()) {
+          const size_t end = std::min(name.find('.', start), name.size());
+          const std::string part = name.substr(start, end - start);
+          if (!part.empty() && part.find_first_not_of("0123456789") == std::string::npos &&
+              part.size() < 10) {
+            pid = std::stol(part);
+          }
+          start = end + 1;
+        }
+        if (pid <= 0 || pid == getpid()) continue;
+        if (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) continue;  // alive
+        fs::remove(entry.path(), error);
+      }
+    }
+  }
+
   bool Selected(const ExperimentRun& run) const {
     const std::string& name = experiment_.scenarios[run.scenario].name;
     const auto& patterns = options_.scenario_filter;
@@ -428,13 +504,19 @@ class Sweep {
                                             temporary_report.string(), "--trace", "--threads",
                                             std::to_string(threads_), "--quiet"};
       const fs::path mesh_file = dir_ / "meshes" / (run.id + ".ply");
+      // The child writes the mesh under a temporary name; renamed when the run succeeded, so a
+      // killed run leaves no partial mesh under the final name.
+      const fs::path mesh_temporary =
+          dir_ / "meshes" / fmt::format(".{}.{}.ply", run.id, getpid());
       const fs::path rest_file = dir_ / "meshes" / (scenario.name + ".rest.ply");
       const fs::path handles_file = dir_ / "meshes" / (scenario.name + ".handles.json");
-      const fs::path rest_temporary = dir_ / "meshes" / fmt::format(".{}.rest.ply", run.id);
-      const fs::path handles_temporary = dir_ / "meshes" / fmt::format(".{}.handles.json", run.id);
+      const fs::path rest_temporary =
+          dir_ / "meshes" / fmt::format(".{}.{}.rest.ply", run.id, getpid());
+      const fs::path handles_temporary =
+          dir_ / "meshes" / fmt::format(".{}.{}.handles.json", run.id, getpid());
       const bool write_rest = experiment_.settings.save_mesh && !fs::exists(rest_file);
       if (experiment_.settings.save_mesh) {
-        arguments.insert(arguments.end(), {"--out", mesh_file.string()});
+        arguments.insert(arguments.end(), {"--out", mesh_temporary.string()});
         info["mesh"] = "meshes/" + mesh_file.filename().string();
         info["rest_mesh"] = "meshes/" + rest_file.filename().string();
         info["handles"] = "meshes/" + handles_file.filename().string();
@@ -448,6 +530,7 @@ class Sweep {
       ProcessOptions process;
       process.output_file = log_file;
       process.timeout = experiment_.settings.timeout;
+      process.die_with_parent = true;
       process.default_environment = {fmt::format("OPENBLAS_NUM_THREADS={}", threads_),
                                      fmt::format("OMP_NUM_THREADS={}", threads_)};
       const ProcessResult child = RunProcess(arguments, process);
@@ -458,8 +541,9 @@ class Sweep {
         report = json::parse(ReadText(temporary_report));
         info["status"] = "ok";
         fs::remove(log_file);
+        std::error_code ignore;
+        if (experiment_.settings.save_mesh) fs::rename(mesh_temporary, mesh_file, ignore);
         if (write_rest) {
-          std::error_code ignore;
           fs::rename(rest_temporary, rest_file, ignore);
           fs::rename(handles_temporary, handles_file, ignore);
         }
@@ -485,6 +569,9 @@ class Sweep {
     }
     std::error_code ignore;
     fs::remove(temporary_report, ignore);
+    for (const char* suffix : {"ply", "rest.ply", "handles.json"}) {  // of a failed run
+      fs::remove(dir_ / "meshes" / fmt::format(".{}.{}.{}", run.id, getpid(), suffix), ignore);
+    }
     info["wall_seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
     report["run"] = info;
     WriteFileAtomically(report_file, report.dump(1) + "\n");

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <string_view>
 
 #include "framework/types.h"
 
@@ -46,8 +47,16 @@ using IterationCallback = std::function<CallbackAction(const IterationSummary&)>
 /// caller that wants clean timings copies the matrix and analyses it after the run.
 using SystemCallback = std::function<void(int level, const SparseMatrix& reduced_matrix)>;
 
+/// Announces that an algorithm starts a phase that may take a while ("building the hierarchy",
+/// "factoring level 0"), so a caller can show progress; algorithms never print. `fraction` is
+/// how much of the phase is done, in [0, 1], or negative when unknown (most phases announce
+/// only their start). Levels may be set up on a background thread while others are solved, so
+/// the callback may be called from several threads at once: it must be thread-safe, and cheap
+/// (it is called a handful of times per level, never per iteration).
+using PhaseCallback = std::function<void(std::string_view phase, double fraction)>;
+
 /// Everything an algorithm needs from its caller besides its inputs: threads, the run clock and
-/// the callback. Passed by reference; algorithms never create global thread pools or print.
+/// the callbacks. Passed by reference; algorithms never create global thread pools or print.
 struct Context {
   /// Runs `f` inside the run's task arena (so the thread count holds for TBB algorithms).
   template <class F>
@@ -59,6 +68,12 @@ struct Context {
   Stopwatch run_clock;                 ///< Started when the run starts; trace times count from it.
   IterationCallback iteration_callback;  ///< May be empty.
   SystemCallback system_callback;        ///< May be empty.
+  PhaseCallback phase_callback;          ///< May be empty.
+
+  /// Calls phase_callback if there is one.
+  void ReportPhase(std::string_view phase, double fraction = -1.0) const {
+    if (phase_callback) phase_callback(phase, fraction);
+  }
 
   /// A context with `threads` worker threads (0 = all hardware threads).
   static Context WithThreads(int threads) {

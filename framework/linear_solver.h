@@ -18,6 +18,9 @@ struct SolveSummary {
   bool success = true;
   int iterations = 0;              ///< 0 for direct solvers.
   double relative_residual = 0.0;  ///< max over columns of ‖b − A x‖ / ‖b‖ (if computed, else 0).
+  /// Whether relative_residual was measured (iterative solvers always; direct solvers only when
+  /// asked to check it), so that reports never show an unmeasured 0 as a residual.
+  bool residual_computed = false;
   double seconds = 0.0;            ///< Wall time of the Solve() call.
   std::string message;             ///< Why it failed, if it did.
 };
@@ -29,9 +32,12 @@ struct SolveStatistics {
   double max_relative_residual = 0.0;  ///< Largest final relative residual of any solve.
   double last_relative_residual = 0.0;
   double seconds = 0.0;                ///< Sum of SolveSummary::seconds.
+  /// Solves whose residual was measured (the residuals above cover only those; 0: not computed).
+  int residuals_computed = 0;
 
   void Add(const SolveSummary& summary) {
     ++solves;
+    if (summary.residual_computed) ++residuals_computed;
     iterations += summary.iterations;
     if (summary.relative_residual > max_relative_residual) {
       max_relative_residual = summary.relative_residual;

@@ -574,6 +574,15 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
     }
     problem_.initial = std::move(initial);
   }
+
+  // What is left after the repair (e.g. a soup that welding joined into one surface), for the
+  // summary: the solved mesh is what the energy sees. Each finding keeps the input's action.
+  repaired_checks_ = CheckMesh(repaired_mesh_, problem_.constraints.indices);
+  const std::vector<const MeshFinding*> input_findings = std::as_const(checks_).Findings();
+  const std::vector<MeshFinding*> repaired_findings = repaired_checks_.Findings();
+  for (size_t k = 0; k < repaired_findings.size(); ++k) {
+    repaired_findings[k]->action = input_findings[k]->action;
+  }
 }
 
 Positions PreparedProblem::ToInputVertices(const Positions& solved) const {
@@ -585,28 +594,34 @@ Positions PreparedProblem::ToInputVertices(const Positions& solved) const {
   return positions;
 }
 
-std::vector<std::string> PreparedProblem::Summary() const {
+std::vector<std::string> PreparedProblem::Summary() const { return SummarizeMeshChecks(checks_); }
+
+std::vector<std::string> PreparedProblem::RepairedSummary() const {
+  return changed_ ? SummarizeMeshChecks(repaired_checks_) : std::vector<std::string>();
+}
+
+std::vector<std::string> SummarizeMeshChecks(const MeshCheckReport& checks) {
   std::vector<std::string> lines;
-  for (const MeshFinding* finding : checks_.Findings()) {
+  for (const MeshFinding* finding : checks.Findings()) {
     if (finding->count == 0) continue;
     std::string name = finding->name;
     std::replace(name.begin(), name.end(), '_', ' ');
     if (name.rfind("non manifold", 0) == 0) name[3] = '-';
     lines.push_back(fmt::format("{} {} (e.g. {}): {}", name, finding->count,
-                                DescribeExample(*finding, checks_), finding->action));
+                                DescribeExample(*finding, checks), finding->action));
   }
-  const auto& components = checks_.components;
-  if (components.size() > 1 || checks_.components_without_constraints > 0) {
+  const auto& components = checks.components;
+  if (components.size() > 1 || checks.components_without_constraints > 0) {
     std::string line = fmt::format("components {}", components.size());
-    if (checks_.components_without_constraints > 0) {
+    if (checks.components_without_constraints > 0) {
       const auto free = std::find_if(components.begin(), components.end(),
                                      [](const auto& c) { return c.constrained_vertices == 0; });
       line += fmt::format(
           ", {} without a handle (e.g. the one with {} {}, {} {}s): pinned in place by one "
           "vertex each, free to rotate and deform",
-          checks_.components_without_constraints,
-          checks_.kind == ElementKind::kTriangle ? "face" : "tetrahedron", free->first_element,
-          free->elements, checks_.kind == ElementKind::kTriangle ? "face" : "tetrahedron");
+          checks.components_without_constraints,
+          checks.kind == ElementKind::kTriangle ? "face" : "tetrahedron", free->first_element,
+          free->elements, checks.kind == ElementKind::kTriangle ? "face" : "tetrahedron");
     } else {
       line += ", each with a handle";
     }

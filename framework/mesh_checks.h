@@ -70,6 +70,10 @@ struct MeshCheckReport {
 /// ValidateMesh) with the constrained vertex indices `constrained`. O(#elements log #elements).
 MeshCheckReport CheckMesh(const Mesh& mesh, const std::vector<Index>& constrained);
 
+/// Short human-readable lines for `checks`: one per finding with a non-zero count (count, first
+/// example, action) and one about the components when there are several or some lack a handle.
+std::vector<std::string> SummarizeMeshChecks(const MeshCheckReport& checks);
+
 /// What to do with repairable defects before solving (the run config's `[mesh]` table).
 struct MeshRepairOptions {
   /// Merge referenced vertices with identical coordinates into one before solving (an unwelded
@@ -104,9 +108,17 @@ class PreparedProblem {
   /// Short human-readable lines for the terminal and the report's notes: one per finding with a
   /// non-zero count (count, first example, action).
   std::vector<std::string> Summary() const;
+  /// When changed(): the checks of the solved (repaired) mesh with the solved constraints, each
+  /// finding carrying the input's action; nullptr otherwise.
+  const MeshCheckReport* repaired_checks() const {
+    return changed_ ? &repaired_checks_ : nullptr;
+  }
+  /// Summary() of repaired_checks() (empty when nothing changed or nothing is left to report).
+  std::vector<std::string> RepairedSummary() const;
 
  private:
   MeshCheckReport checks_;
+  MeshCheckReport repaired_checks_;
   Mesh repaired_mesh_;
   DeformationProblem problem_;
   std::vector<Index> solved_vertex_;  ///< input vertex → solved vertex (empty: identity)

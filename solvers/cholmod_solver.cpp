@@ -433,6 +433,7 @@ struct CholmodSolver::Impl {
       summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
     } else if (options.check_residual) {
       summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy, b, x, residual);
+      summary.residual_computed = true;
     }
     summary.seconds = clock.Seconds();
     return summary;

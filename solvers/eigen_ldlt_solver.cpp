@@ -90,6 +90,7 @@ SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   }
   if (options_.check_residual) {
     summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy_, b, x, residual_);
+    summary.residual_computed = true;
   }
   summary.seconds = clock.Seconds();
   return summary;

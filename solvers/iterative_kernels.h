@@ -215,7 +215,8 @@ std::string DivergenceMessage(std::string_view solver, int iteration, std::strin
 /// the `rows`×`rows` matrix), runs solve_block(first, std::integral_constant<int, K>{}) for the
 /// column blocks [first, first + K) of b and x (K = 3 except for the last block), merges what
 /// the blocks report (iterations and residual are maxima over blocks, the first failure wins)
-/// and times the whole call.
+/// and times the whole call. Every block measures its final residual (the stopping test needs
+/// it), so the summary's residual counts as computed.
 template <class F>
 SolveSummary SolveByBlocks(bool factorized, Index rows, const Eigen::Ref<const Eigen::MatrixXd>& b,
                            const Eigen::Ref<Eigen::MatrixXd>& x, F&& solve_block) {
@@ -225,6 +226,7 @@ SolveSummary SolveByBlocks(bool factorized, Index rows, const Eigen::Ref<const E
               "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
               x.cols(), rows);
   SolveSummary summary;
+  summary.residual_computed = rows > 0 && b.cols() > 0;
   for (Eigen::Index first = 0; rows > 0 && first < b.cols(); first += kMaxBlockColumns) {
     const int k = static_cast<int>(std::min<Eigen::Index>(kMaxBlockColumns, b.cols() - first));
     const SolveSummary block =

@@ -20,7 +20,7 @@ DIR/runs/*.json (one `harap deform --report --trace` report per run, plus its `r
     render_runs  at most this many deformed meshes per scenario picture (default 6)
 
 Pictures are rendered with VTK (Debian python3-vtk9) under xvfb-run; without VTK or Xvfb they
-fall back to matplotlib's 3D plots (say so in the report).
+fall back to flat-shaded matplotlib drawings of the same view (say so in the report).
 """
 import argparse
 import datetime
@@ -32,6 +32,7 @@ import shutil
 import statistics
 import subprocess
 import sys
+import time
 from collections import OrderedDict, defaultdict
 
 import matplotlib
@@ -40,11 +41,45 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+try:
+    import tomllib  # Python 3.11
+except ImportError:  # pragma: no cover
+    tomllib = None
+
 PHASES = [("hierarchy", "H", "#1f77b4"), ("precompute", "P", "#ff7f0e"),
           ("constrain", "C", "#2ca02c"), ("solve", "S", "#d62728")]
-KNOWN_FIGURES = {"phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars"}
-KNOWN_REPORT_KEYS = {"claim", "notes", "figures", "compare", "baseline", "panel", "render",
-                     "render_runs"}
+# One list for report.py and `harap run`, which checks [report] before any run starts.
+with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "report_keys.json"),
+          encoding="utf-8") as _keys_file:
+    _KEYS = json.load(_keys_file)
+KNOWN_FIGURES = set(_KEYS["figures"])
+KNOWN_REPORT_KEYS = set(_KEYS["report_keys"])
+_START = time.monotonic()
+
+
+def progress(message):
+    """Plain progress lines on stderr (terminal or pipe alike): what the report is doing."""
+    print(f"report: [{time.monotonic() - _START:5.1f} s] {message}", file=sys.stderr, flush=True)
+
+
+def energy_of(run):
+    """What a run's energy value measures: the energy's name and its [energy] settings."""
+    config = run["_plan"].get("config", "")
+    table = ""
+    if tomllib is not None:
+        try:
+            table = json.dumps(tomllib.loads(config).get("energy", {}), sort_keys=True)
+        except tomllib.TOMLDecodeError:
+            table = ""
+    return (run.get("energy_type", ""), table)
+
+
+def energy_label(run):
+    name, table = energy_of(run)
+    settings = json.loads(table) if table else {}
+    settings.pop("type", None)
+    extra = ", ".join(f"{k}={v}" for k, v in sorted(settings.items()))
+    return f"{name}{' (' + extra + ')' if extra else ''}"
 
 
 # ------------------------------------------------------------------------------------------
@@ -233,6 +268,9 @@ def quadrant_color(x, y):
 def figure_relative_scatter(directory, runs, compare, baseline, panel):
     pairs = pairs_against_baseline(runs, compare, baseline)
     pairs = [(r, b) for r, b in pairs if b["energy"] > 0 and b["timings"]["total"] > 0]
+    # Energy ratios only between runs of the same energy (see measured_summary).
+    skipped = sum(1 for r, b in pairs if energy_of(r) != energy_of(b))
+    pairs = [(r, b) for r, b in pairs if energy_of(r) == energy_of(b)]
     if not pairs:
         return None
     if panel:
@@ -269,7 +307,9 @@ def figure_relative_scatter(directory, runs, compare, baseline, panel):
     return save(fig, directory, "relative_scatter"), (
         f"Each point: one scenario, total time and final energy relative to `{baseline}`. Green: "
         "faster and lower energy (the ideal, bottom left); blue: lower energy but slower; "
-        "orange: faster but higher energy; red: slower and higher.")
+        "orange: faster but higher energy; red: slower and higher." +
+        (f" {skipped} pairs with different energies are left out (their energies are not "
+         "comparable)." if skipped else ""))
 
 
 def figure_levels(directory, runs):
@@ -333,9 +373,12 @@ def figure_energy_bars(directory, runs):
         ax.set_title(title, fontsize=10)
     axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
+    mixed = len({energy_of(r) for r in done}) > 1
     return save(fig, directory, "energy_bars"), (
         "Final energy above the lowest energy among the runs of the same scenario (in percent; "
-        "0 for the best run) and total time per run.")
+        "0 for the best run) and total time per run." +
+        (" ⚠ The runs use different energies, whose values are not comparable: read the energy "
+         "bars within runs of the same energy only." if mixed else ""))
 
 
 # ------------------------------------------------------------------------------------------
@@ -470,30 +513,51 @@ def render_vtk(panels, size):
 
 
 def render_matplotlib(panels, size):
-    """Fallback without VTK/Xvfb: matplotlib's 3D surface plots (coarser)."""
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    """Fallback without VTK/Xvfb: the same camera as render_vtk (orthographic), faces drawn flat
+    shaded with the painter's algorithm in a 2D plot. All panels share one screen frame, fitted
+    to the projected meshes, so the mesh fills its panel and the panels compare at one scale.
+    Returns images sized to that frame's aspect (longer side `size` pixels)."""
+    from matplotlib.collections import PolyCollection
+
+    rest = panels[0][0]
+    view, up, center, _ = view_frame(rest, [p[0] for p in panels[1:]])
+    towards = view_direction(view, up)  # from the mesh towards the camera
+    up_vector = np.zeros(3)
+    up_vector[up] = 1.0
+    right_vector = np.cross(up_vector, towards)
+    right_vector /= np.linalg.norm(right_vector)
+    screen = np.stack([right_vector, up_vector], axis=1)
+    # One frame for all panels: the projected bounding box of every mesh, with a small margin.
+    projected = [(positions - center) @ screen for positions, _, _ in panels]
+    low = np.min([p.min(axis=0) for p in projected], axis=0)
+    high = np.max([p.max(axis=0) for p in projected], axis=0)
+    extent = np.maximum(high - low, 1e-12 * max(1.0, float(np.max(high - low))))
+    margin = 0.03 * extent.max()
+    low, high = low - margin, high + margin
+    aspect = float(np.clip((high[1] - low[1]) / (high[0] - low[0]), 0.25, 4.0))
+    width_px, height_px = (size, size * aspect) if aspect <= 1 else (size / aspect, size)
+    light = towards + 0.5 * up_vector - 0.4 * right_vector  # from the upper left
+    light /= np.linalg.norm(light)
 
     images = []
-    rest = panels[0][0]
-    view, up, center, radius = view_frame(rest, [p[0] for p in panels[1:]])
-    right = [d for d in range(3) if d not in (view, up)][0]
-    for positions, triangles, labels in panels:
-        step = max(1, len(triangles) // 60000)
-        tris = triangles[::step]
-        fig = plt.figure(figsize=(size / 100, size / 100), dpi=100)
-        ax = fig.add_subplot(projection="3d")
-        coords = positions[:, [right, view, up]]
-        shade = np.abs(np.cross(coords[tris[:, 1]] - coords[tris[:, 0]],
-                                coords[tris[:, 2]] - coords[tris[:, 0]]))
-        normal = shade / np.maximum(np.linalg.norm(shade, axis=1, keepdims=True), 1e-30)
-        light = 0.35 + 0.65 * normal[:, 1]
-        base = HANDLE_COLORS[np.minimum(labels[tris].max(axis=1), len(HANDLE_COLORS) - 1)]
-        ax.add_collection3d(Poly3DCollection(coords[tris], facecolors=base * light[:, None],
-                                             linewidths=0))
-        c = center[[right, view, up]]
-        for setter, k in ((ax.set_xlim, 0), (ax.set_ylim, 1), (ax.set_zlim, 2)):
-            setter(c[k] - radius, c[k] + radius)
-        ax.view_init(elev=0, azim=-90 + VIEW_TILT_DEGREES)
+    for (positions, triangles, labels), flat in zip(panels, projected):
+        corners = positions[triangles]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = normals / np.maximum(lengths, 1e-300)
+        # Two-sided: open meshes show both sides.
+        shade = 0.3 + 0.7 * np.abs(normals @ light)
+        depth = ((corners.mean(axis=1) - center) @ towards)
+        order = np.argsort(depth)  # far faces first
+        base = HANDLE_COLORS[np.minimum(labels[triangles].max(axis=1), len(HANDLE_COLORS) - 1)]
+        colors = np.clip(base * shade[:, None], 0, 1)[order]
+        fig = plt.figure(figsize=(width_px / 100, height_px / 100), dpi=100)
+        ax = fig.add_axes([0, 0, 1, 1])
+        ax.add_collection(PolyCollection(flat[triangles[order]], facecolors=colors,
+                                         edgecolors=colors, linewidths=0.2, antialiased=True))
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[1], high[1])
+        ax.set_aspect("auto")
         ax.set_axis_off()
         fig.canvas.draw()
         images.append(np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy())
@@ -513,7 +577,9 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
     results = []
     renderer = render_vtk if use_vtk else render_matplotlib
     os.makedirs(os.path.join(directory, "pictures"), exist_ok=True)
-    for scenario, group in by_scenario.items():
+    for number, (scenario, group) in enumerate(by_scenario.items(), 1):
+        if not use_vtk:
+            progress(f"picture {number}/{len(by_scenario)}: {scenario}")
         group = group[:per_scenario]
         info = group[0]["run"]
         rest_path = os.path.join(directory, info["rest_mesh"])
@@ -529,13 +595,20 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
             titles.append(f"{run_name(run)}\nE = {fmt_number(run['energy'])}, "
                           f"T = {run['timings']['total']:.2f} s")
         images = renderer(panels, 420)
-        fig, axes = plt.subplots(1, len(images), figsize=(2.6 * len(images), 3.0), squeeze=False)
+        # Panels as tall as the pictures need (wide meshes get short panels, not white bands),
+        # plus room for two title lines.
+        aspect = images[0].shape[0] / images[0].shape[1]
+        panel_width = 2.8
+        picture_height = min(panel_width * aspect, 4.5)
+        # Constrained layout keeps the suptitle clear of the panel titles (tight_layout does not).
+        fig, axes = plt.subplots(1, len(images),
+                                 figsize=(panel_width * len(images), picture_height + 0.9),
+                                 squeeze=False, layout="constrained")
         for ax, image, title in zip(axes.flat, images, titles):
             ax.imshow(image)
-            ax.set_title(title, fontsize=7)
+            ax.set_title(title, fontsize=9)
             ax.axis("off")
-        fig.suptitle(scenario, fontsize=9)
-        fig.tight_layout()
+        fig.suptitle(scenario, fontsize=11)
         path = os.path.join("pictures", f"{scenario}.png")
         fig.savefig(os.path.join(directory, path), dpi=100, bbox_inches="tight")
         plt.close(fig)
@@ -554,6 +627,21 @@ def measured_summary(runs, compare, baseline):
         by_value.setdefault(compare_value(run, compare), []).append((run, base))
     for value, group in by_value.items():
         n = len(group)
+        different = sorted({(energy_label(r), energy_label(b)) for r, b in group
+                            if energy_of(r) != energy_of(b)})
+        if different:
+            # Values of different functionals: no "lower energy" or energy ratio between them.
+            t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
+                       if b["timings"]["total"] > 0]
+            faster = sum(1 for r, b in group if r["timings"]["total"] < b["timings"]["total"])
+            text = (f"**{value}** vs **{baseline}** ({n} {'pair' if n == 1 else 'pairs'}): "
+                    f"⚠ different energies ({'; '.join(f'{a} vs {b}' for a, b in different)}), "
+                    "so their values are not compared; faster in total in "
+                    f"{faster}/{n}")
+            if t_ratio:
+                text += f", median total-time ratio {statistics.median(t_ratio):.3g}"
+            lines.append(text + ".")
+            continue
         e_ratio = [r["energy"] / b["energy"] for r, b in group if b["energy"] > 0]
         t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
                    if b["timings"]["total"] > 0]
@@ -610,7 +698,9 @@ def main():
     args = parser.parse_args()
     directory = args.directory
 
+    progress(f"reading {directory}")
     plan, runs = load(directory)
+    progress(f"{len(runs)} runs, {sum(1 for r in runs if ok(r))} finished")
     GRID_KEYS[:] = plan.get("grid_keys", [])
     report = plan.get("report", {})
     unknown = set(report) - KNOWN_REPORT_KEYS
@@ -693,7 +783,8 @@ def main():
 
     # Figures.
     out.append("## Figures\n")
-    for figure in figures:
+    for number, figure in enumerate(figures, 1):
+        progress(f"figure {number}/{len(figures)}: {figure}")
         if figure == "phases":
             made = figure_phases(directory, runs)
         elif figure == "energy_vs_time":
@@ -713,6 +804,7 @@ def main():
 
     # Pictures.
     if render and not args.no_render:
+        progress("pictures of the meshes (VTK under Xvfb if available, else matplotlib)")
         pictures, backend = make_pictures(directory, runs, render, per_scenario,
                                           args.render_backend)
         if pictures:
@@ -736,12 +828,13 @@ def main():
 
     with open(os.path.join(directory, "report.md"), "w", encoding="utf-8") as file:
         file.write("\n".join(out) + "\n")
+    progress("done")
     print(f"wrote {os.path.join(directory, 'report.md')}")
     return 0
 
 
 def make_pictures(directory, runs, render, per_scenario, backend):
-    """VTK under xvfb-run in a child process; matplotlib 3D if that is not possible."""
+    """VTK under xvfb-run in a child process; flat-shaded matplotlib if that is not possible."""
     if backend in ("auto", "vtk"):
         xvfb = shutil.which("xvfb-run")
         try:
@@ -763,7 +856,7 @@ def make_pictures(directory, runs, render, per_scenario, backend):
         elif backend == "vtk":
             print("VTK or xvfb-run missing; using matplotlib", file=sys.stderr)
     pictures = render_pictures(directory, runs, render, per_scenario, use_vtk=False)
-    return pictures, "matplotlib 3D (fallback: VTK or Xvfb not available)"
+    return pictures, "matplotlib, flat shaded (fallback: VTK or Xvfb not available)"
 
 
 if __name__ == "__main__":

@@ -1084,10 +1084,6 @@ Positions ReadMeshVertices(const std::filesystem::path& file) {
   return ReadMesh(file).vertices;
 }
 
-namespace {
-
-// The boundary triangles of a tetrahedral mesh (faces of exactly one tetrahedron), oriented
-// outwards for positively oriented tetrahedra, in the order of their tetrahedra.
 Elements BoundaryTriangles(const Elements& tetrahedra) {
   // Outward faces of a positive tetrahedron (a, b, c, d): the faces opposite d, c, b and a.
   constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
@@ -1121,8 +1117,6 @@ Elements BoundaryTriangles(const Elements& tetrahedra) {
   }
   return triangles;
 }
-
-}  // namespace
 
 void WritePly(const std::filesystem::path& file, const Positions& vertices,
               const Elements& mesh_elements) {

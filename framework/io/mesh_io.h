@@ -40,6 +40,10 @@ Mesh ParseMesh(std::string_view data, const std::filesystem::path& name);
 void WritePly(const std::filesystem::path& file, const Positions& vertices,
               const Elements& elements);
 
+/// The boundary triangles of a tetrahedral mesh (faces of exactly one tetrahedron), oriented
+/// outwards for positively oriented tetrahedra, in the order of their tetrahedra.
+Elements BoundaryTriangles(const Elements& tetrahedra);
+
 /// Reads the whole file, decompressing it in memory when the name ends in `.xz`.
 std::string ReadFileMaybeXz(const std::filesystem::path& file);
 

@@ -11,6 +11,10 @@
 //     index files) are InputErrors. Every message starts with "file:line:column".
 //   - The whole text is checked before the mesh is read, so a typo does not cost a mesh load
 //     (the keys of a `mesh` table are the exception: they are checked when it is built).
+//   - `refine` of a non-manifold surface uses the crease variant of Loop subdivision, with a note.
+//   - `units = "absolute"` (per handle, or at the top level for every handle) reads slab bounds,
+//     ball centre and radius, rotate.center and translate in mesh coordinates instead of box
+//     fractions and diagonals.
 //   - `refine` of a tetrahedralized surface subdivides the surface before TetGen fills it; `refine`
 //     of a tetrahedral file is an error (Loop subdivision is for triangles).
 //   - `initial` reads vertex positions only (ReadMeshVertices): a start configuration may have
@@ -40,13 +44,17 @@
 #include "framework/io/mesh_io.h"
 #include "framework/io/subdivision.h"
 #include "framework/io/tetrahedralize.h"
+#include "framework/io/text_scanning.h"
 
 namespace harap {
 
 namespace {
 
 enum class SelectionKind { kSlab, kBall, kIndices, kIndexFile };
-enum class TargetKind { kMotion, kInitial };
+enum class TargetKind { kMotion, kInitial, kFile };
+
+// How the numbers of slab/ball selections, rotate.center and translate are meant.
+enum class Units { kFractions, kAbsolute };
 
 struct HandleSpec {
   std::string name;
@@ -61,7 +69,7 @@ struct HandleSpec {
   std::vector<std::string> index_where;  // per inline index
   std::filesystem::path index_file;
   std::string index_file_where;
-  std::string description;  // of the selection, for "matches no vertex"
+  Units units = Units::kFractions;  // slab, ball, rotate center, translate
 
   TargetKind target = TargetKind::kMotion;
   bool has_rotation = false;
@@ -70,7 +78,43 @@ struct HandleSpec {
   std::optional<Eigen::Vector3d> center;  // box fractions
   bool has_translation = false;
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::filesystem::path target_file;  // target_file = "...": per-vertex "index x y z" lines
+  std::string target_file_where;
 };
+
+std::string Vec(const Eigen::Vector3d& v) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", v[0], v[1], v[2]); }
+
+// The box, for every message about a selection: the numbers only mean something against it.
+std::string DescribeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  return fmt::format("x in [{:.6g}, {:.6g}], y in [{:.6g}, {:.6g}], z in [{:.6g}, {:.6g}]", lo[0],
+                     hi[0], lo[1], hi[1], lo[2], hi[2]);
+}
+
+// What a handle selects, with its kind and units; `lo`/`hi` the mesh's bounding box.
+std::string DescribeSelection(const HandleSpec& spec, const Eigen::Vector3d& lo,
+                              const Eigen::Vector3d& hi) {
+  const bool absolute = spec.units == Units::kAbsolute;
+  const std::string units =
+      absolute ? fmt::format("absolute coordinates (units = \"absolute\"); the mesh's bounding box "
+                             "is {}",
+                             DescribeBox(lo, hi))
+               : fmt::format("fractions of the bounding box {}{}", DescribeBox(lo, hi),
+                             spec.kind == SelectionKind::kBall ? ", radius in box diagonals" : "");
+  switch (spec.kind) {
+    case SelectionKind::kSlab:
+      return fmt::format("select.slab {} in [{}, {}] ({})", "xyz"[spec.axis], spec.from, spec.to,
+                         units);
+    case SelectionKind::kBall:
+      return fmt::format("select.ball at {} of radius {} ({})", Vec(spec.ball_center),
+                         spec.radius, units);
+    case SelectionKind::kIndices:
+      return fmt::format("select.indices ({} 0-based vertex indices)", spec.indices.size());
+    case SelectionKind::kIndexFile:
+      return fmt::format("select.index_file {} (0-based vertex indices)",
+                         spec.index_file.string());
+  }
+  return "";
+}
 
 class Parser {
  public:
@@ -140,7 +184,31 @@ class Parser {
     return path.lexically_normal();
   }
 
-  HandleSpec ParseHandle(const toml::table& table, int number) const {
+  // `units = "fractions" | "absolute"` of `table` (a handle or the top level), else `fallback`.
+  Units ParseUnits(const toml::table& table, Units fallback, const std::string& label) const {
+    const toml::node* node = table.get("units");
+    if (!node) return fallback;
+    const std::string value = node->value_or(std::string());
+    if (value == "fractions") return Units::kFractions;
+    if (value == "absolute") return Units::kAbsolute;
+    Fail(Where(*node), label,
+         "'units' must be \"fractions\" (slab/ball/center as fractions of the bounding box, "
+         "radius and translate in box diagonals; the default) or \"absolute\" (mesh coordinates)");
+  }
+
+  // `units` belongs to the handle (it also applies to rotate.center and translate).
+  void UnitsInsideSelection(const toml::table& selection, const std::string& label,
+                            std::string_view what) const {
+    if (const toml::node* units = selection.get("units")) {
+      Fail(Where(*units), label,
+           fmt::format("'units' is a key of the [[handle]] (or of the top level), not of {}: "
+                       "write units = \"absolute\" on its own line in the handle; it applies to "
+                       "the selection, rotate.center and translate",
+                       what));
+    }
+  }
+
+  HandleSpec ParseHandle(const toml::table& table, int number, Units default_units) const {
     HandleSpec spec;
     spec.label = fmt::format("handle {}", number);
     spec.name = spec.label;
@@ -150,15 +218,33 @@ class Parser {
       spec.name = name->as_string()->get();
       spec.label = fmt::format("handle '{}'", spec.name);
     }
-    CheckKeys(table, {"name", "select", "rotate", "translate", "target"}, spec.label,
-              "a [[handle]]");
+    CheckKeys(table, {"name", "select", "rotate", "translate", "target", "target_file", "units"},
+              spec.label, "a [[handle]]");
+    spec.units = ParseUnits(table, default_units, spec.label);
+
+    // target_file = "moves.txt": the file's "index x y z" lines are the selection and the motion.
+    if (const toml::node* file = table.get("target_file")) {
+      if (!file->is_string()) Fail(Where(*file), spec.label, "'target_file' must be a file name");
+      for (const char* other : {"select", "rotate", "translate", "target"}) {
+        if (table.contains(other)) {
+          Fail(Where(*table.get(other)), spec.label,
+               fmt::format("target_file gives both the vertices and their targets; remove '{}'",
+                           other));
+        }
+      }
+      spec.target = TargetKind::kFile;
+      spec.target_file = Resolve(file->as_string()->get());
+      spec.target_file_where = Where(*file);
+      spec.select_where = spec.target_file_where;
+      return spec;
+    }
 
     // Selection: exactly one of slab, ball, indices, index_file.
     const toml::node* select = table.get("select");
     if (!select) {
       Fail(where, spec.label,
            "has no selection; give exactly one of select.slab, select.ball, select.indices, "
-           "select.index_file");
+           "select.index_file (or target_file = \"file\" with \"index x y z\" lines)");
     }
     spec.select_where = Where(*select);
     const toml::table* selection = select->as_table();
@@ -190,6 +276,7 @@ class Parser {
       spec.kind = SelectionKind::kSlab;
       const toml::table* slab = body.as_table();
       if (!slab) Fail(Where(body), spec.label, "select.slab must be a table {axis, from, to}");
+      UnitsInsideSelection(*slab, spec.label, "select.slab");
       CheckKeys(*slab, {"axis", "from", "to"}, spec.label, "select.slab");
       const toml::node& axis = Required(*slab, "axis", Where(body), spec.label, "select.slab");
       const std::string axis_name = axis.value_or(std::string());
@@ -205,11 +292,11 @@ class Parser {
         Fail(Where(body), spec.label,
              fmt::format("select.slab has from = {} > to = {}", spec.from, spec.to));
       }
-      spec.description = fmt::format("slab {} in [{}, {}]", axis_name, spec.from, spec.to);
     } else if (kind == "ball") {
       spec.kind = SelectionKind::kBall;
       const toml::table* ball = body.as_table();
       if (!ball) Fail(Where(body), spec.label, "select.ball must be a table {center, radius}");
+      UnitsInsideSelection(*ball, spec.label, "select.ball");
       CheckKeys(*ball, {"center", "radius"}, spec.label, "select.ball");
       spec.ball_center = Vector3(Required(*ball, "center", Where(body), spec.label, "select.ball"),
                                  spec.label, "select.ball center");
@@ -218,9 +305,6 @@ class Parser {
       if (spec.radius < 0.0) {
         Fail(Where(*ball->get("radius")), spec.label, "select.ball radius must be >= 0");
       }
-      spec.description =
-          fmt::format("ball at ({}, {}, {}) of radius {}", spec.ball_center[0],
-                      spec.ball_center[1], spec.ball_center[2], spec.radius);
     } else if (kind == "indices") {
       spec.kind = SelectionKind::kIndices;
       const toml::array* indices = body.as_array();
@@ -233,19 +317,19 @@ class Parser {
         spec.indices.push_back(integer->get());
         spec.index_where.push_back(Where(index));
       }
-      spec.description = "select.indices (empty)";
     } else {
       spec.kind = SelectionKind::kIndexFile;
       if (!body.is_string()) Fail(Where(body), spec.label, "select.index_file must be a string");
       spec.index_file = Resolve(body.as_string()->get());
       spec.index_file_where = Where(body);
-      spec.description = fmt::format("index file '{}'", spec.index_file.string());
     }
 
     // Motion.
     if (const toml::node* target = table.get("target")) {
       if (target->value_or(std::string()) != "initial") {
-        Fail(Where(*target), spec.label, "'target' must be \"initial\" (the only target mode)");
+        Fail(Where(*target), spec.label,
+             "'target' must be \"initial\" (per-vertex targets from a file are given as "
+             "target_file = \"moves.txt\")");
       }
       if (table.contains("rotate") || table.contains("translate")) {
         Fail(Where(*target), spec.label,
@@ -284,20 +368,24 @@ class Parser {
                             const Eigen::Vector3d& extent, double diagonal) const {
     std::vector<Index> selected;
     const Index n = mesh.num_vertices();
-    auto fraction = [&](Index v, int d) {
+    const bool absolute = spec.units == Units::kAbsolute;
+    // Slab bounds are compared as written: fractions to fractions, coordinates to coordinates.
+    auto coordinate = [&](Index v, int d) {
+      if (absolute) return mesh.vertices(v, d);
       return extent[d] > 0.0 ? (mesh.vertices(v, d) - lo[d]) / extent[d] : 0.0;
     };
     switch (spec.kind) {
       case SelectionKind::kSlab:
         for (Index v = 0; v < n; ++v) {
           if (!referenced[v]) continue;
-          const double f = fraction(v, spec.axis);
+          const double f = coordinate(v, spec.axis);
           if (f >= spec.from && f <= spec.to) selected.push_back(v);
         }
         break;
       case SelectionKind::kBall: {
-        const Eigen::Vector3d center = lo + spec.ball_center.cwiseProduct(extent);
-        const double radius = spec.radius * diagonal;
+        const Eigen::Vector3d center =
+            absolute ? spec.ball_center : Eigen::Vector3d(lo + spec.ball_center.cwiseProduct(extent));
+        const double radius = absolute ? spec.radius : spec.radius * diagonal;
         for (Index v = 0; v < n; ++v) {
           if (!referenced[v]) continue;
           if ((mesh.vertices.row(v).transpose() - center).norm() <= radius) selected.push_back(v);
@@ -324,7 +412,11 @@ class Parser {
     selected.erase(std::unique(selected.begin(), selected.end()), selected.end());
     if (selected.empty()) {
       Fail(spec.select_where, spec.label,
-           fmt::format("the selection ({}) matches no vertex", spec.description));
+           fmt::format("{} matches no vertex{}", DescribeSelection(spec, lo, lo + extent),
+                       spec.units == Units::kFractions &&
+                               (spec.kind == SelectionKind::kSlab || spec.kind == SelectionKind::kBall)
+                           ? "; for mesh coordinates write units = \"absolute\" in the handle"
+                           : ""));
     }
     return selected;
   }
@@ -370,6 +462,180 @@ class Parser {
     return indices;
   }
 
+  // text of a file the scenario names; read errors become InputErrors naming `where` and `what`.
+  static std::string ReadNamedText(const std::filesystem::path& path, const std::string& where,
+                                   std::string_view what) {
+    std::error_code error;
+    if (!std::filesystem::exists(path, error)) {
+      throw InputError(fmt::format("{}: {} file {} not found", where, what, path.string()));
+    }
+    try {
+      return ReadFileMaybeXz(path);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}: {}", where, what, e.what()));
+    }
+  }
+
+  // target_file: lines "index x y z" (absolute coordinates; `#` comments, blank lines skipped).
+  // Fills the handle's vertices (ascending) and targets.
+  void ReadTargetFile(const HandleSpec& spec, Index num_vertices, ScenarioHandle& handle) const {
+    const std::string file = spec.target_file.string();
+    const std::string text = ReadNamedText(spec.target_file, spec.target_file_where, "target_file");
+    io_internal::LineReader lines(text);
+    auto fail = [&](const std::string& problem) {
+      throw InputError(fmt::format("{}: {}: target file {}:{}: {}", spec.target_file_where,
+                                   spec.label, file, lines.line_number(), problem));
+    };
+    std::vector<std::pair<Index, Eigen::Vector3d>> entries;
+    std::vector<size_t> line_of(static_cast<size_t>(num_vertices), 0);
+    std::string_view line;
+    while (lines.NextContent(line)) {
+      std::string_view tokens[5];
+      int count = 0;
+      for (std::string_view token; !(token = io_internal::NextToken(line)).empty();) {
+        if (count < 5) tokens[count] = token;
+        ++count;
+      }
+      if (count != 4) {
+        fail(fmt::format("expected 'index x y z' (4 values), found {} value{}", count,
+                         count == 1 ? "" : "s"));
+      }
+      int64_t index = 0;
+      if (!io_internal::ParseInteger(tokens[0], index)) {
+        fail(fmt::format("{} is not a vertex index", io_internal::Quote(tokens[0])));
+      }
+      if (index < 0 || index >= num_vertices) {
+        fail(fmt::format("index {} out of range (the mesh has {} vertices, valid 0..{})", index,
+                         num_vertices, num_vertices - 1));
+      }
+      if (line_of[index] != 0) {
+        fail(fmt::format("vertex {} has a target already (line {})", index, line_of[index]));
+      }
+      line_of[index] = lines.line_number();
+      Eigen::Vector3d target;
+      for (int d = 0; d < 3; ++d) {
+        if (!io_internal::ParseDouble(tokens[d + 1], target[d])) {
+          fail(fmt::format("{} is not a number", io_internal::Quote(tokens[d + 1])));
+        }
+        if (!std::isfinite(target[d])) {
+          fail(fmt::format("{} is not a finite number", io_internal::Quote(tokens[d + 1])));
+        }
+      }
+      entries.emplace_back(static_cast<Index>(index), target);
+    }
+    if (entries.empty()) {
+      throw InputError(fmt::format("{}: {}: target file {} has no 'index x y z' line",
+                                   spec.target_file_where, spec.label, file));
+    }
+    std::sort(entries.begin(), entries.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    handle.vertices.clear();
+    handle.targets.resize(static_cast<Index>(entries.size()), 3);
+    for (size_t i = 0; i < entries.size(); ++i) {
+      handle.vertices.push_back(entries[i].first);
+      handle.targets.row(static_cast<Index>(i)) = entries[i].second.transpose();
+    }
+  }
+
+  // The deformation benchmark of Botsch & Sorkine's survey: `selection` (.sel: one label per
+  // vertex, 0 fixed, 1 free, 2 handle) and `deformation` (.def: the handle's 4x4 transform,
+  // row-major, applied to (x, y, z, 1)). Makes the handles "fixed" (if any 0) and "handle".
+  void AddBenchmarkHandles(const std::filesystem::path& selection_file,
+                           const std::string& selection_where,
+                           const std::filesystem::path& deformation_file,
+                           const std::string& deformation_where, Scenario& scenario) const {
+    const Index n = scenario.mesh.num_vertices();
+    const std::string sel_text = ReadNamedText(selection_file, selection_where, "selection");
+    io_internal::LineReader lines(sel_text);
+    auto fail_sel = [&](const std::string& problem) {
+      throw InputError(fmt::format("{}: selection file {}:{}: {}", selection_where,
+                                   selection_file.string(), lines.line_number(), problem));
+    };
+    ScenarioHandle fixed, moved;
+    fixed.name = "fixed";
+    moved.name = "handle";
+    Index count = 0;
+    std::string_view line;
+    while (lines.NextContent(line)) {
+      for (std::string_view token; !(token = io_internal::NextToken(line)).empty();) {
+        int64_t label = 0;
+        if (!io_internal::ParseInteger(token, label) || label < 0 || label > 2) {
+          fail_sel(fmt::format("{} is not a vertex label (0 fixed, 1 free, 2 handle)",
+                               io_internal::Quote(token)));
+        }
+        if (count >= n) {
+          fail_sel(fmt::format("more labels than the mesh's {} vertices (one label per vertex)",
+                               n));
+        }
+        if (label == 0) fixed.vertices.push_back(count);
+        if (label == 2) moved.vertices.push_back(count);
+        ++count;
+      }
+    }
+    if (count != n) {
+      throw InputError(fmt::format("{}: selection file {} has {} labels, but the mesh has {} "
+                                   "vertices{} (one label per vertex: 0 fixed, 1 free, 2 handle)",
+                                   selection_where, selection_file.string(), count, n,
+                                   scenario.mesh_source.empty() ? "" : " (" + scenario.mesh_source + ")"));
+    }
+    if (moved.vertices.empty()) {
+      throw InputError(fmt::format("{}: selection file {} marks no vertex as handle (label 2)",
+                                   selection_where, selection_file.string()));
+    }
+
+    const std::string def_text = ReadNamedText(deformation_file, deformation_where, "deformation");
+    io_internal::TokenCursor cursor(def_text, 1, /*skip_comments=*/true);
+    Eigen::Matrix4d transform;
+    for (int k = 0; k < 17; ++k) {
+      const std::string_view token = cursor.Next();
+      auto fail_def = [&](const std::string& problem) {
+        throw InputError(fmt::format("{}: deformation file {}:{}: {}", deformation_where,
+                                     deformation_file.string(), cursor.line(), problem));
+      };
+      if (k == 16) {
+        if (!token.empty()) fail_def("more than the 16 numbers of a 4x4 matrix");
+        break;
+      }
+      if (token.empty()) {
+        fail_def(fmt::format("ends after {} of the 16 numbers of the 4x4 matrix (row-major)", k));
+      }
+      double value = 0.0;
+      if (!io_internal::ParseDouble(token, value) || !std::isfinite(value)) {
+        fail_def(fmt::format("{} is not a finite number", io_internal::Quote(token)));
+      }
+      transform(k / 4, k % 4) = value;
+    }
+    if (transform.row(3) != Eigen::RowVector4d(0.0, 0.0, 0.0, 1.0)) {
+      throw InputError(fmt::format("{}: deformation file {}: the last row is ({}, {}, {}, {}), "
+                                   "not (0, 0, 0, 1): not an affine transform",
+                                   deformation_where, deformation_file.string(), transform(3, 0),
+                                   transform(3, 1), transform(3, 2), transform(3, 3)));
+    }
+    const Eigen::Matrix3d linear = transform.topLeftCorner<3, 3>();
+    const Eigen::Vector3d shift = transform.topRightCorner<3, 1>();
+    moved.targets.resize(static_cast<Index>(moved.vertices.size()), 3);
+    for (size_t i = 0; i < moved.vertices.size(); ++i) {
+      const Eigen::Vector3d p = scenario.mesh.vertices.row(moved.vertices[i]).transpose();
+      moved.targets.row(static_cast<Index>(i)) = (linear * p + shift).transpose();
+    }
+    moved.selection = fmt::format("label 2 of {}", selection_file.filename().string());
+    moved.motion = fmt::format("4x4 transform from {}: linear part [{:.6g} {:.6g} {:.6g}; {:.6g} "
+                               "{:.6g} {:.6g}; {:.6g} {:.6g} {:.6g}], translation {}",
+                               deformation_file.filename().string(), linear(0, 0), linear(0, 1),
+                               linear(0, 2), linear(1, 0), linear(1, 1), linear(1, 2),
+                               linear(2, 0), linear(2, 1), linear(2, 2), Vec(shift));
+    if (!fixed.vertices.empty()) {
+      fixed.targets.resize(static_cast<Index>(fixed.vertices.size()), 3);
+      for (size_t i = 0; i < fixed.vertices.size(); ++i) {
+        fixed.targets.row(static_cast<Index>(i)) = scenario.mesh.vertices.row(fixed.vertices[i]);
+      }
+      fixed.selection = fmt::format("label 0 of {}", selection_file.filename().string());
+      fixed.motion = "fixed (held at rest positions)";
+      scenario.handles.push_back(std::move(fixed));
+    }
+    scenario.handles.push_back(std::move(moved));
+  }
+
   Scenario Parse(std::string_view toml_text) const {
     toml::table root;
     try {
@@ -378,7 +644,29 @@ class Parser {
       throw ConfigError(fmt::format("{}: TOML syntax error: {}", Where(error.source()),
                                     error.description()));
     }
-    CheckKeys(root, {"mesh", "refine", "initial", "planar", "handle"}, "", "the top level");
+    CheckKeys(root,
+              {"mesh", "refine", "initial", "planar", "handle", "units", "selection",
+               "deformation"},
+              "", "the top level");
+    const Units default_units = ParseUnits(root, Units::kFractions, "");
+    // selection = "x.sel" with deformation = "x.def": the deformation benchmark's handles.
+    std::optional<std::filesystem::path> selection_file, deformation_file;
+    std::string selection_where, deformation_where;
+    auto file_key = [&](std::string_view key, std::optional<std::filesystem::path>& file,
+                        std::string& where) {
+      if (const toml::node* node = root.get(key)) {
+        if (!node->is_string()) Fail(Where(*node), "", fmt::format("'{}' must be a file name", key));
+        file = Resolve(node->as_string()->get());
+        where = Where(*node);
+      }
+    };
+    file_key("selection", selection_file, selection_where);
+    file_key("deformation", deformation_file, deformation_where);
+    if (selection_file.has_value() != deformation_file.has_value()) {
+      Fail(selection_file ? selection_where : deformation_where, "",
+           "selection = \"x.sel\" and deformation = \"x.def\" come together (the deformation "
+           "benchmark's per-vertex labels and the handle's 4x4 transform)");
+    }
 
     // Everything in the text first (see the top of this file).
     const toml::node* mesh_node = root.get("mesh");
@@ -417,13 +705,14 @@ class Parser {
         ++number;
         const toml::table* table = entry.as_table();
         if (!table) Fail(Where(entry), fmt::format("handle {}", number), "must be a table");
-        specs.push_back(ParseHandle(*table, number));
+        specs.push_back(ParseHandle(*table, number, default_units));
         if (specs.back().target == TargetKind::kInitial && !initial_file) {
           Fail(Where(*table->get("target")), specs.back().label,
                "target = \"initial\" needs a top-level initial = \"file\"");
         }
       }
     }
+    if (text_only_) return Scenario{};
 
     Scenario scenario;
     const toml::node* refine_node = root.get("refine");
@@ -480,21 +769,38 @@ class Parser {
     }
     const Eigen::Vector3d extent = hi - lo;
     const double diagonal = BoundingBoxDiagonal(mesh);
+    scenario.box_min = lo;
+    scenario.box_max = hi;
 
+    if (selection_file) {
+      AddBenchmarkHandles(*selection_file, selection_where, *deformation_file, deformation_where,
+                          scenario);
+    }
     for (const HandleSpec& spec : specs) {
       ScenarioHandle handle;
       handle.name = spec.name;
+      if (spec.target == TargetKind::kFile) {
+        ReadTargetFile(spec, mesh.num_vertices(), handle);
+        handle.selection = fmt::format("the indices of target_file {}", spec.target_file.string());
+        handle.motion = fmt::format("per-vertex targets from {} (absolute coordinates)",
+                                    spec.target_file.string());
+        scenario.handles.push_back(std::move(handle));
+        continue;
+      }
       handle.vertices = Select(spec, mesh, referenced, lo, extent, diagonal);
+      handle.selection = DescribeSelection(spec, lo, hi);
       const Index count = static_cast<Index>(handle.vertices.size());
       handle.targets.resize(count, 3);
       if (spec.target == TargetKind::kInitial) {
         for (Index i = 0; i < count; ++i) {
           handle.targets.row(i) = scenario.initial->row(handle.vertices[i]);
         }
+        handle.motion = "held at its positions in the initial configuration";
       } else {
+        const bool absolute = spec.units == Units::kAbsolute;
         Eigen::Vector3d center = Eigen::Vector3d::Zero();
         if (spec.center) {
-          center = lo + spec.center->cwiseProduct(extent);
+          center = absolute ? *spec.center : Eigen::Vector3d(lo + spec.center->cwiseProduct(extent));
         } else {
           for (const Index v : handle.vertices) center += mesh.vertices.row(v).transpose();
           center /= static_cast<double>(count);
@@ -503,7 +809,7 @@ class Parser {
             Eigen::AngleAxisd(spec.degrees * std::numbers::pi / 180.0,
                               spec.axis_vector.normalized())
                 .toRotationMatrix();
-        const Eigen::Vector3d shift = spec.translation * diagonal;
+        const Eigen::Vector3d shift = absolute ? spec.translation : spec.translation * diagonal;
         for (Index i = 0; i < count; ++i) {
           const Eigen::Vector3d p = mesh.vertices.row(handle.vertices[i]).transpose();
           // Without a rotation, p + t*D exactly (no round trip through the centre), so a fixed
@@ -513,6 +819,19 @@ class Parser {
                                 : Eigen::Vector3d(p + shift);
           handle.targets.row(i) = target.transpose();
         }
+        std::vector<std::string> parts;
+        if (spec.has_rotation) {
+          parts.push_back(fmt::format("rotate {}° about {} through {}{}", spec.degrees,
+                                      Vec(spec.axis_vector.normalized()), Vec(center),
+                                      spec.center ? "" : " (the handle's centroid)"));
+        }
+        if (spec.has_translation) {
+          parts.push_back(absolute ? fmt::format("translate {}", Vec(shift))
+                                   : fmt::format("translate {} (= {} box diagonals)", Vec(shift),
+                                                 Vec(spec.translation)));
+        }
+        handle.motion = parts.empty() ? std::string("fixed (held at rest positions)")
+                                      : fmt::format("{}", fmt::join(parts, ", then "));
       }
       scenario.handles.push_back(std::move(handle));
     }
@@ -571,7 +890,9 @@ class Parser {
                        limits_.max_elements, scenario.mesh.num_elements()));
     }
     try {
-      scenario.mesh = LoopSubdivide(scenario.mesh, refine);
+      std::string note;
+      scenario.mesh = LoopSubdivide(scenario.mesh, refine, &note);
+      if (!note.empty()) scenario.notes.push_back(std::move(note));
     } catch (const InputError& error) {
       throw InputError(fmt::format("{}: refine = {} of mesh {}: {}", Where(*refine_node), refine,
                                    scenario.mesh_source, error.what()));
@@ -690,6 +1011,9 @@ class Parser {
   std::string source_;
   std::filesystem::path base_;
   ScenarioLimits limits_;
+
+ public:
+  bool text_only_ = false;  // CheckScenarioText: stop before reading any file
 };
 
 }  // namespace
@@ -722,6 +1046,16 @@ Scenario ParseScenario(std::string_view toml_text, const std::string& source_nam
                        const std::filesystem::path& base_directory,
                        const ScenarioLimits& limits) {
   return Parser(source_name, base_directory, limits).Parse(toml_text);
+}
+
+void CheckScenarioText(const std::filesystem::path& file) {
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) {
+    throw InputError(fmt::format("{}: scenario file not found", file.string()));
+  }
+  Parser parser(file.string(), file.parent_path(), {});
+  parser.text_only_ = true;
+  parser.Parse(ReadFileMaybeXz(file));
 }
 
 Scenario LoadScenario(const std::filesystem::path& file) {

@@ -17,6 +17,12 @@ struct ScenarioHandle {
   std::string name;             ///< `name`, or "handle N" (1-based) if absent.
   std::vector<Index> vertices;  ///< Selected vertices, ascending.
   Positions targets;            ///< #vertices×3 target positions.
+  /// What selects the vertices, with its units ("slab y in [0, 0.05] (fractions of the bounding
+  /// box)", "label 2 of x.sel", ...), for `harap handles` and messages.
+  std::string selection;
+  /// The target motion in words: "fixed", "rotate 90° about (0, 0, 1) through (..), translate
+  /// (..)", "per-vertex targets from FILE", "4x4 transform from FILE", ...
+  std::string motion;
 };
 
 /// A deformation scenario (../shared/scenarios/FORMAT.md, harap's additions in docs/input.md):
@@ -26,6 +32,8 @@ struct Scenario {
   std::string mesh_source;          ///< Mesh file path or builtin description, for reports.
   Mesh mesh;                        ///< After `refine` / `tetrahedralize`; `planar` decided.
   std::vector<ScenarioHandle> handles;
+  /// The box selections refer to: of the vertices some element references (docs/input.md).
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero(), box_max = Eigen::Vector3d::Zero();
   std::optional<Positions> initial; ///< From `initial = "file"`.
   /// Remarks about the input for reports: reoriented tetrahedra, what tetrahedralization made,
   /// why the mesh is (not) treated as planar.
@@ -48,6 +56,11 @@ struct ScenarioLimits {
 /// Loads a scenario file. Mesh paths are relative to the scenario file. Throws ConfigError or
 /// InputError naming the file, the handle and the problem.
 Scenario LoadScenario(const std::filesystem::path& file);
+
+/// Checks a scenario file's text (TOML syntax, keys, values, handles) without reading the mesh
+/// or any other file it names, for callers that want typos found before long work starts
+/// (`harap run` checks every scenario file of an experiment so). Throws like LoadScenario.
+void CheckScenarioText(const std::filesystem::path& file);
 
 /// Same from TOML text; relative paths are resolved against `base_directory`.
 Scenario ParseScenario(std::string_view toml_text, const std::string& source_name,

@@ -112,6 +112,7 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
     : level_(level), planar_(mesh.planar), simplex_size_(mesh.simplex_size()),
       elements_(mesh.elements) {
   Stopwatch clock;
+  context.ReportPhase(fmt::format("precomputing level {}", level));
   const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
   if (!tetrahedra && !mesh.planar) {
     throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
@@ -214,6 +215,7 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
   precompute_seconds_ = clock.Seconds();
 
   clock.Restart();
+  context.ReportPhase(fmt::format("factoring level {}", level));
   for (Index v : constrained) {
     HARAP_CHECK(v >= 0 && v < num_vertices, "constrained vertex {} out of range", v);
   }

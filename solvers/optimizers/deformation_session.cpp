@@ -76,6 +76,7 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
     start_positions_ = mesh_.vertices;
     Stopwatch phase;
     if (options_.hierarchical) {
+      context_.ReportPhase("building the hierarchy");
       hierarchy_ = factory_.MakeHierarchy()->Build(mesh_, context_);
       upsampler_ = factory_.MakeUpsampler();
     }

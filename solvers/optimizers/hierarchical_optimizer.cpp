@@ -80,6 +80,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
 
   // H: the hierarchy.
   Stopwatch clock;
+  context.ReportPhase("building the hierarchy");
   const MeshHierarchy hierarchy = factory.MakeHierarchy()->Build(mesh, context);
   const auto upsampler = factory.MakeUpsampler();
   result.timings.hierarchy = clock.Seconds();

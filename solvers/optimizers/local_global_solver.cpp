@@ -14,6 +14,7 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& f
                                      int level, const Context& context, const Mesh* input_mesh)
     : level_(level) {
   Stopwatch clock;
+  context.ReportPhase(fmt::format("precomputing level {}", level));
   ordering_ = LocalityOrdering(mesh);
   energy_ = factory.MakeEnergy();
   if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
@@ -48,6 +49,7 @@ std::vector<Index> Renumbered(const std::vector<Index>& constrained, const MeshO
 void LocalGlobalSolver::Constrain(const std::vector<Index>& constrained,
                                   const ComponentFactory& factory, const Context& context) {
   Stopwatch clock;
+  context.ReportPhase(fmt::format("factoring level {}", level_));
   masked_ = nullptr;
   auto system = std::make_unique<ConstrainedSystem>(energy_->system_matrix(),
                                                     Renumbered(constrained, ordering_));
@@ -64,6 +66,7 @@ LocalGlobalSolver::ConstrainSummary LocalGlobalSolver::ConstrainMasked(
     const std::vector<Index>& constrained, const ComponentFactory& factory,
     const Context& context) {
   Stopwatch clock;
+  context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
   const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
   ConstrainSummary summary;
   if (masked_ == nullptr) {

@@ -79,7 +79,7 @@ TEST_CASE("RunDeform: tetrahedral and planar meshes default to the elements ener
       Scenario scenario;
       scenario.mesh_source = "generated";
       scenario.mesh = planar ? testing::PlanarGrid(20, 8) : testing::TetBox(12, 4, 4, 5);
-      ScenarioHandle fixed{"fixed", {}, {}}, moved{"moved", {}, {}};
+      ScenarioHandle fixed{"fixed", {}, {}, {}, {}}, moved{"moved", {}, {}, {}, {}};
       for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
         const double x = scenario.mesh.vertices(v, 0);
         if (x == 0.0) fixed.vertices.push_back(v);

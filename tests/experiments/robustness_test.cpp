@@ -44,7 +44,7 @@ fs::path TempDir(const std::string& name) {
 Scenario SeamScenario(std::vector<std::pair<Index, Index>>& seam) {
   Scenario scenario;
   scenario.mesh = testing::SeamedGrid(9, seam);
-  ScenarioHandle left{"left", {}, {}}, right{"right", {}, {}};
+  ScenarioHandle left{"left", {}, {}, {}, {}}, right{"right", {}, {}, {}, {}};
   for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
     if (scenario.mesh.vertices(v, 0) == 0.0) left.vertices.push_back(v);
     if (scenario.mesh.vertices(v, 0) == 1.0) right.vertices.push_back(v);
@@ -119,7 +119,7 @@ TEST_CASE("harap deform: mesh checks on the terminal and in the report, output p
   REQUIRE(run.status == 0);
   CHECK_THAT(run.output, Contains("checks      unreferenced vertices 1 (e.g. vertex 6): "));
   CHECK_THAT(run.output, Contains("duplicate faces 1 (e.g. face 8 repeats face 0): 1 copies left out"));
-  CHECK_THAT(run.output, Contains("solved on   7 vertices, 8 faces"));
+  CHECK_THAT(run.output, Contains("repaired    solved on 7 vertices, 8 faces"));
   std::ifstream stream(report_file);
   const auto report = nlohmann::json::parse(stream);
   const auto& checks = report["mesh_checks"];

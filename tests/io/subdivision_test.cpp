@@ -85,7 +85,8 @@ TEST_CASE("LoopSubdivide: boundaries, unreferenced vertices, zero steps", "[io][
   CHECK_THROWS_AS(LoopSubdivide(triangle, -1), InternalError);
 }
 
-TEST_CASE("LoopSubdivide rejects non-manifold input without printing", "[io][subdivision]") {
+TEST_CASE("LoopSubdivide refines non-manifold input with a note, without printing",
+          "[io][subdivision]") {
   // Three triangles on one edge (a "book"): a halfedge mesh cannot hold the third.
   Mesh book;
   book.vertices.resize(5, 3);
@@ -96,20 +97,101 @@ TEST_CASE("LoopSubdivide rejects non-manifold input without printing", "[io][sub
   auto* old_err = std::cerr.rdbuf(captured_err.rdbuf());
   auto* old_out = std::cout.rdbuf(captured_out.rdbuf());
   auto* old_log = std::clog.rdbuf(captured_err.rdbuf());
-  std::string message;
-  try {
-    LoopSubdivide(book, 1);
-  } catch (const InputError& error) {
-    message = error.what();
-  }
+  std::string note;
+  const Mesh refined = LoopSubdivide(book, 1, &note);
   std::cerr.rdbuf(old_err);
   std::cout.rdbuf(old_out);
   std::clog.rdbuf(old_log);
-  CHECK_THAT(message, Contains("not manifold"));
-  CHECK_THAT(message, Contains("triangle 2"));
-  CHECK_THAT(message, Contains("complex edge"));  // OpenMesh's own diagnosis, captured
-  CHECK(captured_err.str().empty());  // OpenMesh's complaint went into the message
+  CHECK(refined.num_elements() == 12);
+  CHECK(refined.num_vertices() == 5 + 7);  // 7 edges
+  CHECK_THAT(note, Contains("not a manifold"));
+  CHECK_THAT(note, Contains("triangle 2"));
+  CHECK_THAT(note, Contains("complex edge"));  // OpenMesh's own diagnosis, captured
+  CHECK_THAT(note, Contains("1 non-manifold edge "));
+  CHECK(captured_err.str().empty());  // OpenMesh's complaint went into the note
   CHECK(captured_out.str().empty());
+  // A manifold mesh gets no note.
+  note.clear();
+  LoopSubdivide(Tetrahedron(), 1, &note);
+  CHECK(note.empty());
+}
+
+TEST_CASE("LoopSubdivideCreased: non-manifold edges are creases, non-manifold vertices stay",
+          "[io][subdivision]") {
+  // A book of three triangles on the edge (0, 1), plus two triangles touching it only at
+  // vertex 2 (a non-manifold vertex: two fans), plus an unreferenced vertex 8.
+  Mesh mesh;
+  mesh.vertices.resize(9, 3);
+  mesh.vertices << 0, 0, 0,  // 0
+      2, 0, 0,               // 1
+      1, 1, 0,               // 2: tip of the first page, and where the bowtie meets
+      1, -1, 0,              // 3
+      1, 0, 1,               // 4
+      2, 2, 0,               // 5
+      0, 2, 0,               // 6
+      1, 3, 0,               // 7
+      9, 9, 9;               // 8: unreferenced
+  mesh.elements.resize(5, 3);
+  mesh.elements << 0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 5, 7, 2, 7, 6;
+  Index edges = -1, vertices = -1;
+  const Mesh refined = LoopSubdivideCreased(mesh, 1, &edges, &vertices);
+  CHECK(edges == 1);     // (0, 1) has three triangles
+  CHECK(vertices == 0);  // vertex 2 lies on boundary edges, so it is a corner, not counted
+  const auto counts = testing::CountEdges(mesh);
+  CHECK(refined.num_vertices() == 8 + static_cast<Index>(counts.undirected.size()));
+  CHECK(refined.num_elements() == 20);
+  // The old vertices first, in order, without the unreferenced one.
+  // Vertex 0 lies on the crease (0, 1) and on boundary edges (0, 2), (0, 3), (0, 4): more than
+  // two crease edges, so it is a corner and stays; so does vertex 2 (four boundary edges).
+  CHECK(refined.vertices.row(0) == mesh.vertices.row(0));
+  CHECK(refined.vertices.row(2) == mesh.vertices.row(2));
+  // The non-manifold edge gets its midpoint (crease rule), not Loop's 3/8-1/8 stencil.
+  CHECK(HasVertexAt(refined, Eigen::RowVector3d(1, 0, 0)));
+  // Orientation of each triangle is kept: the first child of triangle 0 has normal +z.
+  const Eigen::RowVector3d a = refined.vertices.row(refined.elements(0, 0));
+  const Eigen::RowVector3d b = refined.vertices.row(refined.elements(0, 1));
+  const Eigen::RowVector3d c = refined.vertices.row(refined.elements(0, 2));
+  CHECK((b - a).cross(c - a)(2) > 0.0);
+
+  // Two closed tetrahedra sharing one vertex: every edge has two triangles, but the shared
+  // vertex has two fans, so it stays; the others follow Loop's rule.
+  Mesh touching;
+  touching.vertices.resize(7, 3);
+  touching.vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, -1, 0, 0, 0, -1, 0, 0, 0, -1;
+  touching.elements.resize(8, 3);
+  touching.elements << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,  //
+      0, 5, 4, 0, 4, 6, 0, 6, 5, 4, 5, 6;
+  const Mesh split = LoopSubdivideCreased(touching, 1, &edges, &vertices);
+  CHECK(edges == 0);
+  CHECK(vertices == 1);
+  CHECK(split.vertices.row(0) == touching.vertices.row(0));
+  // Through the public entry point (OpenMesh refuses the second fan): refined with a note.
+  std::string note;
+  const Mesh through_public = LoopSubdivide(touching, 1, &note);
+  CHECK_THAT(note, Contains("1 vertex where separate fans meet"));
+  CHECK(through_public.vertices == split.vertices);
+}
+
+TEST_CASE("LoopSubdivideCreased equals OpenMesh's Loop on manifold meshes", "[io][subdivision]") {
+  // Same vertex positions (as sets: the edge vertices may be numbered differently), for a closed
+  // mesh (Loop's interior rule) and an open one (the boundary rules).
+  Mesh open = Tetrahedron();
+  open.elements.conservativeResize(3, 3);
+  for (const Mesh& mesh : {Tetrahedron(), open}) {
+    for (const int steps : {1, 2}) {
+      const Mesh ours = LoopSubdivideCreased(mesh, steps);
+      const Mesh theirs = LoopSubdivide(mesh, steps);
+      REQUIRE(ours.num_vertices() == theirs.num_vertices());
+      REQUIRE(ours.num_elements() == theirs.num_elements());
+      // The original vertices keep their numbers in both.
+      for (Index v = 0; v < mesh.num_vertices(); ++v) {
+        CHECK((ours.vertices.row(v) - theirs.vertices.row(v)).norm() < 1e-12);
+      }
+      for (Index v = 0; v < ours.num_vertices(); ++v) {
+        CHECK(HasVertexAt(theirs, ours.vertices.row(v)));
+      }
+    }
+  }
 }
 
 TEST_CASE("LoopSubdivide of the built-in cylinder stays a closed manifold", "[io][subdivision]") {
@@ -139,10 +221,14 @@ TEST_CASE("LoopSubdivide of armadillo-43k gives the paper's ~173K vertices", "[i
   CHECK(BoundingBoxDiagonal(refined) == Approx(BoundingBoxDiagonal(mesh)).epsilon(0.02));
 }
 
-TEST_CASE("LoopSubdivide names the problem for the non-manifold dragon-res2", "[io][subdivision]"
+TEST_CASE("LoopSubdivide refines the non-manifold dragon-res2 with a note", "[io][subdivision]"
           "[shared]") {
   HARAP_REQUIRE_SHARED(file, "meshes/dragon-res2.obj.xz");
-  CHECK_THROWS_WITH(LoopSubdivide(ReadMesh(file), 1), Contains("not manifold"));
+  const Mesh mesh = ReadMesh(file);
+  std::string note;
+  const Mesh refined = LoopSubdivide(mesh, 1, &note);
+  CHECK_THAT(note, Contains("not a manifold"));
+  CHECK(refined.num_elements() == 4 * mesh.num_elements());
 }
 
 }  // namespace
