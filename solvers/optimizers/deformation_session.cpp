@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
 
 #include "framework/error.h"
@@ -330,6 +331,13 @@ OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
 
 OptimizeResult DeformationSession::Preview() { return Run({}, /*preview=*/true); }
 
+double DeformationSession::CurrentEnergy() {
+  LevelState state;
+  state.positions = positions();
+  if (levels_[0]->has_solution) state.rotations = levels_[0]->state.rotations;
+  return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
+}
+
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -452,8 +460,17 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
           l > 0) {
         before_this_solve = level->state;
       }
-      const LocalGlobalSolver::RunResult run =
-          solver.Run(state, start_with_global_step, options, diagonal_, context, update);
+      LocalGlobalSolver::RunResult run;
+      if (l == 0 && preview && start_with_global_step &&
+          static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations()) {
+        // The paper's approximation: one global solve from the up-sampled rotations, no local
+        // step (the energy is left to CurrentEnergy()).
+        run.linear_solves.Add(solver.GlobalStep(state, context));
+        run.iterations = 1;
+        run.energy = std::numeric_limits<double>::quiet_NaN();
+      } else {
+        run = solver.Run(state, start_with_global_step, options, diagonal_, context, update);
+      }
       level->state = state;
       level->has_solution = true;
       coarse_before = std::move(before_this_solve);
@@ -484,7 +501,10 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   result.stopped_by_callback = user_stop;
   std::reverse(result.levels.begin(), result.levels.end());
   LocalGlobalSolver& finest = *levels_[0]->solver;
-  result.measures = context.Run([&] { return finest.AuxiliaryMeasures(state, context); });
+  // A preview's rotations are not fitted to its positions: no measures of that state.
+  if (!preview) {
+    result.measures = context.Run([&] { return finest.AuxiliaryMeasures(state, context); });
+  }
   result.constraints = finest.system().report();
   std::vector<std::string> notes = DescribeConstraintHandling(result.constraints);
   result.notes.insert(result.notes.begin(), notes.begin(), notes.end());

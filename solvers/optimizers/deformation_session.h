@@ -121,8 +121,13 @@ class DeformationSession {
   /// seconds; timings.solve and .total; the constraint report and notes).
   OptimizeResult Solve(const SessionSolveOptions& options = {});
   /// The paper's coarse approximation (Figs. 15–16): the coarsest level solved (warm-started),
-  /// its solution up-sampled straight to the finest level, and one local/global iteration there.
+  /// its solution up-sampled level by level to the finest, and one global solve there from the
+  /// up-sampled rotations (with an upsampler that hands down positions: one local/global
+  /// iteration). The finest level's energy is not evaluated (NaN; it would cost a local step:
+  /// CurrentEnergy() gives it).
   OptimizeResult Preview();
+  /// E(U, R) of the current finest positions (positions()), rotations fitted to them.
+  double CurrentEnergy();
 
   /// Called after every iteration; returning kStop ends the solve (the result says so) as in a
   /// one-shot run. Empty: none.

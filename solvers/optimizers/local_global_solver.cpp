@@ -138,6 +138,28 @@ double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context
   return energy;
 }
 
+SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& context) {
+  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
+              "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
+  Positions u = ordering_.ToNew(state.positions);
+  const Rotations rotations = ordering_.ToNew(state.rotations, per_element);
+  system_->SetFixedPositions(u);
+  if (system_->num_free() == 0) return SolveSummary{};
+  energy_->AssembleRhs(rotations, rhs_, context);
+  system_->ReducedRhs(rhs_, reduced_rhs_);
+  if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
+  const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
+  if (!summary.success) {
+    throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
+                                     summary.message));
+  }
+  system_->ScatterFree(reduced_x_, u);
+  state.positions = ordering_.ToOld(u);
+  return summary;
+}
+
 std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
                                                                    const Context& context) const {
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;

@@ -221,13 +221,17 @@ TEST_CASE("session: moving targets, preview, time budget and a stopping callback
   session.SetTargets(handles.targets);
   const OptimizeResult preview = session.Preview();
   CHECK(preview.iterations == 1);
+  CHECK(std::isnan(preview.energy));
+  const double preview_energy = session.CurrentEnergy();
   for (size_t k = 0; k < handles.indices.size(); ++k) {
     CHECK((preview.positions.row(handles.indices[k]) - handles.targets.row(k)).norm() == 0.0);
   }
   const OptimizeResult full = session.Solve();
   CHECK(halfway.energy > 0.0);
   CHECK(full.energy > halfway.energy);
-  CHECK(preview.energy >= full.energy * (1.0 - 1e-9));
+  CHECK(preview_energy >= full.energy * (1.0 - 1e-9));
+  CHECK(preview_energy < 10.0 * full.energy);
+  CHECK(session.CurrentEnergy() == Approx(full.energy).epsilon(1e-9));
   CHECK(full.converged);
 
   // A budget that runs out at once still returns the handles at their targets.
