@@ -59,7 +59,7 @@ struct SessionSolveOptions {
   int max_iterations = -1;  ///< Per level.
   /// Wall-time budget of the whole solve in seconds (0: none). When it runs out on a coarse level
   /// the solution is up-sampled to the finest level, the handles placed, and one local/global
-  /// iteration done there (Preview()'s finish); on the finest level the iteration stops.
+  /// iteration done there; on the finest level the iteration stops.
   double time_budget_seconds = 0.0;
 };
 
@@ -152,8 +152,8 @@ class DeformationSession {
   HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
   HandleEditResult ConstrainLevels();
   void UpdateCoarseTargets();
-  /// The S phase: the cascade from `top` down (or the finest level only), `finest_iterations`
-  /// > 0 caps the finest level's iterations (Preview: 1).
+  /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
+  /// FrameStart::kPrevious, the finest level alone).
   OptimizeResult Run(const SessionSolveOptions& options, bool preview);
 
   const Mesh& mesh_;
@@ -161,7 +161,7 @@ class DeformationSession {
   SessionOptions options_;
   Context context_;
   IterationCallback callback_;
-  MeshHierarchy hierarchy_;  ///< classic: the mesh alone
+  MeshHierarchy hierarchy_;  ///< classic: empty (level 0 is mesh_)
   std::unique_ptr<Upsampler> upsampler_;
   std::vector<std::unique_ptr<Level>> levels_;  ///< per hierarchy level; null if not solved
   std::vector<int> solved_levels_;              ///< coarsest first
