@@ -116,13 +116,14 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
               "{} positions for {} vertices", caller_state.positions.rows(),
               system_->num_vertices());
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
-  LevelState state;
-  state.positions = ordering_.ToNew(caller_state.positions);
-  state.rotations = ordering_.ToNew(caller_state.rotations, per_element);
+  // The internal state's buffers are kept between runs (a session runs every frame).
+  LevelState& state = internal_state_;
+  ordering_.ToNew(caller_state.positions, state.positions);
+  ordering_.ToNew(caller_state.rotations, per_element, state.rotations);
   const RunResult result = Iterate(state, start_with_global_step, options, diagonal, context,
                                    update_fixed);
-  caller_state.positions = ordering_.ToOld(state.positions);
-  caller_state.rotations = ordering_.ToOld(state.rotations, per_element);
+  ordering_.ToOld(state.positions, caller_state.positions);
+  ordering_.ToOld(state.rotations, per_element, caller_state.rotations);
   return result;
 }
 
@@ -143,8 +144,10 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
   HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
               "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
-  Positions u = ordering_.ToNew(state.positions);
-  const Rotations rotations = ordering_.ToNew(state.rotations, per_element);
+  Positions& u = internal_state_.positions;
+  Rotations& rotations = internal_state_.rotations;
+  ordering_.ToNew(state.positions, u);
+  ordering_.ToNew(state.rotations, per_element, rotations);
   system_->SetFixedPositions(u);
   if (system_->num_free() == 0) return SolveSummary{};
   energy_->AssembleRhs(rotations, rhs_, context);
@@ -156,7 +159,7 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
                                      summary.message));
   }
   system_->ScatterFree(reduced_x_, u);
-  state.positions = ordering_.ToOld(u);
+  ordering_.ToOld(u, state.positions);
   return summary;
 }
 

@@ -167,6 +167,7 @@ class LocalGlobalSolver {
   double precompute_seconds_ = 0.0;
   double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
+  LevelState internal_state_;  ///< Run()'s and GlobalStep()'s state in the internal numbering
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;
