@@ -372,51 +372,58 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   };
 
   std::vector<std::string> frozen_target_notes;
-  LevelState state;
+  // The states are kept between solves (work_[l], scratch_[l]: no allocation per frame on the
+  // big levels). `cur` is the state being solved or handed down; a solved level's result is
+  // swapped into its Level, so work_[l] then holds the level's previous solution.
+  if (work_.size() != static_cast<size_t>(num_levels())) {
+    work_.assign(num_levels(), LevelState());
+    scratch_.assign(num_levels(), LevelState());
+  }
+  LevelState* cur = nullptr;
   bool start_with_global_step = false;
-  // FrameStart::kCorrected: the last solved level's solution before this solve.
-  LevelState coarse_before;
-  int coarse_before_level = -1;  ///< the level coarse_before belongs to (-1: none)
+  // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
+  int coarse_before_level = -1;
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
+      LevelState& work = work_[l];
       if (l == top) {
         Level* level = levels_[l].get();
         if (level->has_solution) {
           // Warm start: the previous solution's rotations drive the first global step, which
           // places the (moved) handles' influence smoothly over the mesh.
-          state = level->state;
+          work = level->state;
           start_with_global_step = true;
         } else {
-          state = LevelState();
-          state.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
+          work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
+          work.rotations.clear();
           start_with_global_step = false;
         }
       } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
                  !preview) {
         // Nothing changed since this level's last solution: it is the best start there is (an
         // up-sampled one would start the level's iterations over).
-        state = levels_[l]->state;
+        work = levels_[l]->state;
         start_with_global_step = true;
       } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
                  levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
-                 coarse_before.rotations.size() == state.rotations.size()) {
+                 work_[l + 1].rotations.size() == cur->rotations.size()) {
         // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
         // the coarser level's solution changed since then (the smooth motion), up-sampled.
-        LevelState now, before;
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, state, now,
+        LevelState& now = scratch_[l];
+        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
                              context);
         upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_,
-                             coarse_before, before, context);
-        state.positions = levels_[l]->state.positions + now.positions - before.positions;
-        state.rotations = levels_[l]->state.rotations;
+                             work_[l + 1], work, context);
+        work.positions = levels_[l]->state.positions + now.positions - work.positions;
+        work.rotations = levels_[l]->state.rotations;
         start_with_global_step = false;
       } else {
-        LevelState coarse_state = std::move(state);
-        state = LevelState();
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, coarse_state,
-                             state, context);
+        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
+                             context);
         start_with_global_step = upsampler_->output() == UpsampleOutput::kRotations;
       }
+      cur = &work;
+      LevelState& state = work;
       Level* level = levels_[l].get();
       if (level == nullptr) continue;  // not a solved level: only up-sampled
       if (preview && l != top && l != 0) continue;
@@ -427,6 +434,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         result.energy = solver.FitRotations(state, context);
         level->state = state;
         level->has_solution = true;
+        cur = &level->state;
         break;
       }
       Stopwatch level_clock;
@@ -453,13 +461,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         }
       }
       const bool was_out_of_time = out_of_time;
-      // This level's solution before this solve, for the next finer level's correction.
-      LevelState before_this_solve;
       const bool had_solution = level->has_solution;
-      if (options_.frame_start == SessionOptions::FrameStart::kCorrected && had_solution &&
-          l > 0) {
-        before_this_solve = level->state;
-      }
       LocalGlobalSolver::RunResult run;
       if (l == 0 && preview && start_with_global_step &&
           static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations()) {
@@ -471,9 +473,11 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       } else {
         run = solver.Run(state, start_with_global_step, options, diagonal_, context, update);
       }
-      level->state = state;
+      // The new solution into the Level; work_[l] keeps the previous one (the correction of
+      // the next finer level needs it).
+      std::swap(level->state, work);
+      cur = &level->state;
       level->has_solution = true;
-      coarse_before = std::move(before_this_solve);
       coarse_before_level = had_solution ? l : -1;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
       level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
@@ -503,7 +507,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   LocalGlobalSolver& finest = *levels_[0]->solver;
   // A preview's rotations are not fitted to its positions: no measures of that state.
   if (!preview) {
-    result.measures = context.Run([&] { return finest.AuxiliaryMeasures(state, context); });
+    result.measures = context.Run([&] { return finest.AuxiliaryMeasures(*cur, context); });
   }
   result.constraints = finest.system().report();
   std::vector<std::string> notes = DescribeConstraintHandling(result.constraints);
@@ -516,7 +520,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
                               : ""));
   }
   result.notes.insert(result.notes.end(), frozen_target_notes.begin(), frozen_target_notes.end());
-  result.positions = std::move(state.positions);
+  result.positions = cur->positions;
   result.timings.solve = total.Seconds();
   result.timings.total = result.timings.solve;
   return result;

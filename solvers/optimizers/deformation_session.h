@@ -171,6 +171,8 @@ class DeformationSession {
   Positions targets_;
   Positions start_positions_;  ///< finest positions without a solution (SetPositions)
   long long version_ = 0;      ///< bumped by every change of handles, targets or positions
+  /// Solve()'s per-level states, kept between solves (see Run()).
+  std::vector<LevelState> work_, scratch_;
   PhaseTimings setup_timings_;
 };
 
