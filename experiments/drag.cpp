@@ -2,13 +2,13 @@
 #include "experiments/drag.h"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <toml++/toml.h>
 
 #include "experiments/component_factory.h"
 #include "experiments/session.h"
@@ -35,8 +35,8 @@ HandleMotion FitMotion(const Mesh& mesh, const ScenarioHandle& handle) {
   for (Index k = 0; k < count; ++k) rest.row(k) = mesh.vertices.row(handle.vertices[k]);
   motion.center = rest.colwise().mean();
   const Eigen::RowVector3d target_center = handle.targets.colwise().mean();
-  const Eigen::Matrix3d covariance = (handle.targets.rowwise() - target_center).transpose() *
-                                     (rest.rowwise() - motion.center);
+  const Eigen::Matrix3d covariance =
+      (handle.targets.rowwise() - target_center).transpose() * (rest.rowwise() - motion.center);
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) d(2, 2) = -1.0;
@@ -78,8 +78,8 @@ std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
   };
   for (const auto& [key, value] : root) {
     if (key.str() != "edit") {
-      throw ConfigError(fmt::format("{}: unknown key '{}' (expected [[edit]] entries)", file,
-                                    key.str()));
+      throw ConfigError(
+          fmt::format("{}: unknown key '{}' (expected [[edit]] entries)", file, key.str()));
     }
   }
   const toml::array* entries = root["edit"].as_array();
@@ -141,8 +141,8 @@ std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
       fail(k, "add needs exactly one selection: select.ball, select.slab or select.indices");
     }
     if (const toml::table* ball = (*select)["ball"].as_table()) {
-      const Eigen::Vector3d center = lo + vector3(k, ball->get("center"), "select.ball center")
-                                              .cwiseProduct(extent);
+      const Eigen::Vector3d center =
+          lo + vector3(k, ball->get("center"), "select.ball center").cwiseProduct(extent);
       const auto radius = (*ball)["radius"].value<double>();
       if (!radius || *radius <= 0.0) fail(k, "select.ball needs radius > 0");
       for (Index v = 0; v < mesh.num_vertices(); ++v) {
@@ -192,9 +192,8 @@ Constraints FrameConstraints(const Scenario& scenario, double t) {
         Eigen::AngleAxisd(motion.rotation.angle() * t, motion.rotation.axis()).toRotationMatrix();
     for (Index k = 0; k < static_cast<Index>(handle.vertices.size()); ++k) {
       const Eigen::RowVector3d rest = scenario.mesh.vertices.row(handle.vertices[k]);
-      handle.targets.row(k) = (r * (rest - motion.center).transpose()).transpose() +
-                              motion.center + t * motion.translation +
-                              t * motion.remainder.row(k);
+      handle.targets.row(k) = (r * (rest - motion.center).transpose()).transpose() + motion.center +
+                              t * motion.translation + t * motion.remainder.row(k);
     }
   }
   // Merge as the scenario does (first handle wins), without copying the mesh.
@@ -230,8 +229,8 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
     throw InputError("--preview and --from-scratch exclude each other");
   }
   if (!(options.frame_budget_ms >= 0.0)) {
-    throw InputError(fmt::format("--frame-budget-ms must be >= 0, got {}",
-                                 options.frame_budget_ms));
+    throw InputError(
+        fmt::format("--frame-budget-ms must be >= 0, got {}", options.frame_budget_ms));
   }
   DragOutcome outcome;
   outcome.mode = options.from_scratch ? "from_scratch" : options.preview ? "preview" : "session";
@@ -258,7 +257,8 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
     ValidateRunConfig(config);
     auto optimizer = MakeOptimizer(registries, config, defaults);
     RegistryComponentFactory factory(registries, config, defaults);
-    outcome.optimizer = config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
+    outcome.optimizer =
+        config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
     for (int frame = 1; frame <= options.frames; ++frame) {
       DeformationProblem problem;
       problem.mesh = &scenario.mesh;
@@ -275,8 +275,8 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   }
 
   Stopwatch setup_clock;
-  auto configured = MakeSession(registries, scenario.mesh, config, options.threads,
-                                options.frame_start);
+  auto configured =
+      MakeSession(registries, scenario.mesh, config, options.threads, options.frame_start);
   outcome.setup_seconds = setup_clock.Seconds();
   outcome.optimizer = configured->optimizer();
   DeformationSession& session = configured->session();
@@ -301,16 +301,16 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
       for (Index v : session.handles()) is_handle[v] = 1;
       if (request.add) {
         if (added.count(request.name)) {
-          throw InputError(fmt::format("edit at frame {}: a handle '{}' was added already",
-                                       frame, request.name));
+          throw InputError(fmt::format("edit at frame {}: a handle '{}' was added already", frame,
+                                       request.name));
         }
         std::vector<Index> fresh;
         for (Index v : request.vertices) {
           if (!is_handle[v]) fresh.push_back(v);
         }
         if (fresh.empty()) {
-          throw InputError(fmt::format("edit at frame {}: '{}' selects only handle vertices",
-                                       frame, request.name));
+          throw InputError(fmt::format("edit at frame {}: '{}' selects only handle vertices", frame,
+                                       request.name));
         }
         Positions held(fresh.size(), 3);
         for (size_t k = 0; k < fresh.size(); ++k) {
@@ -416,9 +416,9 @@ std::string DragReportJson(const Scenario& scenario, const DragOutcome& outcome)
 }
 
 std::string DragTable(const DragOutcome& outcome) {
-  std::string table = fmt::format("mode {}  optimizer {}  setup {:.3f} s  constrain {:.3f} s\n",
-                                  outcome.mode, outcome.optimizer, outcome.setup_seconds,
-                                  outcome.constrain_seconds);
+  std::string table =
+      fmt::format("mode {}  optimizer {}  setup {:.3f} s  constrain {:.3f} s\n", outcome.mode,
+                  outcome.optimizer, outcome.setup_seconds, outcome.constrain_seconds);
   table += fmt::format("{:>5} {:>10} {:>16} {:>10} {:>8} {:>9}\n", "frame", "seconds", "energy",
                        "iterations", "total", "converged");
   for (const DragFrame& frame : outcome.frames) {

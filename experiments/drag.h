@@ -43,16 +43,16 @@ struct DragOptions {
   bool preview = false;          ///< session Preview() frames instead of Solve()
   bool from_scratch = false;     ///< a fresh one-shot run per frame (the baseline)
   SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected;
-  std::string out_frames;        ///< folder for frame_NNN.ply (empty: none)
-  std::vector<DragEdit> edits;   ///< session modes only
+  std::string out_frames;       ///< folder for frame_NNN.ply (empty: none)
+  std::vector<DragEdit> edits;  ///< session modes only
   IterationCallback progress;
 };
 
 struct DragFrame {
-  int frame = 0;          ///< 1-based
-  double seconds = 0.0;   ///< the frame's solve (from scratch: the whole one-shot run)
+  int frame = 0;         ///< 1-based
+  double seconds = 0.0;  ///< the frame's solve (from scratch: the whole one-shot run)
   double energy = 0.0;
-  int iterations = 0;     ///< finest level
+  int iterations = 0;  ///< finest level
   int total_iterations = 0;
   bool converged = false;
   std::vector<LevelResult> levels;  ///< finest first
@@ -63,12 +63,12 @@ struct DragFrame {
 };
 
 struct DragOutcome {
-  std::string mode;                 ///< "session", "preview" or "from_scratch"
+  std::string mode;  ///< "session", "preview" or "from_scratch"
   std::string optimizer;
-  double setup_seconds = 0.0;       ///< session: hierarchy and precomputation
-  double constrain_seconds = 0.0;   ///< session: the first SetHandles (factoring every level)
+  double setup_seconds = 0.0;      ///< session: hierarchy and precomputation
+  double constrain_seconds = 0.0;  ///< session: the first SetHandles (factoring every level)
   std::vector<DragFrame> frames;
-  double frames_seconds = 0.0;      ///< sum of the frames' seconds
+  double frames_seconds = 0.0;  ///< sum of the frames' seconds
   std::vector<std::string> notes;
   std::string resolved_config;
 };

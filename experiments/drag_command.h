@@ -4,9 +4,9 @@
 // The `harap drag` subcommand's command line (CLI11: included by main.cpp only; the work is in
 // drag.h).
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -30,8 +30,9 @@ struct DragCommandArguments {
 
 inline CLI::App* AddDragCommand(CLI::App& app, DragCommandArguments& a) {
   CLI::App* drag = app.add_subcommand(
-      "drag", "replay an interaction: the scenario's handles move from rest to their targets "
-              "over --frames frames, one solve per frame in a session");
+      "drag",
+      "replay an interaction: the scenario's handles move from rest to their targets "
+      "over --frames frames, one solve per frame in a session");
   drag->add_option("scenario", a.scenario, "scenario TOML file")->required();
   drag->add_option("--config", a.config_file, "TOML file with the run config tables");
   drag->add_option("--optimizer", a.optimizer, "classic (default) or hierarchical");

@@ -28,8 +28,8 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   DeformationProblem problem;
   problem.mesh = &mesh;
   problem.constraints.targets.resize(0, 3);
-  const auto prepared = context.Run(
-      [&] { return std::make_unique<const PreparedProblem>(problem, mesh_options); });
+  const auto prepared =
+      context.Run([&] { return std::make_unique<const PreparedProblem>(problem, mesh_options); });
   mesh_checks_ = prepared->checks();
   mesh_summary_ = prepared->Summary();
   const Mesh& solved = *prepared->problem().mesh;

@@ -24,9 +24,10 @@ SessionOptions SessionOptions::FromConfig(const ConfigNode& node) {
     options.hierarchical = true;
     options.optimizer = HierarchicalOptimizer::Options::FromConfig(node);
     if (options.optimizer.inner != HierarchicalOptimizer::Inner::kLocalGlobal) {
-      throw ConfigError(fmt::format("{}: a session runs the local/global iteration on every "
-                                    "level; the ADMM inner optimizers are for one-shot runs",
-                                    node.Where("inner")));
+      throw ConfigError(
+          fmt::format("{}: a session runs the local/global iteration on every "
+                      "level; the ADMM inner optimizers are for one-shot runs",
+                      node.Where("inner")));
     }
   }
   if (options.optimizer.iterations.newton > 0) {
@@ -42,8 +43,8 @@ SessionOptions::FrameStart SessionOptions::ParseFrameStart(std::string_view name
   if (name == "corrected") return FrameStart::kCorrected;
   if (name == "upsampled") return FrameStart::kUpsampled;
   if (name == "previous") return FrameStart::kPrevious;
-  throw ConfigError(fmt::format("unknown frame start '{}': valid are corrected, upsampled, previous",
-                                name));
+  throw ConfigError(
+      fmt::format("unknown frame start '{}': valid are corrected, upsampled, previous", name));
 }
 
 std::string_view SessionOptions::FrameStartName(FrameStart start) {
@@ -96,9 +97,9 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
       solved_levels_.push_back(l);
       levels_[l] = std::make_unique<Level>();
       // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-      levels_[l]->solver = std::make_unique<LocalGlobalSolver>(
-          l == 0 ? mesh_ : hierarchy_.levels[l].mesh, factory_, l, context_,
-          l > 0 ? &mesh_ : nullptr);
+      levels_[l]->solver =
+          std::make_unique<LocalGlobalSolver>(l == 0 ? mesh_ : hierarchy_.levels[l].mesh, factory_,
+                                              l, context_, l > 0 ? &mesh_ : nullptr);
       setup_timings_.precompute += levels_[l]->solver->precompute_seconds();
     }
     site_ = levels_[coarsest]->solver->energy().rotation_site();
@@ -123,9 +124,10 @@ void DeformationSession::ValidateIndices(const std::vector<Index>& indices,
   for (size_t k = 0; k < indices.size(); ++k) {
     const Index v = indices[k];
     if (v < 0 || v >= mesh_.num_vertices()) {
-      throw InputError(fmt::format("{}: vertex index {} (entry {}) is out of range (the mesh "
-                                   "has {} vertices)",
-                                   what, v, k, mesh_.num_vertices()));
+      throw InputError(
+          fmt::format("{}: vertex index {} (entry {}) is out of range (the mesh "
+                      "has {} vertices)",
+                      what, v, k, mesh_.num_vertices()));
     }
     if (seen[v]) {
       throw InputError(fmt::format("{}: vertex {} is given twice (entry {})", what, v, k));
@@ -137,8 +139,8 @@ void DeformationSession::ValidateIndices(const std::vector<Index>& indices,
 void DeformationSession::ValidateTargets(const Positions& targets, size_t count,
                                          const char* what) const {
   if (static_cast<size_t>(targets.rows()) != count) {
-    throw InputError(fmt::format("{}: {} targets for {} handle vertices", what, targets.rows(),
-                                 count));
+    throw InputError(
+        fmt::format("{}: {} targets for {} handle vertices", what, targets.rows(), count));
   }
   for (Index k = 0; k < targets.rows(); ++k) {
     if (!targets.row(k).allFinite()) {
@@ -146,8 +148,8 @@ void DeformationSession::ValidateTargets(const Positions& targets, size_t count,
                                    targets(k, 0), targets(k, 1), targets(k, 2)));
     }
     if (mesh_.planar && targets(k, 2) != 0.0) {
-      throw InputError(fmt::format("{}: the mesh is planar (z = 0) but target {} has z = {}",
-                                   what, k, targets(k, 2)));
+      throw InputError(fmt::format("{}: the mesh is planar (z = 0) but target {} has z = {}", what,
+                                   k, targets(k, 2)));
     }
   }
 }
@@ -182,9 +184,10 @@ HandleEditResult DeformationSession::AddHandles(const std::vector<Index>& indice
   const std::unordered_set<Index> current(handles_.begin(), handles_.end());
   for (Index v : indices) {
     if (current.count(v)) {
-      throw InputError(fmt::format("AddHandles: vertex {} is a handle already (move it with "
-                                   "SetTargets)",
-                                   v));
+      throw InputError(
+          fmt::format("AddHandles: vertex {} is a handle already (move it with "
+                      "SetTargets)",
+                      v));
     }
   }
   std::vector<Index> handles = handles_;
@@ -205,8 +208,9 @@ HandleEditResult DeformationSession::RemoveHandles(const std::vector<Index>& ind
     }
   }
   if (removed.size() == handles_.size()) {
-    throw InputError("RemoveHandles: this would remove every handle; a session needs at least "
-                     "one (use SetHandles to replace them)");
+    throw InputError(
+        "RemoveHandles: this would remove every handle; a session needs at least "
+        "one (use SetHandles to replace them)");
   }
   std::vector<Index> handles;
   Positions targets(handles_.size() - removed.size(), 3);
@@ -297,9 +301,8 @@ HandleEditResult DeformationSession::ConstrainLevels() {
         constrained = static_cast<Index>(level.constraints.vertices.size());
         summary = solver.ConstrainMasked(level.constraints.vertices, factory_, context_);
       }
-      result.levels.push_back(HandleEditResult::Level{l, constrained, summary.changed_rows,
-                                                      summary.factored, summary.route,
-                                                      summary.seconds});
+      result.levels.push_back(HandleEditResult::Level{
+          l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds});
     }
   });
   result.constraints = levels_[0]->solver->system().report();
@@ -412,8 +415,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         LevelState& now = scratch_[l];
         upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
                              context);
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_,
-                             work_[l + 1], work, context);
+        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
+                             work, context);
         work.positions = levels_[l]->state.positions + now.positions - work.positions;
         work.rotations = levels_[l]->state.rotations;
         start_with_global_step = false;
@@ -482,18 +485,17 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
       level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
       if (run.targets_frozen_at > 0) {
-        frozen_target_notes.push_back(fmt::format(
-            "level {}: coarse constraint targets stopped following the rotations after "
-            "iteration {} (the energy kept rising)",
-            l, run.targets_frozen_at));
+        frozen_target_notes.push_back(
+            fmt::format("level {}: coarse constraint targets stopped following the rotations after "
+                        "iteration {} (the energy kept rising)",
+                        l, run.targets_frozen_at));
       }
       result.total_iterations += run.iterations;
-      result.levels.push_back(LevelResult{l, solver.system().num_vertices(),
-                                          l == 0 ? mesh_.num_elements()
-                                                 : hierarchy_.levels[l].mesh.num_elements(),
-                                          run.iterations, run.energy, level_clock.Seconds(),
-                                          run.converged, solver.system().num_free(),
-                                          run.linear_solves});
+      result.levels.push_back(
+          LevelResult{l, solver.system().num_vertices(),
+                      l == 0 ? mesh_.num_elements() : hierarchy_.levels[l].mesh.num_elements(),
+                      run.iterations, run.energy, level_clock.Seconds(), run.converged,
+                      solver.system().num_free(), run.linear_solves});
       RecordAcceleration(options, run, result.levels.back());
       if (l == 0) {
         result.energy = run.energy;

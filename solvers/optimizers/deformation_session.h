@@ -68,13 +68,13 @@ struct HandleEditResult {
   struct Level {
     int level = 0;
     Index constrained_vertices = 0;  ///< constrained vertices of the level (coarse: clusters)
-    Index changed_rows = 0;  ///< rows of the level's masked matrix that changed
-    bool factored = false;   ///< false: nothing changed on the level
+    Index changed_rows = 0;          ///< rows of the level's masked matrix that changed
+    bool factored = false;           ///< false: nothing changed on the level
     LinearSolver::RefactorRoute route = LinearSolver::RefactorRoute::kFull;
     double seconds = 0.0;
   };
-  std::vector<Level> levels;  ///< finest first
-  double seconds = 0.0;       ///< the whole edit
+  std::vector<Level> levels;       ///< finest first
+  double seconds = 0.0;            ///< the whole edit
   ConstraintReport constraints;    ///< on the finest level
   std::vector<std::string> notes;  ///< pinned components, isolated vertices
 };

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
-#include <catch2/catch.hpp>
+#include "experiments/drag.h"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "experiments/builtins.h"
-#include "experiments/drag.h"
 #include "tests/support/run_harap.h"
 
 using namespace harap;
@@ -15,7 +15,8 @@ using namespace harap::testing;
 
 namespace {
 
-const std::string kCylinder = std::string(HARAP_SOURCE_DIR) + "/experiments/scenarios/cylinder-bend.toml";
+const std::string kCylinder =
+    std::string(HARAP_SOURCE_DIR) + "/experiments/scenarios/cylinder-bend.toml";
 
 }  // namespace
 
@@ -27,8 +28,7 @@ TEST_CASE("drag: frame targets move from rest to the scenario's targets", "[expe
   REQUIRE(at_end.indices == end.indices);
   CHECK((at_end.targets - end.targets).cwiseAbs().maxCoeff() < 1e-12);
   for (size_t k = 0; k < at_rest.indices.size(); ++k) {
-    CHECK((at_rest.targets.row(k) - scenario.mesh.vertices.row(at_rest.indices[k])).norm() <
-          1e-12);
+    CHECK((at_rest.targets.row(k) - scenario.mesh.vertices.row(at_rest.indices[k])).norm() < 1e-12);
   }
   // Halfway, the top ring (turned by 90 degrees) is turned by 45: its rest-to-halfway rotation
   // moves the ring's vertices less than the whole motion does.
@@ -46,9 +46,9 @@ TEST_CASE("drag: frame targets move from rest to the scenario's targets", "[expe
 TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experiments]") {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "harap_drag_test";
   std::filesystem::remove_all(dir);
-  const CommandResult run = RunHarap(
-      "drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 --report " +
-      (dir / "drag.json").string() + " --out-frames " + (dir / "frames").string());
+  const CommandResult run =
+      RunHarap("drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 --report " +
+               (dir / "drag.json").string() + " --out-frames " + (dir / "frames").string());
   INFO(run.output);
   REQUIRE(run.status == 0);
   CHECK(run.output.find("frames:") != std::string::npos);
@@ -66,9 +66,10 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
   }
   CHECK(std::filesystem::exists(dir / "frames" / "frame_003.ply"));
   // The last frame is the scenario's end pose: a one-shot run ends near the same energy.
-  const CommandResult scratch =
-      RunHarap("drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 "
-               "--from-scratch --report " + (dir / "scratch.json").string());
+  const CommandResult scratch = RunHarap("drag " + kCylinder +
+                                         " --optimizer hierarchical --frames 3 --threads 2 "
+                                         "--from-scratch --report " +
+                                         (dir / "scratch.json").string());
   REQUIRE(scratch.status == 0);
   std::ifstream scratch_file(dir / "scratch.json");
   const nlohmann::json from_scratch = nlohmann::json::parse(scratch_file);
@@ -82,9 +83,9 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
     edits << "[[edit]]\nframe = 2\nadd = { name = \"ball\", select.ball = { center = [0.5, 0.0, "
              "0.5], radius = 0.1 } }\n[[edit]]\nframe = 3\nremove = \"ball\"\n";
   }
-  const CommandResult edited = RunHarap(
-      "drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 --edits " +
-      (dir / "edits.toml").string() + " --report " + (dir / "edited.json").string());
+  const CommandResult edited =
+      RunHarap("drag " + kCylinder + " --optimizer hierarchical --frames 3 --threads 2 --edits " +
+               (dir / "edits.toml").string() + " --report " + (dir / "edited.json").string());
   INFO(edited.output);
   REQUIRE(edited.status == 0);
   std::ifstream edited_file(dir / "edited.json");
@@ -105,12 +106,12 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
     std::ofstream bad(dir / "bad.toml");
     bad << "[[edit]]\nframe = 2\nremove = \"nothing\"\n";
   }
-  const CommandResult bad = RunHarap("drag " + kCylinder + " --frames 3 --edits " +
-                                     (dir / "bad.toml").string());
+  const CommandResult bad =
+      RunHarap("drag " + kCylinder + " --frames 3 --edits " + (dir / "bad.toml").string());
   CHECK(bad.status == 1);
   CHECK(bad.output.find("no handle 'nothing'") != std::string::npos);
   CHECK(RunHarap("drag " + kCylinder + " --frames 0").status == 1);
-  CHECK(RunHarap("drag " + kCylinder + " --frame-start sideways").output.find("valid are corrected") !=
-        std::string::npos);
+  CHECK(RunHarap("drag " + kCylinder + " --frame-start sideways")
+            .output.find("valid are corrected") != std::string::npos);
   std::filesystem::remove_all(dir);
 }

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
-#include <catch2/catch.hpp>
+#include "experiments/session.h"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 
-#include "experiments/session.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -18,7 +18,8 @@ struct SmallBentTube : BentTube {
   SmallBentTube() : BentTube(30, 16, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4)) {}
 };
 
-const char* const kClassic = "[optimizer]\ntype = \"classic\"\ntolerance = 0\nmax_iterations = 25\n";
+const char* const kClassic =
+    "[optimizer]\ntype = \"classic\"\ntolerance = 0\nmax_iterations = 25\n";
 const char* const kHierarchical =
     "[optimizer]\ntype = \"hierarchical\"\ntolerance = 0\nmax_iterations = 20\n"
     "[hierarchy]\nmin_vertices = 60\n";
@@ -27,9 +28,9 @@ bool Close(double a, double b, double relative) {
   return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b));
 }
 
-std::unique_ptr<ConfiguredSession> Session(const TestSetup& setup, const Mesh& mesh,
-                                           SessionOptions::FrameStart start =
-                                               SessionOptions::FrameStart::kCorrected) {
+std::unique_ptr<ConfiguredSession> Session(
+    const TestSetup& setup, const Mesh& mesh,
+    SessionOptions::FrameStart start = SessionOptions::FrameStart::kCorrected) {
   return MakeSession(setup.registries, mesh, setup.config, 2, start);
 }
 
@@ -152,16 +153,26 @@ TEST_CASE("session: bad calls throw InputError, change nothing, and the session 
       {"no vertex indices", [&] { session.SetHandles({}); }},
       {"targets for", [&] { session.SetHandles(handles.indices, handles.targets.topRows(3)); }},
       {"not finite", [&] { session.SetHandles(handles.indices, nan_targets); }},
-      {"a handle already", [&] { session.AddHandles({handles.indices[0]}, Positions::Zero(1, 3)); }},
-      {"targets for", [&] { session.AddHandles({200, 201}, Positions::Zero(1, 3)); }},
+      {"a handle already",
+       [&] { session.AddHandles({handles.indices[0]}, Positions::Zero(1, 3)); }},
+      {"targets for",
+       [&] {
+         session.AddHandles({200, 201}, Positions::Zero(1, 3));
+       }},
       {"out of range", [&] { session.AddHandles({n + 5}, Positions::Zero(1, 3)); }},
       {"not finite", [&] { session.AddHandles({200}, nan_targets.row(3)); }},
       {"not a handle", [&] { session.RemoveHandles({200}); }},
       {"every handle", [&] { session.RemoveHandles(handles.indices); }},
-      {"given twice", [&] { session.RemoveHandles({handles.indices[0], handles.indices[0]}); }},
+      {"given twice",
+       [&] {
+         session.RemoveHandles({handles.indices[0], handles.indices[0]});
+       }},
       {"positions for", [&] { session.SetPositions(Positions::Zero(3, 3)); }},
       {"not all finite", [&] { session.SetPositions(bad_positions); }},
-      {"time budget", [&] { session.Solve({-1.0, -1, -2.0}); }},
+      {"time budget",
+       [&] {
+         session.Solve({-1.0, -1, -2.0});
+       }},
   };
   for (const auto& [message, call] : bad_calls) {
     INFO("expected an error containing '" << message << "'");
@@ -180,8 +191,9 @@ TEST_CASE("session: bad calls throw InputError, change nothing, and the session 
 TEST_CASE("session: a warm-started solve with unchanged targets takes very few iterations",
           "[session]") {
   SmallBentTube tube;
-  TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
-                  "[hierarchy]\nmin_vertices = 60\n");
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+      "[hierarchy]\nmin_vertices = 60\n");
   for (const auto start :
        {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kPrevious,
         SessionOptions::FrameStart::kCorrected}) {
@@ -203,11 +215,11 @@ TEST_CASE("session: a warm-started solve with unchanged targets takes very few i
   }
 }
 
-TEST_CASE("session: moving targets, preview, time budget and a stopping callback",
-          "[session]") {
+TEST_CASE("session: moving targets, preview, time budget and a stopping callback", "[session]") {
   SmallBentTube tube;
-  TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
-                  "[hierarchy]\nmin_vertices = 60\n");
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+      "[hierarchy]\nmin_vertices = 60\n");
   auto configured = Session(setup, tube.mesh);
   DeformationSession& session = configured->session();
   const Constraints& handles = tube.problem.constraints;
@@ -310,8 +322,9 @@ TEST_CASE("session: options a session cannot run are rejected clearly", "[sessio
 TEST_CASE("session: a drag in frames ends near the one-shot solution with the cascade starts",
           "[session]") {
   SmallBentTube tube;
-  TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n"
-                  "[hierarchy]\nmin_vertices = 60\n");
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n"
+      "[hierarchy]\nmin_vertices = 60\n");
   const OptimizeResult reference =
       setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context::WithThreads(2));
   const Constraints& handles = tube.problem.constraints;
