@@ -67,4 +67,21 @@ Scenario ParseScenario(std::string_view toml_text, const std::string& source_nam
                        const std::filesystem::path& base_directory,
                        const ScenarioLimits& limits = {});
 
+/// Decides scenario.mesh.planar: `setting` if given (true fails with a ConfigError prefixed by
+/// `where` when the mesh has tetrahedra or something leaves the plane z = 0), else automatically:
+/// a triangle mesh whose vertices, handle targets and initial positions all have z = 0 (a note
+/// says so). Scenario files and in-memory scenarios decide alike.
+void DecidePlanar(Scenario& scenario, std::optional<bool> setting, const std::string& where);
+
+/// A scenario from data held in memory (the Python module's arrays): `mesh` (triangles or
+/// tetrahedra; not planar yet), one handle moving `handle_vertices[k]` to `targets.row(k)`, an
+/// optional start configuration, and `planar` as in a scenario file (absent: automatic). Checks
+/// everything a scenario file's loader checks and throws InputError naming `source` and the
+/// offending row: the mesh (ValidateMesh; flat tetrahedra), handle vertices out of range or
+/// repeated, a targets or initial array of the wrong size, non-finite targets or initial
+/// positions. Tetrahedra are oriented positively as the file readers do (a note says so).
+Scenario ScenarioFromArrays(Mesh mesh, const std::vector<Index>& handle_vertices,
+                            const Positions& targets, std::optional<Positions> initial,
+                            std::optional<bool> planar, const std::string& source);
+
 }  // namespace harap

@@ -1,0 +1,519 @@
+// SPDX-License-Identifier: MIT
+// The compiled part of the Python package `harap` (harap._harap): converts numpy arrays to and
+// from harap's types and calls the library (experiments/deform.h, experiments/library.h,
+// framework/io). No algorithm lives here; python/harap/__init__.py is the public API.
+//
+// Threads and signals: a solve runs on a worker thread with the GIL released. The calling thread
+// waits; after every iteration (and every 20 ms) it takes the GIL, runs Python's signal handlers
+// (PyErr_CheckSignals works only on the main thread) and the per-iteration Python callback, so
+// the callback runs on the caller's thread. A handler that raises (Ctrl-C: KeyboardInterrupt), a
+// callback that raises or returns False ends the solve after its current iteration
+// (CallbackAction::kStop); the exception is raised once the worker has finished.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <climits>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "experiments/builtins.h"
+#include "experiments/deform.h"
+#include "experiments/library.h"
+#include "framework/error.h"
+#include "framework/io/builtin_meshes.h"
+#include "framework/io/mesh_io.h"
+#include "framework/io/scenario.h"
+
+namespace py = pybind11;
+
+namespace harap {
+namespace {
+
+py::exception<Error>* g_error = nullptr;
+py::exception<ConfigError>* g_config_error = nullptr;
+py::exception<InputError>* g_input_error = nullptr;
+py::exception<NumericalError>* g_numerical_error = nullptr;
+py::exception<InternalError>* g_internal_error = nullptr;
+
+// Options arrive from Python as (dotted key, TOML value literal) pairs, in order.
+using Settings = std::vector<std::pair<std::string, std::string>>;
+
+// A run config from settings; errors name "<options>" and the key, as config files name theirs.
+ConfigNode ConfigFromSettings(const Settings& settings) {
+  ConfigNode config = ConfigNode::Parse("", "<options>");
+  for (const auto& [key, literal] : settings) config.Set(key, literal);
+  return config;
+}
+
+const Registries& BuiltinRegistries() {
+  static const Registries registries = MakeBuiltinRegistries();
+  return registries;
+}
+
+// numpy.asarray(object): lists, tuples and any array-like; arrays pass through unchanged.
+py::array AsArray(py::handle object, const std::string& name) {
+  py::object numpy = py::module_::import("numpy");
+  try {
+    return numpy.attr("asarray")(object);
+  } catch (py::error_already_set& error) {
+    throw InputError(fmt::format("{}: not convertible to an array ({})", name, error.what()));
+  }
+}
+
+std::string ShapeText(const py::array& array) {
+  std::string text = "(";
+  for (py::ssize_t d = 0; d < array.ndim(); ++d) {
+    text += fmt::format("{}{}", d ? ", " : "", array.shape(d));
+  }
+  return text + (array.ndim() == 1 ? ",)" : ")");
+}
+
+std::string DtypeText(const py::array& array) { return py::str(array.dtype()).cast<std::string>(); }
+
+// An (n, 3) array of real numbers (any float or integer dtype, any memory layout: copied).
+Positions ToPositions(py::handle object, const std::string& name) {
+  const py::array array = AsArray(object, name);
+  if (array.size() == 0 && array.ndim() <= 2 && (array.ndim() < 2 || array.shape(1) == 3 ||
+                                                  array.shape(1) == 0)) {
+    return Positions(0, 3);
+  }
+  const char kind = array.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    throw InputError(fmt::format("{} must hold real numbers (a float or integer dtype), got dtype "
+                                 "{}",
+                                 name, DtypeText(array)));
+  }
+  if (array.ndim() != 2 || array.shape(1) != 3) {
+    throw InputError(fmt::format("{} must be an (n, 3) array, got shape {}", name,
+                                 ShapeText(array)));
+  }
+  if (array.shape(0) > INT_MAX) throw InputError(fmt::format("{}: too many rows", name));
+  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!values) throw InputError(fmt::format("{}: cannot convert to float64", name));
+  const auto view = values.unchecked<2>();
+  Positions positions(static_cast<Index>(view.shape(0)), 3);
+  for (py::ssize_t i = 0; i < view.shape(0); ++i) {
+    for (int d = 0; d < 3; ++d) positions(static_cast<Index>(i), d) = view(i, d);
+  }
+  return positions;
+}
+
+// An integer array (any integer dtype and layout) as int64.
+py::array_t<long long, py::array::c_style | py::array::forcecast> ToIntegers(
+    const py::array& array, const std::string& name) {
+  const char kind = array.dtype().kind();
+  if (kind != 'i' && kind != 'u') {
+    throw InputError(fmt::format("{} must hold integers, got dtype {}", name, DtypeText(array)));
+  }
+  auto values = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!values) throw InputError(fmt::format("{}: cannot convert to int64", name));
+  return values;
+}
+
+Elements ToElements(py::handle object, const std::string& name) {
+  const py::array array = AsArray(object, name);
+  if (array.ndim() != 2 || (array.shape(1) != 3 && array.shape(1) != 4)) {
+    throw InputError(fmt::format("{} must be an (m, 3) array of triangles or an (m, 4) array of "
+                                 "tetrahedra, got shape {}",
+                                 name, ShapeText(array)));
+  }
+  if (array.size() == 0) return Elements(0, array.shape(1));
+  const auto values = ToIntegers(array, name);
+  const auto view = values.unchecked<2>();
+  Elements elements(static_cast<Index>(view.shape(0)), static_cast<Index>(view.shape(1)));
+  for (py::ssize_t e = 0; e < view.shape(0); ++e) {
+    for (py::ssize_t a = 0; a < view.shape(1); ++a) {
+      const long long v = view(e, a);
+      if (v < INT_MIN || v > INT_MAX) {
+        throw InputError(fmt::format("{}: element {} references vertex {}, which is out of range",
+                                     name, e, v));
+      }
+      elements(static_cast<Index>(e), static_cast<Index>(a)) = static_cast<Index>(v);
+    }
+  }
+  return elements;
+}
+
+std::vector<Index> ToIndices(py::handle object, const std::string& name) {
+  const py::array array = AsArray(object, name);
+  if (array.size() == 0 && array.ndim() == 1) return {};
+  if (array.ndim() != 1) {
+    throw InputError(fmt::format("{} must be a 1-D array of vertex indices, got shape {}", name,
+                                 ShapeText(array)));
+  }
+  const auto values = ToIntegers(array, name);
+  const auto view = values.unchecked<1>();
+  std::vector<Index> indices(static_cast<size_t>(view.shape(0)));
+  for (py::ssize_t k = 0; k < view.shape(0); ++k) {
+    const long long v = view(k);
+    if (v < INT_MIN || v > INT_MAX) {
+      throw InputError(fmt::format("{}: vertex {} (row {}) is out of range", name, v, k));
+    }
+    indices[static_cast<size_t>(k)] = static_cast<Index>(v);
+  }
+  return indices;
+}
+
+py::array_t<double> FromPositions(const Positions& positions) {
+  py::array_t<double> array({static_cast<py::ssize_t>(positions.rows()), py::ssize_t{3}});
+  auto view = array.mutable_unchecked<2>();
+  for (Index i = 0; i < positions.rows(); ++i) {
+    for (int d = 0; d < 3; ++d) view(i, d) = positions(i, d);
+  }
+  return array;
+}
+
+py::array_t<long long> FromElements(const Elements& elements) {
+  py::array_t<long long> array(
+      {static_cast<py::ssize_t>(elements.rows()), static_cast<py::ssize_t>(elements.cols())});
+  auto view = array.mutable_unchecked<2>();
+  for (Index e = 0; e < elements.rows(); ++e) {
+    for (Index a = 0; a < elements.cols(); ++a) view(e, a) = elements(e, a);
+  }
+  return array;
+}
+
+template <class T>
+py::array_t<long long> FromVector(const std::vector<T>& values) {
+  py::array_t<long long> array(static_cast<py::ssize_t>(values.size()));
+  auto view = array.mutable_unchecked<1>();
+  for (size_t k = 0; k < values.size(); ++k) view(static_cast<py::ssize_t>(k)) = values[k];
+  return array;
+}
+
+Mesh ToMesh(py::handle V, py::handle F) {
+  Mesh mesh;
+  mesh.vertices = ToPositions(V, "V");
+  mesh.elements = ToElements(F, "F");
+  return mesh;
+}
+
+std::optional<Positions> ToOptionalPositions(py::handle object, const std::string& name) {
+  if (object.is_none()) return std::nullopt;
+  return ToPositions(object, name);
+}
+
+void CheckThreads(int threads) {
+  if (threads < 0) throw ConfigError(fmt::format("threads must be >= 0 (0: all cores), got {}", threads));
+}
+
+// A solve on a worker thread, watched by the calling thread (see the top of the file). The
+// worker reports every iteration (OnIteration, the optimizer's progress callback); the calling
+// thread, woken by each report and at least every 20 ms, takes the GIL, runs Python's signal
+// handlers and then the Python callback, if any, for that iteration, while the worker waits for
+// its answer (without a callback the worker does not wait). A handler or callback that raises, or
+// a callback returning False, makes the next answer kStop.
+class WatchedSolve {
+ public:
+  explicit WatchedSolve(py::object callback) : callback_(std::move(callback)) {}
+
+  // Worker thread.
+  CallbackAction OnIteration(const IterationSummary& summary) {
+    std::unique_lock lock(mutex_);
+    if (stop_) return CallbackAction::kStop;
+    if (!callback_.is_none()) {
+      answered_.wait(lock, [&] { return !pending_; });  // one report at a time
+      if (stop_) return CallbackAction::kStop;
+      pending_ = summary;
+      changed_.notify_all();
+      answered_.wait(lock, [&] { return !pending_; });
+    } else {
+      ++iterations_;
+      changed_.notify_all();
+    }
+    return stop_ ? CallbackAction::kStop : CallbackAction::kContinue;
+  }
+
+  // Calling thread, GIL held: runs `work` on the worker; raises the Python exception that stopped
+  // it, else rethrows the exception `work` threw.
+  template <class Work>
+  void Run(Work&& work) {
+    std::exception_ptr failure;
+    {
+      py::gil_scoped_release release;
+      std::thread worker([&] {
+        try {
+          work();
+        } catch (...) {
+          failure = std::current_exception();
+        }
+        std::lock_guard lock(mutex_);
+        done_ = true;
+        changed_.notify_all();
+      });
+      Watch();
+      worker.join();
+    }
+    if (python_error_) throw std::move(*python_error_);
+    if (callback_failure_) std::rethrow_exception(callback_failure_);
+    if (failure) std::rethrow_exception(failure);
+  }
+
+ private:
+  // Calling thread, GIL released.
+  void Watch() {
+    std::unique_lock lock(mutex_);
+    long long seen = iterations_;
+    while (true) {
+      changed_.wait_for(lock, std::chrono::milliseconds(20),
+                        [&] { return done_ || pending_ || iterations_ != seen; });
+      if (done_) return;
+      seen = iterations_;
+      const std::optional<IterationSummary> summary = pending_;
+      lock.unlock();
+      const bool stop = CheckSignalsAndCall(summary);
+      lock.lock();
+      if (stop) stop_ = true;
+      if (summary) {
+        pending_.reset();
+        answered_.notify_all();
+      }
+    }
+  }
+
+  // Calling thread: takes the GIL; true if the solve must stop.
+  bool CheckSignalsAndCall(const std::optional<IterationSummary>& summary) {
+    py::gil_scoped_acquire acquire;
+    if (python_error_ || callback_failure_) return true;
+    if (PyErr_CheckSignals() != 0) {
+      python_error_.emplace();  // fetches the handler's exception (KeyboardInterrupt)
+      return true;
+    }
+    if (!summary) return false;
+    try {
+      const py::object answer = callback_(summary->level, summary->iteration, summary->energy);
+      return answer.is(py::bool_(false));
+    } catch (py::error_already_set& error) {
+      python_error_.emplace(std::move(error));
+    } catch (...) {
+      callback_failure_ = std::current_exception();
+    }
+    return true;
+  }
+
+  py::object callback_;
+  std::mutex mutex_;
+  std::condition_variable changed_;   // worker → calling thread: an iteration, or done
+  std::condition_variable answered_;  // calling thread → worker: pending_ handled
+  std::optional<IterationSummary> pending_;
+  long long iterations_ = 0;
+  bool done_ = false;
+  bool stop_ = false;
+  // Only touched with the GIL held, on the calling thread.
+  std::optional<py::error_already_set> python_error_;
+  std::exception_ptr callback_failure_;
+};
+
+// harap._harap.deform: (positions, report JSON text, stopped by the callback).
+py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targets,
+                 const Settings& settings, py::handle initial, std::optional<bool> planar,
+                 py::object callback, int threads, bool trace) {
+  CheckThreads(threads);
+  if (!callback.is_none() && !PyCallable_Check(callback.ptr())) {
+    throw ConfigError("callback must be callable as callback(level, iteration, energy) or None");
+  }
+  const ConfigNode config = ConfigFromSettings(settings);
+  Mesh mesh = ToMesh(V, F);
+  const std::vector<Index> handle_vertices = ToIndices(handles, "handles");
+  const Positions handle_targets = ToPositions(targets, "targets");
+  const Scenario scenario =
+      ScenarioFromArrays(std::move(mesh), handle_vertices, handle_targets,
+                         ToOptionalPositions(initial, "initial"), planar, "arrays V, F");
+
+  WatchedSolve solve(std::move(callback));
+  DeformOptions options;
+  options.threads = threads;
+  options.progress = [&](const IterationSummary& summary) { return solve.OnIteration(summary); };
+  DeformOutcome outcome;
+  solve.Run([&] { outcome = RunDeform(BuiltinRegistries(), scenario, config, options); });
+  return py::make_tuple(FromPositions(outcome.result.positions),
+                        DeformReportJson(scenario, outcome, trace),
+                        outcome.result.stopped_by_callback);
+}
+
+py::tuple ReadMeshArrays(const std::string& path) {
+  Mesh mesh;
+  {
+    py::gil_scoped_release release;
+    mesh = ReadMesh(path);
+  }
+  return py::make_tuple(FromPositions(mesh.vertices), FromElements(mesh.elements));
+}
+
+void WriteMeshArrays(const std::string& path, py::handle V, py::handle F) {
+  Mesh mesh = ToMesh(V, F);
+  ValidateMesh(mesh, path);
+  const std::string extension = std::filesystem::path(path).extension().string();
+  if (extension != ".ply" && extension != ".PLY") {
+    throw InputError(fmt::format("{}: write_mesh writes binary PLY (double coordinates) only; "
+                                 "name the file .ply",
+                                 path));
+  }
+  py::gil_scoped_release release;
+  WritePly(path, mesh.vertices, mesh.elements);
+}
+
+py::dict ScenarioDict(const Scenario& scenario) {
+  const Constraints merged = scenario.MergedConstraints();
+  py::list groups;
+  for (const ScenarioHandle& handle : scenario.handles) {
+    py::dict group;
+    group["name"] = handle.name;
+    group["vertices"] = FromVector(handle.vertices);
+    group["targets"] = FromPositions(handle.targets);
+    groups.append(group);
+  }
+  py::dict result;
+  result["V"] = FromPositions(scenario.mesh.vertices);
+  result["F"] = FromElements(scenario.mesh.elements);
+  result["handles"] = FromVector(merged.indices);
+  result["targets"] = FromPositions(merged.targets);
+  result["initial"] = scenario.initial ? py::object(FromPositions(*scenario.initial)) : py::none();
+  result["planar"] = scenario.mesh.planar;
+  result["handle_groups"] = groups;
+  result["mesh_source"] = scenario.mesh_source;
+  result["notes"] = scenario.notes;
+  return result;
+}
+
+py::dict LoadScenarioArrays(const std::string& path) {
+  Scenario scenario;
+  {
+    py::gil_scoped_release release;
+    scenario = LoadScenario(path);
+  }
+  return ScenarioDict(scenario);
+}
+
+py::tuple BuiltinMeshArrays(const Settings& settings) {
+  const ConfigNode config = ConfigFromSettings(settings);
+  const Mesh mesh = MakeBuiltinMesh(config);
+  return py::make_tuple(FromPositions(mesh.vertices), FromElements(mesh.elements), mesh.planar);
+}
+
+py::list HierarchyLevels(py::handle V, py::handle F, const Settings& settings,
+                         std::optional<bool> planar, int threads) {
+  CheckThreads(threads);
+  const ConfigNode config = ConfigFromSettings(settings);
+  const Scenario scenario =
+      ScenarioFromArrays(ToMesh(V, F), {}, Positions(0, 3), std::nullopt, planar, "arrays V, F");
+  MeshHierarchy hierarchy;
+  {
+    py::gil_scoped_release release;
+    hierarchy = BuildHierarchy(BuiltinRegistries(), scenario.mesh, config, threads);
+  }
+  py::list levels;
+  for (const HierarchyLevel& level : hierarchy.levels) {
+    py::dict entry;
+    entry["vertices"] = FromPositions(level.mesh.vertices);
+    entry["elements"] = FromElements(level.mesh.elements);
+    entry["coarse_vertex"] = level.coarse_vertex.empty() ? py::object(py::none())
+                                                         : py::object(FromVector(level.coarse_vertex));
+    entry["in_cluster"] = level.in_cluster.empty() ? py::object(py::none())
+                                                   : py::object(FromVector(level.in_cluster));
+    levels.append(entry);
+  }
+  return levels;
+}
+
+py::tuple EnergyValue(py::handle V, py::handle F, py::handle U, const Settings& settings,
+                      std::optional<bool> planar, int threads) {
+  CheckThreads(threads);
+  const ConfigNode config = ConfigFromSettings(settings);
+  const Positions u = ToPositions(U, "U");
+  // The scenario builder checks the mesh and decides `planar` as for a scenario whose start
+  // configuration is U.
+  const Scenario scenario =
+      ScenarioFromArrays(ToMesh(V, F), {}, Positions(0, 3), u, planar, "arrays V, F");
+  EnergyEvaluation evaluation;
+  {
+    py::gil_scoped_release release;
+    evaluation = EvaluateEnergy(BuiltinRegistries(), scenario.mesh, u, config, threads);
+  }
+  py::array_t<double> rotations({static_cast<py::ssize_t>(evaluation.rotations.size()),
+                                 py::ssize_t{3}, py::ssize_t{3}});
+  auto view = rotations.mutable_unchecked<3>();
+  for (size_t s = 0; s < evaluation.rotations.size(); ++s) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) view(static_cast<py::ssize_t>(s), i, j) = evaluation.rotations[s](i, j);
+    }
+  }
+  return py::make_tuple(evaluation.value, FromPositions(evaluation.gradient), rotations,
+                        evaluation.per_element, scenario.mesh.planar);
+}
+
+py::list OptionList(const std::vector<OptionInfo>& options) {
+  py::list list;
+  for (const OptionInfo& option : options) {
+    list.append(py::make_tuple(option.key, option.default_value, option.help));
+  }
+  return list;
+}
+
+py::dict Components() {
+  const ComponentCatalog catalog = DescribeComponents(BuiltinRegistries());
+  py::list components;
+  for (const ComponentDescription& component : catalog.components) {
+    components.append(py::make_tuple(component.kind, component.name, component.description,
+                                     OptionList(component.options)));
+  }
+  py::dict result;
+  result["components"] = components;
+  result["small_systems"] = OptionList(catalog.small_systems_options);
+  result["mesh"] = OptionList(catalog.mesh_options);
+  result["builtin_meshes"] = catalog.builtin_meshes;
+  return result;
+}
+
+}  // namespace
+}  // namespace harap
+
+PYBIND11_MODULE(_harap, m) {
+  using namespace harap;
+  m.doc() = "harap's compiled core; use the package `harap` (python/harap/__init__.py).";
+
+  // C++ errors become Python exceptions with the same messages: harap.Error (a ValueError) and
+  // one subclass per harap::Error subclass. Never destroyed: they live as long as the module.
+  g_error = new py::exception<Error>(m, "Error", PyExc_ValueError);
+  g_config_error = new py::exception<ConfigError>(m, "ConfigError", g_error->ptr());
+  g_input_error = new py::exception<InputError>(m, "InputError", g_error->ptr());
+  g_numerical_error = new py::exception<NumericalError>(m, "NumericalError", g_error->ptr());
+  g_internal_error = new py::exception<InternalError>(m, "InternalError", g_error->ptr());
+  for (const char* name : {"Error", "ConfigError", "InputError", "NumericalError", "InternalError"}) {
+    m.attr(name).attr("__module__") = "harap";
+  }
+  py::register_exception_translator([](std::exception_ptr pointer) {
+    try {
+      if (pointer) std::rethrow_exception(pointer);
+    } catch (const ConfigError& e) {
+      (*g_config_error)(e.what());
+    } catch (const InputError& e) {
+      (*g_input_error)(e.what());
+    } catch (const NumericalError& e) {
+      (*g_numerical_error)(e.what());
+    } catch (const InternalError& e) {
+      (*g_internal_error)(e.what());
+    } catch (const Error& e) {
+      (*g_error)(e.what());
+    }
+  });
+
+  m.def("deform", &Deform, py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
+        py::arg("settings"), py::arg("initial"), py::arg("planar"), py::arg("callback"),
+        py::arg("threads"), py::arg("trace"));
+  m.def("read_mesh", &ReadMeshArrays, py::arg("path"));
+  m.def("write_mesh", &WriteMeshArrays, py::arg("path"), py::arg("V"), py::arg("F"));
+  m.def("load_scenario", &LoadScenarioArrays, py::arg("path"));
+  m.def("builtin_mesh", &BuiltinMeshArrays, py::arg("settings"));
+  m.def("hierarchy", &HierarchyLevels, py::arg("V"), py::arg("F"), py::arg("settings"),
+        py::arg("planar"), py::arg("threads"));
+  m.def("energy", &EnergyValue, py::arg("V"), py::arg("F"), py::arg("U"), py::arg("settings"),
+        py::arg("planar"), py::arg("threads"));
+  m.def("components", &Components);
+  // harap.Session: bound here once the session (issue 21) is merged.
+}

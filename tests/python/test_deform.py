@@ -1,0 +1,165 @@
+# SPDX-License-Identifier: MIT
+"""harap.deform: results, report keys, and identity with `harap deform` on the same scenario."""
+import json
+
+import numpy as np
+import pytest
+
+import harap
+from conftest import run_cli
+
+# A small scenario the CLI and the Python module both run (generated mesh: no data needed).
+CYLINDER_SCENARIO = """
+mesh = { builtin = "cylinder", vertices = 1500 }
+[[handle]]
+name = "bottom"
+select.slab = { axis = "z", from = 0.0, to = 0.02 }
+[[handle]]
+name = "top"
+select.slab = { axis = "z", from = 0.98, to = 1.0 }
+rotate = { axis = [1.0, 0.0, 0.0], degrees = 90.0 }
+translate = [0.0, 0.35, -0.3]
+"""
+
+TET_SCENARIO = """
+mesh = { tetrahedralize = { builtin = "cylinder", vertices = 300 }, max_volume = 0.01 }
+[[handle]]
+select.slab = { axis = "z", from = 0.0, to = 0.05 }
+[[handle]]
+select.slab = { axis = "z", from = 0.95, to = 1.0 }
+translate = [0.2, 0.0, 0.0]
+"""
+
+
+def test_deform_moves_the_handles_and_reports(cylinder):
+    V, F, handles, targets = cylinder
+    result = harap.deform(V, F, handles, targets, options={"optimizer.tolerance": 1e-6,
+                                                           "hierarchy.min_vertices": 100})
+    assert result.positions.shape == V.shape
+    assert result.positions.dtype == np.float64
+    np.testing.assert_allclose(result.positions[handles], targets, atol=1e-12)
+    report = result.report
+    assert report["optimizer"] == "hierarchical"
+    assert report["energy"] > 0
+    assert report["converged"]
+    assert len(report["levels"]) > 1
+    assert report["trace"] and {"t", "energy", "level"} <= set(report["trace"][0])
+    # Energies of the trace decrease on the finest level (local/global never increases it).
+    finest = [p["energy"] for p in report["trace"] if p["level"] == 0]
+    assert all(b <= a * (1 + 1e-12) for a, b in zip(finest, finest[1:]))
+    assert result.energy == report["energy"]
+    assert not result.stopped
+
+
+def test_report_has_the_cli_report_keys(tmp_path):
+    scenario = tmp_path / "cylinder.toml"
+    scenario.write_text(CYLINDER_SCENARIO)
+    code, output = run_cli("deform", scenario, "--optimizer", "hierarchical", "--report",
+                           tmp_path / "r.json", "--trace", "--quiet")
+    assert code == 0, output
+    cli = json.loads((tmp_path / "r.json").read_text())
+    s = harap.load_scenario(scenario)
+    python = harap.deform(*s, optimizer="hierarchical").report
+
+    def keys(value, prefix=""):
+        if isinstance(value, dict):
+            return {prefix + k for k in value} | set().union(
+                *(keys(v, prefix + k + ".") for k, v in value.items()))
+        if isinstance(value, list) and value and isinstance(value[0], dict):
+            return keys(value[0], prefix + "[].")
+        return set()
+
+    # mesh_checks findings depend on the mesh only, which is the same.
+    assert keys(python) == keys(cli)
+
+
+@pytest.mark.parametrize("optimizer", ["classic", "hierarchical"])
+def test_identical_to_the_cli_on_the_same_scenario(tmp_path, optimizer):
+    scenario = tmp_path / "cylinder.toml"
+    scenario.write_text(CYLINDER_SCENARIO)
+    code, output = run_cli("deform", scenario, "--optimizer", optimizer, "--tolerance", "1e-6",
+                           "--threads", "2", "--out", tmp_path / "out.ply")
+    assert code == 0, output
+    printed = next(line.split()[1] for line in output.splitlines() if line.startswith("energy "))
+    s = harap.load_scenario(scenario)
+    result = harap.deform(*s, optimizer=optimizer, tolerance=1e-6, threads=2)
+    # The CLI prints the energy with 10 significant digits: equal to the last one.
+    assert f"{result.energy:.9e}" == printed
+    iterations = next(l.split()[1] for l in output.splitlines() if l.startswith("iterations"))
+    assert result.report["iterations"] == int(iterations)
+    cli_positions, _ = harap.read_mesh(tmp_path / "out.ply")
+    np.testing.assert_allclose(result.positions, cli_positions, rtol=0, atol=1e-9)
+
+
+def test_tetrahedra_identical_to_the_cli(tmp_path):
+    scenario = tmp_path / "tets.toml"
+    scenario.write_text(TET_SCENARIO)
+    code, output = run_cli("deform", scenario, "--optimizer", "hierarchical", "--report",
+                           tmp_path / "r.json", "--quiet")
+    assert code == 0, output
+    cli = json.loads((tmp_path / "r.json").read_text())
+    s = harap.load_scenario(scenario)
+    assert s.F.shape[1] == 4
+    result = harap.deform(*s, **s.deform_arguments())
+    assert result.report["energy_type"] == "elements"
+    assert result.report["mesh"]["element_kind"] == "tetrahedron"
+    assert f"{result.energy:.9e}" == f"{cli['energy']:.9e}"
+
+
+def test_planar_meshes_are_detected_as_in_scenarios():
+    V, F = harap.builtin_mesh("rectangle", vertices=400)
+    left = np.flatnonzero(V[:, 0] < 0.05)
+    right = np.flatnonzero(V[:, 0] > 3.95)
+    handles = np.concatenate([left, right])
+    targets = np.concatenate([V[left], V[right] + [0.0, 1.0, 0.0]])
+    result = harap.deform(V, F, handles, targets)
+    assert result.report["mesh"]["planar"]
+    assert result.report["energy_type"] == "elements"
+    assert np.all(result.positions[:, 2] == 0.0)
+    forced = harap.deform(V, F, handles, targets, planar=False)
+    assert not forced.report["mesh"]["planar"]
+    assert forced.report["energy_type"] == "spokes_and_rims"
+
+
+def test_pieces_and_options_are_passed_like_config_keys(cylinder):
+    V, F, handles, targets = cylinder
+    result = harap.deform(V, F, handles, targets, optimizer="classic", energy="spokes",
+                          solver="eigen_ldlt", options={"optimizer": {"max_iterations": 3}})
+    report = result.report
+    assert (report["optimizer"], report["energy_type"], report["solver"]) == \
+        ("classic", "spokes", "eigen_ldlt")
+    assert report["iterations"] == 3
+    assert "max_iterations = 3" in report["config"]
+    result = harap.deform(V, F, handles, targets, hierarchy="octree", upsampler="positions",
+                          max_iterations=2, options={"hierarchy.min_vertices": 100})
+    assert result.report["upsampler"] == "positions"
+    assert all(level["iterations"] <= 2 for level in result.report["levels"])
+
+
+def test_initial_positions_start_the_solve(cylinder):
+    V, F, handles, targets = cylinder
+    first = harap.deform(V, F, handles, targets, optimizer="classic", tolerance=1e-8)
+    # Started from the solution, classic converges again in far fewer iterations, lower still.
+    again = harap.deform(V, F, handles, targets, optimizer="classic", tolerance=1e-8,
+                         initial=first.positions)
+    assert again.report["iterations"] < first.report["iterations"] / 3
+    assert again.energy <= first.energy
+
+
+def test_arrays_of_any_layout_and_dtype_give_the_same_result(cylinder):
+    V, F, handles, targets = cylinder
+    reference = harap.deform(V, F, handles, targets, optimizer="classic", max_iterations=5)
+    # Fortran order, a strided view, int32 faces, float32-exact handles as a list.
+    strided = np.zeros((len(V), 6))
+    strided[:, ::2] = V
+    result = harap.deform(strided[:, ::2], np.asfortranarray(F.astype(np.int32)),
+                          list(handles), np.asfortranarray(targets), optimizer="classic",
+                          max_iterations=5)
+    np.testing.assert_array_equal(result.positions, reference.positions)
+
+
+def test_no_handles_keeps_the_rest_state(cylinder):
+    V, F, _, _ = cylinder
+    result = harap.deform(V, F, [], np.zeros((0, 3)), optimizer="classic")
+    assert result.energy < 1e-10  # rounding only
+    np.testing.assert_allclose(result.positions, V, atol=1e-9)
