@@ -17,6 +17,7 @@
 #include "experiments/cli_output.h"
 #include "experiments/component_factory.h"
 #include "experiments/deform.h"
+#include "experiments/drag_command.h"
 #include "experiments/experiment.h"
 #include "experiments/handles_command.h"
 #include "experiments/interrupt.h"
@@ -320,6 +321,9 @@ int main(int argc, char** argv) {
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
 
+  DragCommandArguments drag_args;
+  auto* drag = AddDragCommand(app, drag_args);
+
   std::string hierarchy_out;
   auto* hierarchy = app.add_subcommand("hierarchy", "build a scenario's mesh hierarchy, write each "
                                                     "level as PLY, print a per-level table");
@@ -377,6 +381,7 @@ int main(int argc, char** argv) {
     }
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
+    if (*drag) return RunDragCommand(drag_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <numeric>
 
 #include "framework/disjoint_sets.h"
@@ -12,25 +13,12 @@
 
 namespace harap {
 
-namespace {
-
-
-}  // namespace
-
-ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained) {
+SystemComponents::SystemComponents(const SparseMatrix& a) {
   const Index n = static_cast<Index>(a.rows());
   HARAP_CHECK(a.rows() == a.cols(), "global matrix is {}x{}", a.rows(), a.cols());
-  std::vector<unsigned char> fixed(n, 0);
-  for (Index v : constrained) {
-    HARAP_CHECK(v >= 0 && v < n, "constrained vertex {} out of range (n = {})", v, n);
-    HARAP_CHECK(!fixed[v], "vertex {} constrained twice", v);
-    fixed[v] = 1;
-  }
-  report_.constrained_vertices = static_cast<Index>(constrained.size());
-
   // Components over non-zero off-diagonal couplings; vertices with an empty row are isolated.
-  DisjointSets<Index> sets(n);  // connected components of A's graph
-  std::vector<unsigned char> coupled(n, 0);
+  DisjointSets<Index> sets(n);
+  coupled.assign(n, 0);
   for (Index col = 0; col < n; ++col) {
     for (SparseMatrix::InnerIterator it(a, col); it; ++it) {
       if (it.value() == 0.0) continue;
@@ -38,35 +26,60 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
       if (it.row() != col) sets.Unite(static_cast<Index>(it.row()), col);
     }
   }
+  root.resize(n);
+  for (Index v = 0; v < n; ++v) root[v] = sets.Find(v);
+}
+
+FixedVertices ChooseFixedVertices(const SystemComponents& components,
+                                  const std::vector<Index>& constrained) {
+  const Index n = components.num_vertices();
+  FixedVertices result;
+  std::vector<unsigned char>& fixed = result.fixed;
+  fixed.assign(n, 0);
+  for (Index v : constrained) {
+    HARAP_CHECK(v >= 0 && v < n, "constrained vertex {} out of range (n = {})", v, n);
+    HARAP_CHECK(!fixed[v], "vertex {} constrained twice", v);
+    fixed[v] = 1;
+  }
+  ConstraintReport& report = result.report;
+  report.constrained_vertices = static_cast<Index>(constrained.size());
   std::vector<unsigned char> component_constrained(n, 0);
-  for (Index v : constrained) component_constrained[sets.Find(v)] = 1;
+  for (Index v : constrained) component_constrained[components.root[v]] = 1;
   for (Index v = 0; v < n; ++v) {
     if (fixed[v]) continue;
-    if (!coupled[v]) {
+    if (!components.coupled[v]) {
       fixed[v] = 1;
-      pinned_vertices_.push_back(v);
-      ++report_.isolated_vertices;
+      result.pinned.push_back(v);
+      ++report.isolated_vertices;
       continue;
     }
-    const Index root = sets.Find(v);
+    const Index root = components.root[v];
     if (!component_constrained[root]) {
       // `root` is the component's lowest index, so this is the first vertex we meet of it.
       component_constrained[root] = 1;
       fixed[v] = 1;
-      pinned_vertices_.push_back(v);
-      ++report_.free_components;
+      result.pinned.push_back(v);
+      ++report.free_components;
     }
   }
-  if (report_.free_components > 0) {
+  if (report.free_components > 0) {
     for (Index v = 0; v < n; ++v) {
-      if (coupled[v]) {
-        const Index root = sets.Find(v);
-        bool root_pinned = std::binary_search(pinned_vertices_.begin(), pinned_vertices_.end(),
-                                              root);
-        if (root_pinned) ++report_.vertices_in_free_components;
+      if (components.coupled[v]) {
+        const Index root = components.root[v];
+        bool root_pinned = std::binary_search(result.pinned.begin(), result.pinned.end(), root);
+        if (root_pinned) ++report.vertices_in_free_components;
       }
     }
   }
+  return result;
+}
+
+ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained) {
+  const Index n = static_cast<Index>(a.rows());
+  FixedVertices choice = ChooseFixedVertices(SystemComponents(a), constrained);
+  const std::vector<unsigned char>& fixed = choice.fixed;
+  pinned_vertices_ = std::move(choice.pinned);
+  report_ = choice.report;
 
   fixed_vertices_ = constrained;
   fixed_vertices_.insert(fixed_vertices_.end(), pinned_vertices_.begin(), pinned_vertices_.end());
@@ -142,7 +155,119 @@ double ConstrainedSystem::ScatterFree(const Eigen::MatrixXd& x_f, Positions& u) 
         }
         return largest;
       },
-      [](double x, double y) { return std::max(x, y); });
+      [](double a, double b) { return std::max(a, b); });
+}
+
+MaskedSystem::MaskedSystem(const SparseMatrix& a) : components_(a) {
+  const Index n = components_.num_vertices();
+  // M's pattern: every stored entry of A (explicit zeros too: a factor's pattern then covers
+  // every constraint set's) plus the whole diagonal (identity rows of isolated vertices).
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(a.nonZeros() + n);
+  for (Index col = 0; col < n; ++col) {
+    for (SparseMatrix::InnerIterator it(a, col); it; ++it) {
+      entries.emplace_back(static_cast<Index>(it.row()), col, it.value());
+    }
+    entries.emplace_back(col, col, 0.0);  // summed with A's diagonal: adds exactly nothing
+  }
+  unmasked_.resize(n, n);
+  unmasked_.setFromTriplets(entries.begin(), entries.end());
+  unmasked_.makeCompressed();
+  masked_ = unmasked_;
+  fixed_.assign(n, 0);
+  free_vertices_.resize(n);
+  std::iota(free_vertices_.begin(), free_vertices_.end(), Index{0});
+  fixed_coupling_ = Positions::Zero(n, 3);
+}
+
+void MaskedSystem::MaskColumn(Index column) {
+  const Index begin = unmasked_.outerIndexPtr()[column];
+  const Index end = unmasked_.outerIndexPtr()[column + 1];
+  const Index* rows = unmasked_.innerIndexPtr();
+  const double* values = unmasked_.valuePtr();
+  double* masked = masked_.valuePtr();
+  for (Index k = begin; k < end; ++k) {
+    const Index row = rows[k];
+    if (fixed_[row] || fixed_[column]) {
+      masked[k] = row == column ? 1.0 : 0.0;
+    } else {
+      masked[k] = values[k];
+    }
+  }
+}
+
+std::vector<Index> MaskedSystem::SetConstrained(const std::vector<Index>& constrained) {
+  FixedVertices choice = ChooseFixedVertices(components_, constrained);
+  const Index n = num_vertices();
+  std::vector<Index> changed;
+  for (Index v = 0; v < n; ++v) {
+    if (choice.fixed[v] != fixed_[v]) changed.push_back(v);
+  }
+  fixed_ = std::move(choice.fixed);
+  pinned_vertices_ = std::move(choice.pinned);
+  report_ = choice.report;
+  // An entry (r, c) of M depends on whether r and c are fixed, so exactly the columns of the
+  // changed vertices and, by symmetry, the entries of their rows in the other columns change.
+  std::vector<unsigned char> touched(n, 0);
+  for (Index v : changed) {
+    touched[v] = 1;
+    for (SparseMatrix::InnerIterator it(unmasked_, v); it; ++it) touched[it.row()] = 1;
+  }
+  for (Index v = 0; v < n; ++v) {
+    if (touched[v]) MaskColumn(v);
+  }
+  fixed_vertices_ = constrained;
+  fixed_vertices_.insert(fixed_vertices_.end(), pinned_vertices_.begin(), pinned_vertices_.end());
+  free_vertices_.clear();
+  for (Index v = 0; v < n; ++v) {
+    if (!fixed_[v]) free_vertices_.push_back(v);
+  }
+  return changed;
+}
+
+void MaskedSystem::SetFixedPositions(const Positions& u) {
+  HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(),
+              num_vertices());
+  // Free rows: A_fc U_c, gathered column by column of the fixed vertices (A is symmetric).
+  for (Index v : free_vertices_) fixed_coupling_.row(v).setZero();
+  for (Index c : fixed_vertices_) {
+    fixed_coupling_.row(c) = u.row(c);
+    for (SparseMatrix::InnerIterator it(unmasked_, c); it; ++it) {
+      const Index row = static_cast<Index>(it.row());
+      if (!fixed_[row]) fixed_coupling_.row(row) += it.value() * u.row(c);
+    }
+  }
+}
+
+void MaskedSystem::ReducedRhs(const Positions& b, Eigen::MatrixXd& rhs) const {
+  const Index n = num_vertices();
+  rhs.resize(n, 3);  // no-op after the first call
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 4096),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index v = range.begin(); v != range.end(); ++v) {
+                        if (fixed_[v]) {
+                          rhs.row(v) = fixed_coupling_.row(v);
+                        } else {
+                          rhs.row(v) = b.row(v) - fixed_coupling_.row(v);
+                        }
+                      }
+                    });
+}
+
+void MaskedSystem::GatherFree(const Positions& u, Eigen::MatrixXd& x) const { x = u; }
+
+double MaskedSystem::ScatterFree(const Eigen::MatrixXd& x, Positions& u) const {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<Index>(0, num_free(), 4096), 0.0,
+      [&](const tbb::blocked_range<Index>& range, double largest) {
+        for (Index k = range.begin(); k != range.end(); ++k) {
+          const Index v = free_vertices_[k];
+          largest = std::max(largest, (x.row(v) - u.row(v)).squaredNorm());
+          u.row(v) = x.row(v);
+        }
+        return largest;
+      },
+      [](double a, double b) { return std::max(a, b); });
 }
 
 }  // namespace harap

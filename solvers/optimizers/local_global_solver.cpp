@@ -10,9 +10,8 @@
 
 namespace harap {
 
-LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
-                                     const ComponentFactory& factory, int level,
-                                     const Context& context, const Mesh* input_mesh)
+LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory,
+                                     int level, const Context& context, const Mesh* input_mesh)
     : level_(level) {
   Stopwatch clock;
   context.ReportPhase(fmt::format("precomputing level {}", level));
@@ -21,24 +20,90 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
   if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
+  rhs_.resize(mesh.num_vertices(), 3);
+}
 
-  clock.Restart();
-  context.ReportPhase(fmt::format("factoring level {}", level));
+LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
+                                     const ComponentFactory& factory, int level,
+                                     const Context& context, const Mesh* input_mesh)
+    : LocalGlobalSolver(mesh, factory, level, context, input_mesh) {
+  Constrain(constrained, factory, context);
+}
+
+namespace {
+
+// `constrained` (the mesh's numbering) in the level's internal numbering.
+std::vector<Index> Renumbered(const std::vector<Index>& constrained, const MeshOrdering& ordering) {
+  const Index n = static_cast<Index>(ordering.new_vertex.size());
   std::vector<Index> renumbered(constrained.size());
   for (size_t k = 0; k < constrained.size(); ++k) {
-    HARAP_CHECK(constrained[k] >= 0 && constrained[k] < mesh.num_vertices(),
-                "constrained vertex {} out of range", constrained[k]);
-    renumbered[k] = ordering_.new_vertex[constrained[k]];
+    HARAP_CHECK(constrained[k] >= 0 && constrained[k] < n, "constrained vertex {} out of range",
+                constrained[k]);
+    renumbered[k] = ordering.new_vertex[constrained[k]];
   }
-  system_ = std::make_unique<ConstrainedSystem>(energy_->system_matrix(), renumbered);
-  solver_ = factory.MakeLinearSolver(level, system_->num_free());
-  if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
-  constrain_seconds_ = clock.Seconds();
-  if (context.system_callback) context.system_callback(level_, system_->reduced_matrix());
+  return renumbered;
+}
 
-  rhs_.resize(mesh.num_vertices(), 3);
-  reduced_rhs_.resize(system_->num_free(), 3);
-  reduced_x_.resize(system_->num_free(), 3);
+}  // namespace
+
+void LocalGlobalSolver::Constrain(const std::vector<Index>& constrained,
+                                  const ComponentFactory& factory, const Context& context) {
+  Stopwatch clock;
+  context.ReportPhase(fmt::format("factoring level {}", level_));
+  masked_ = nullptr;
+  auto system = std::make_unique<ConstrainedSystem>(energy_->system_matrix(),
+                                                    Renumbered(constrained, ordering_));
+  solver_ = factory.MakeLinearSolver(level_, system->num_free());
+  if (system->num_free() > 0) solver_->Factorize(system->reduced_matrix(), context);
+  system_ = std::move(system);
+  constrain_seconds_ = clock.Seconds();
+  if (context.system_callback) context.system_callback(level_, system_->system_matrix());
+  reduced_rhs_.resize(system_->num_unknowns(), 3);
+  reduced_x_.resize(system_->num_unknowns(), 3);
+}
+
+LocalGlobalSolver::ConstrainSummary LocalGlobalSolver::ConstrainMasked(
+    const std::vector<Index>& constrained, const ComponentFactory& factory,
+    const Context& context) {
+  Stopwatch clock;
+  context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
+  const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
+  ConstrainSummary summary;
+  if (masked_ == nullptr) {
+    auto system = std::make_unique<MaskedSystem>(energy_->system_matrix());
+    system->SetConstrained(renumbered);
+    masked_ = system.get();
+    system_ = std::move(system);
+    solver_ = factory.MakeLinearSolver(level_, masked_->num_unknowns());
+    needs_factorization_ = true;
+    reduced_rhs_.resize(system_->num_unknowns(), 3);
+    reduced_x_.resize(system_->num_unknowns(), 3);
+    summary.changed_rows = masked_->num_unknowns();
+  } else {
+    const std::vector<Index> changed = masked_->SetConstrained(renumbered);
+    summary.changed_rows = static_cast<Index>(changed.size());
+    if (!needs_factorization_ && !changed.empty()) {
+      // Until the refactorization succeeds the factor is out of date: a throw leaves it so.
+      needs_factorization_ = true;
+      const LinearSolver::RefactorSummary refactor =
+          solver_->Refactor(masked_->system_matrix(), changed, context);
+      needs_factorization_ = false;
+      summary.factored = true;
+      summary.route = refactor.route;
+    }
+  }
+  if (needs_factorization_) {
+    solver_->Factorize(masked_->system_matrix(), context);
+    needs_factorization_ = false;
+    summary.factored = true;
+    summary.route = LinearSolver::RefactorRoute::kFull;
+  }
+  summary.seconds = clock.Seconds();
+  constrain_seconds_ = summary.seconds;
+  if (summary.factored && context.system_callback) {
+    context.system_callback(level_, system_->system_matrix());
+  }
+  return summary;
 }
 
 LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
@@ -46,17 +111,19 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
                                                     const LocalGlobalOptions& options,
                                                     double diagonal, const Context& context,
                                                     const FixedPositionUpdate& update_fixed) {
+  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
   HARAP_CHECK(caller_state.positions.rows() == system_->num_vertices(),
               "{} positions for {} vertices", caller_state.positions.rows(),
               system_->num_vertices());
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
-  LevelState state;
-  state.positions = ordering_.ToNew(caller_state.positions);
-  state.rotations = ordering_.ToNew(caller_state.rotations, per_element);
+  // The internal state's buffers are kept between runs (a session runs every frame).
+  LevelState& state = internal_state_;
+  ordering_.ToNew(caller_state.positions, state.positions);
+  ordering_.ToNew(caller_state.rotations, per_element, state.rotations);
   const RunResult result = Iterate(state, start_with_global_step, options, diagonal, context,
                                    update_fixed);
-  caller_state.positions = ordering_.ToOld(state.positions);
-  caller_state.rotations = ordering_.ToOld(state.rotations, per_element);
+  ordering_.ToOld(state.positions, caller_state.positions);
+  ordering_.ToOld(state.rotations, per_element, caller_state.rotations);
   return result;
 }
 
@@ -70,6 +137,30 @@ double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context
   const double energy = energy_->FitRotations(u, rotations, context);
   state.rotations = ordering_.ToOld(rotations, per_element);
   return energy;
+}
+
+SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& context) {
+  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
+              "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
+  Positions& u = internal_state_.positions;
+  Rotations& rotations = internal_state_.rotations;
+  ordering_.ToNew(state.positions, u);
+  ordering_.ToNew(state.rotations, per_element, rotations);
+  system_->SetFixedPositions(u);
+  if (system_->num_free() == 0) return SolveSummary{};
+  energy_->AssembleRhs(rotations, rhs_, context);
+  system_->ReducedRhs(rhs_, reduced_rhs_);
+  if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
+  const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
+  if (!summary.success) {
+    throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
+                                     summary.message));
+  }
+  system_->ScatterFree(reduced_x_, u);
+  ordering_.ToOld(u, state.positions);
+  return summary;
 }
 
 std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
@@ -112,9 +203,11 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   // from handed-down rotations): the safeguard of Anderson acceleration compares against it.
   bool energy_is_fitted = !start_with_global_step;
   if (options.anderson > 0) {
-    anderson_.Reset(system_->num_free(), options.anderson);
-    current_free_.resize(system_->num_free(), 3);
-    accelerated_free_.resize(system_->num_free(), 3);
+    // The unknowns of a masked system include the fixed rows; they hold the targets in every
+    // iterate, so the extrapolation keeps them (its weights sum to one) and ScatterFree skips them.
+    anderson_.Reset(system_->num_unknowns(), options.anderson);
+    current_free_.resize(system_->num_unknowns(), 3);
+    accelerated_free_.resize(system_->num_unknowns(), 3);
     trial_positions_ = state.positions;
   }
   if (options.newton > 0) {
@@ -122,6 +215,11 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw ConfigError(
           "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
           "derivative); this energy has none, or fits its rotations to a part of the energy");
+    }
+    if (masked_ != nullptr) {
+      throw ConfigError(
+          "optimizer.newton works on the eliminated global system of a one-shot run; an "
+          "interactive session masks its handles instead: set `newton` to 0 (or use `anderson`)");
     }
     newton_.Reset(system_->num_vertices(), system_->num_free(), options.newton_exact_hessian);
   }
@@ -185,7 +283,7 @@ double LocalGlobalSolver::NewtonIteration(LevelState& state, double& energy,
                                           double squared_diagonal, const Context& context,
                                           RunResult& result) {
   const NewtonCgStep::Outcome step =
-      newton_.Step(*energy_, *system_, *solver_, options.newton, state.positions,
+      newton_.Step(*energy_, static_cast<const ConstrainedSystem&>(*system_), *solver_, options.newton, state.positions,
                    state.rotations, energy, reduced_rhs_, reduced_x_, context);
   result.newton_steps += step.newton ? 1 : 0;
   result.hessian_products += step.cg_iterations;

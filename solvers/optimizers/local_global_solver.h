@@ -42,22 +42,52 @@ struct LocalGlobalOptions {
   bool newton_exact_hessian = true;
 };
 
-/// Local/global ARAP iterations on one mesh level with a fixed constraint set: owns the level's
-/// energy, constrained system and factored linear solver. Construction does the precomputation
-/// (energy weights, constraint elimination, factorization: the paper's P and C phases);
-/// Run() does the S phase. Per-iteration work allocates nothing.
+/// Local/global ARAP iterations on one mesh level: owns the level's energy, constrained system
+/// and factored linear solver. Construction does the precomputation (energy weights: the paper's
+/// P phase), Constrain() or ConstrainMasked() the constraint handling and factorization (the C
+/// phase); Run() does the S phase. Per-iteration work allocates nothing.
+///
+/// Two ways to constrain: Constrain() eliminates the fixed vertices (ConstrainedSystem: the
+/// smallest system, for a run with one constraint set); ConstrainMasked() masks them
+/// (MaskedSystem: a system of one size and pattern for every constraint set, so a later call
+/// with another set brings the factorization up to date with LinearSolver::Refactor on the rows
+/// that changed instead of factoring anew: interactive sessions). Newton steps need the
+/// eliminated system.
 ///
 /// Internally the level is renumbered for memory locality (vertex_ordering.h); Run() takes and
 /// returns states in the mesh's own numbering. Only `update_fixed` sees the internal numbering
 /// (translate indices with ordering()).
 class LocalGlobalSolver {
  public:
-  /// `constrained`: vertex indices whose positions are prescribed (their rows of `u` at Run()).
-  /// `input_mesh`: the mesh of the whole problem when `mesh` is a level of a hierarchy (handed to
-  /// Energy::SetInputMesh before the precomputation).
+  /// The P phase only: ordering and energy precomputation; Constrain() or ConstrainMasked() must
+  /// follow before Run(). `input_mesh`: the mesh of the whole problem when `mesh` is a level of a
+  /// hierarchy (handed to Energy::SetInputMesh before the precomputation).
+  LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory, int level,
+                    const Context& context, const Mesh* input_mesh = nullptr);
+  /// P and C at once (Constrain()): `constrained` are vertex indices whose positions are
+  /// prescribed (their rows of `u` at Run()).
   LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
                     const ComponentFactory& factory, int level, const Context& context,
                     const Mesh* input_mesh = nullptr);
+
+  /// Eliminates `constrained` (the mesh's numbering) and factors the reduced system with a new
+  /// solver from `factory`.
+  void Constrain(const std::vector<Index>& constrained, const ComponentFactory& factory,
+                 const Context& context);
+
+  /// What ConstrainMasked() did to the factorization.
+  struct ConstrainSummary {
+    bool factored = false;  ///< false: the fixed set did not change, nothing was refactored
+    LinearSolver::RefactorRoute route = LinearSolver::RefactorRoute::kFull;
+    Index changed_rows = 0;  ///< rows of the masked matrix that changed (all on the first call)
+    double seconds = 0.0;
+  };
+  /// Masks `constrained` (the mesh's numbering; unique, in range): the first call builds the
+  /// masked system and factors it with a new solver from `factory` (asked for num_vertices()
+  /// unknowns); later calls refactor only the changed rows (LinearSolver::Refactor). On a throw
+  /// from the linear solver the next call factors from scratch.
+  ConstrainSummary ConstrainMasked(const std::vector<Index>& constrained,
+                                   const ComponentFactory& factory, const Context& context);
 
   /// What the level's run did.
   struct RunResult {
@@ -97,6 +127,9 @@ class LocalGlobalSolver {
   /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
   /// returns the energy.
   double FitRotations(LevelState& state, const Context& context) const;
+  /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
+  /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
+  SolveSummary GlobalStep(LevelState& state, const Context& context);
   /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
   std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
                                                   const Context& context) const;
@@ -104,7 +137,9 @@ class LocalGlobalSolver {
   /// The level's energy; it works in the internal numbering of ordering().
   const Energy& energy() const { return *energy_; }
   const MeshOrdering& ordering() const { return ordering_; }
-  const ConstrainedSystem& system() const { return *system_; }
+  /// The constrained system (Constrain() or ConstrainMasked() must have been called).
+  const GlobalStepSystem& system() const { return *system_; }
+  bool constrained() const { return system_ != nullptr; }
   double precompute_seconds() const { return precompute_seconds_; }
   double constrain_seconds() const { return constrain_seconds_; }
 
@@ -125,11 +160,14 @@ class LocalGlobalSolver {
   int level_;
   MeshOrdering ordering_;
   std::unique_ptr<Energy> energy_;
-  std::unique_ptr<ConstrainedSystem> system_;
+  std::unique_ptr<GlobalStepSystem> system_;
+  MaskedSystem* masked_ = nullptr;  ///< system_ when masked
+  bool needs_factorization_ = false;  ///< masked: a Refactor threw, factor anew next time
   std::unique_ptr<LinearSolver> solver_;
   double precompute_seconds_ = 0.0;
   double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
+  LevelState internal_state_;  ///< Run()'s and GlobalStep()'s state in the internal numbering
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;

@@ -95,4 +95,30 @@ Rotations MeshOrdering::ToOld(const Rotations& renumbered, bool per_element) con
   return result;
 }
 
+void MeshOrdering::ToNew(const Positions& input, Positions& out) const {
+  out.resize(input.rows(), input.cols());
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) out.row(k) = input.row(old_vertex[k]);
+}
+
+void MeshOrdering::ToOld(const Positions& renumbered, Positions& out) const {
+  out.resize(renumbered.rows(), renumbered.cols());
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) out.row(old_vertex[k]) = renumbered.row(k);
+}
+
+void MeshOrdering::ToNew(const Rotations& input, bool per_element, Rotations& out) const {
+  const std::vector<Index>& old = per_element ? old_element : old_vertex;
+  if (input.size() != old.size()) {  // not set yet (e.g. empty): nothing to permute
+    out = input;
+    return;
+  }
+  out.resize(input.size());
+  for (size_t k = 0; k < old.size(); ++k) out[k] = input[old[k]];
+}
+
+void MeshOrdering::ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const {
+  const std::vector<Index>& old = per_element ? old_element : old_vertex;
+  out.resize(renumbered.size());
+  for (size_t k = 0; k < old.size(); ++k) out[old[k]] = renumbered[k];
+}
+
 }  // namespace harap

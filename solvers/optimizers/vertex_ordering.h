@@ -26,6 +26,12 @@ struct MeshOrdering {
   /// Site rotations (per vertex or per element) in the new order, and back.
   Rotations ToNew(const Rotations& input, bool per_element) const;
   Rotations ToOld(const Rotations& renumbered, bool per_element) const;
+  /// The same into `out` (resized if needed; no allocation when it has the size already: a
+  /// session converts every frame's states).
+  void ToNew(const Positions& input, Positions& out) const;
+  void ToOld(const Positions& renumbered, Positions& out) const;
+  void ToNew(const Rotations& input, bool per_element, Rotations& out) const;
+  void ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const;
 };
 
 MeshOrdering LocalityOrdering(const Mesh& mesh);

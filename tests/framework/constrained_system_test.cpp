@@ -61,3 +61,86 @@ TEST_CASE("ConstrainedSystem keeps isolated vertices fixed", "[framework]") {
   CHECK(system.report().free_components == 0);
   CHECK(system.num_free() == mesh.num_vertices() - 2);
 }
+
+namespace {
+
+// Whether two compressed matrices have the same size and sparsity pattern.
+bool SamePattern(const SparseMatrix& a, const SparseMatrix& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;
+  for (Index c = 0; c <= a.cols(); ++c) {
+    if (a.outerIndexPtr()[c] != b.outerIndexPtr()[c]) return false;
+  }
+  for (Index k = 0; k < a.nonZeros(); ++k) {
+    if (a.innerIndexPtr()[k] != b.innerIndexPtr()[k]) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("MaskedSystem solves the eliminated system with one pattern for every constraint set",
+          "[framework]") {
+  // A tube with an isolated vertex and a separate sphere: pins of both kinds.
+  Mesh mesh = Concatenate(Tube(5, 6), Icosphere(0));  // 30 + 12 vertices
+  mesh.vertices.conservativeResize(mesh.num_vertices() + 1, 3);
+  mesh.vertices.row(mesh.num_vertices() - 1) << 5, 5, 5;
+  SpokesAndRimsEnergy energy({});
+  energy.Precompute(mesh, Context());
+  const SparseMatrix& a = energy.system_matrix();
+  MaskedSystem masked(a);
+  const std::vector<std::vector<Index>> sets = {{0, 1, 2}, {0, 1, 2, 20, 35}, {29, 3}, {0}};
+  const SparseMatrix first_pattern = [&] {
+    masked.SetConstrained(sets[0]);
+    return masked.system_matrix();
+  }();
+  std::vector<unsigned char> was_fixed(mesh.num_vertices(), 0);
+  for (Index v : masked.fixed_vertices()) was_fixed[v] = 1;
+  for (const auto& set : sets) {
+    INFO("constrained set of " << set.size() << " vertices starting with " << set[0]);
+    const std::vector<Index> changed = masked.SetConstrained(set);
+    const ConstrainedSystem reduced(a, set);
+    // Same pins and report as the eliminated system.
+    CHECK(masked.pinned_vertices() == reduced.pinned_vertices());
+    CHECK(masked.fixed_vertices() == reduced.fixed_vertices());
+    CHECK(masked.free_vertices() == reduced.free_vertices());
+    CHECK(masked.report().free_components == reduced.report().free_components);
+    CHECK(masked.report().isolated_vertices == reduced.report().isolated_vertices);
+    CHECK(masked.report().vertices_in_free_components ==
+          reduced.report().vertices_in_free_components);
+    // The changed rows are exactly the vertices whose fixedness flipped.
+    std::vector<unsigned char> fixed(mesh.num_vertices(), 0);
+    for (Index v : masked.fixed_vertices()) fixed[v] = 1;
+    std::vector<Index> flipped;
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (fixed[v] != was_fixed[v]) flipped.push_back(v);
+    }
+    CHECK(changed == flipped);
+    was_fixed = fixed;
+    // One pattern for all sets, values equal to a masked system built for this set alone.
+    CHECK(SamePattern(masked.system_matrix(), first_pattern));
+    MaskedSystem fresh(a);
+    fresh.SetConstrained(set);
+    CHECK(Eigen::MatrixXd(masked.system_matrix()) == Eigen::MatrixXd(fresh.system_matrix()));
+    // The masked solution equals the eliminated one on the free rows and the fixed positions.
+    Positions u = SmoothlyDeformed(mesh.vertices, 0.3);
+    const Positions b = Positions::Random(mesh.num_vertices(), 3);
+    masked.SetFixedPositions(u);
+
+    Eigen::MatrixXd rhs, x;
+    masked.ReducedRhs(b, rhs);
+    x = Eigen::MatrixXd(masked.system_matrix()).llt().solve(rhs);
+    ConstrainedSystem eliminated(a, set);
+    eliminated.SetFixedPositions(u);
+    Eigen::MatrixXd rhs_f;
+    eliminated.ReducedRhs(b, rhs_f);
+    const Eigen::MatrixXd x_f = Eigen::MatrixXd(eliminated.reduced_matrix()).llt().solve(rhs_f);
+    Positions from_masked = u, from_reduced = u;
+    masked.ScatterFree(x, from_masked);
+    eliminated.ScatterFree(x_f, from_reduced);
+    CHECK((from_masked - from_reduced).cwiseAbs().maxCoeff() < 1e-10);
+    for (Index v : masked.fixed_vertices()) {
+      CHECK((x.row(v) - u.row(v)).norm() < 1e-12);
+      CHECK(from_masked.row(v) == u.row(v));
+    }
+  }
+}

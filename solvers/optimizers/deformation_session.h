@@ -1,0 +1,179 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "framework/config.h"
+#include "framework/optimizer.h"
+#include "solvers/optimizers/coarse_constraints.h"
+#include "solvers/optimizers/hierarchical_optimizer.h"
+#include "solvers/optimizers/local_global_solver.h"
+
+namespace harap {
+
+/// How a session is solved: the optimizer (classic = one level, or hierarchical with its
+/// hierarchy levels) and its options, read from the same `[optimizer]` table as `harap deform`.
+struct SessionOptions {
+  bool hierarchical = false;
+  /// The per-level options; for classic only `iterations` is used. The hierarchical options
+  /// `overlap_setup` (a session sets up once) does not apply; `inner` must be local_global and
+  /// `newton` 0 (Newton steps need the eliminated system; Anderson acceleration works).
+  HierarchicalOptimizer::Options optimizer;
+
+  /// Where the finer levels of a hierarchical session start a frame (the coarsest level always
+  /// starts from its own previous solution, and a level whose last solution is for the current
+  /// handles and targets starts from it). Measured on 30-frame drags (docs/session.md):
+  /// kCorrected gave the lowest energies (no frame above the one-shot run's) at about the
+  /// kUpsampled time; kPrevious the fewest iterations but energies up to 60% above.
+  enum class FrameStart {
+    /// Every level solved from the coarsest down, each finer one from the up-sampled solution of
+    /// the coarser one, as in a one-shot run (the paper's cascade).
+    kUpsampled,
+    /// Only the finest level is solved, from its own previous solution (the first frame runs
+    /// the cascade). The convergence test stops while the slow, smooth modes still lag behind
+    /// the handles, and the lag accumulates over frames.
+    kPrevious,
+    /// The cascade, but a finer level with a previous solution starts from it moved by the
+    /// up-sampled change of the coarser level's solution since then (a coarse-grid correction:
+    /// the old fine detail plus the new smooth motion), with a local step.
+    kCorrected,
+  };
+  FrameStart frame_start = FrameStart::kCorrected;
+  /// "corrected", "upsampled", "previous" (ConfigError listing them for anything else).
+  static FrameStart ParseFrameStart(std::string_view name);
+  static std::string_view FrameStartName(FrameStart start);
+
+  /// Reads `type` (classic or hierarchical) and that optimizer's options from an `[optimizer]`
+  /// table; other optimizers and options a session cannot run are rejected (ConfigError).
+  static SessionOptions FromConfig(const ConfigNode& optimizer_node);
+};
+
+/// Per-solve limits; negative values take the optimizer's configured ones.
+struct SessionSolveOptions {
+  /// Convergence tolerance of every level (the coarse levels' `coarse_tolerance`, if configured,
+  /// still applies to them).
+  double tolerance = -1.0;
+  int max_iterations = -1;  ///< Per level.
+  /// Wall-time budget of the whole solve in seconds (0: none). When it runs out on a coarse level
+  /// the solution is up-sampled to the finest level, the handles placed, and one local/global
+  /// iteration done there; on the finest level the iteration stops.
+  double time_budget_seconds = 0.0;
+};
+
+/// What a handle edit did, per solved level.
+struct HandleEditResult {
+  struct Level {
+    int level = 0;
+    Index constrained_vertices = 0;  ///< constrained vertices of the level (coarse: clusters)
+    Index changed_rows = 0;          ///< rows of the level's masked matrix that changed
+    bool factored = false;           ///< false: nothing changed on the level
+    LinearSolver::RefactorRoute route = LinearSolver::RefactorRoute::kFull;
+    double seconds = 0.0;
+  };
+  std::vector<Level> levels;       ///< finest first
+  double seconds = 0.0;            ///< the whole edit
+  ConstraintReport constraints;    ///< on the finest level
+  std::vector<std::string> notes;  ///< pinned components, isolated vertices
+};
+
+/// An interactive deformation session: the paper's phases split by what an interaction repeats.
+/// Built once from a mesh (hierarchy H and per-level precomputation P); SetHandles() chooses the
+/// constrained vertices (C: every level's masked system factored); SetTargets() moves them (no
+/// refactoring); AddHandles()/RemoveHandles() edit the handle set by updating every level's
+/// factorization on the rows that changed (LinearSolver::Refactor); Solve() runs the S phase,
+/// warm-started from the previous solution; Preview() is the paper's coarse approximation.
+///
+/// Levels use MaskedSystem (LocalGlobalSolver::ConstrainMasked), so their matrices keep one size
+/// and pattern whatever the handles. Coarse levels are constrained as in the hierarchical
+/// optimizer (coarse_constraints.h): a coarse vertex is constrained when a handle maps to it, its
+/// target follows its rotation (`update_constraints`).
+///
+/// Every public method validates its input first and throws InputError (naming the problem)
+/// without changing anything, so the session stays usable after a bad call. `mesh` and `factory`
+/// must outlive the session (experiments/session.h bundles them). Not thread-safe.
+class DeformationSession {
+ public:
+  DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
+                     const SessionOptions& options, const Context& context);
+  ~DeformationSession();
+  DeformationSession(const DeformationSession&) = delete;
+  DeformationSession& operator=(const DeformationSession&) = delete;
+
+  /// Makes `indices` the handles (unique, in range, not empty), their targets their current
+  /// positions (the last solution, or the start positions), or `targets` (#indices×3, finite).
+  HandleEditResult SetHandles(const std::vector<Index>& indices);
+  HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets);
+  /// Moves the handles: `targets` has one row per handle, in the order of handles().
+  void SetTargets(const Positions& targets);
+  /// Adds handles (not handles yet) with their targets; refactors the changed rows of each level.
+  HandleEditResult AddHandles(const std::vector<Index>& indices, const Positions& targets);
+  /// Removes handles (each must be one; at least one must stay).
+  HandleEditResult RemoveHandles(const std::vector<Index>& indices);
+  /// Sets the positions the next solve starts from (#V×3, finite) and forgets the previous
+  /// solutions: the next Solve() starts like a one-shot run from `positions`.
+  void SetPositions(const Positions& positions);
+
+  /// Minimizes the energy for the current handles and targets, warm-started from the previous
+  /// solution. The result is as detailed as a one-shot run's (per level iterations, energy,
+  /// seconds; timings.solve and .total; the constraint report and notes).
+  OptimizeResult Solve(const SessionSolveOptions& options = {});
+  /// The paper's coarse approximation (Figs. 15–16): the coarsest level solved (warm-started),
+  /// its solution up-sampled level by level to the finest, and one global solve there from the
+  /// up-sampled rotations (with an upsampler that hands down positions: one local/global
+  /// iteration). The finest level's energy is not evaluated (NaN; it would cost a local step:
+  /// CurrentEnergy() gives it).
+  OptimizeResult Preview();
+  /// E(U, R) of the current finest positions (positions()), rotations fitted to them.
+  double CurrentEnergy();
+
+  /// Called after every iteration; returning kStop ends the solve (the result says so) as in a
+  /// one-shot run. Empty: none.
+  void set_iteration_callback(IterationCallback callback) { callback_ = std::move(callback); }
+
+  const Mesh& mesh() const { return mesh_; }
+  int num_levels() const;
+  /// Levels that are solved (coarsest first); classic: {0}.
+  const std::vector<int>& solved_levels() const { return solved_levels_; }
+  const std::vector<Index>& handles() const { return handles_; }
+  const Positions& targets() const { return targets_; }
+  /// The current finest-level positions (the last solution, or the start).
+  const Positions& positions() const;
+  /// Timings of the construction: hierarchy and precompute (constrain and solve are 0).
+  const PhaseTimings& setup_timings() const { return setup_timings_; }
+
+ private:
+  struct Level;
+  void ValidateIndices(const std::vector<Index>& indices, const char* what) const;
+  void ValidateTargets(const Positions& targets, size_t count, const char* what) const;
+  /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
+  HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
+  HandleEditResult ConstrainLevels();
+  void UpdateCoarseTargets();
+  /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
+  /// FrameStart::kPrevious, the finest level alone).
+  OptimizeResult Run(const SessionSolveOptions& options, bool preview);
+
+  const Mesh& mesh_;
+  const ComponentFactory& factory_;
+  SessionOptions options_;
+  Context context_;
+  IterationCallback callback_;
+  MeshHierarchy hierarchy_;  ///< classic: empty (level 0 is mesh_)
+  std::unique_ptr<Upsampler> upsampler_;
+  std::vector<std::unique_ptr<Level>> levels_;  ///< per hierarchy level; null if not solved
+  std::vector<int> solved_levels_;              ///< coarsest first
+  RotationSite site_ = RotationSite::kVertex;
+  double diagonal_ = 0.0;
+  std::vector<Index> handles_;
+  Positions targets_;
+  Positions start_positions_;  ///< finest positions without a solution (SetPositions)
+  long long version_ = 0;      ///< bumped by every change of handles, targets or positions
+  /// Solve()'s per-level states, kept between solves (see Run()).
+  std::vector<LevelState> work_, scratch_;
+  PhaseTimings setup_timings_;
+};
+
+}  // namespace harap

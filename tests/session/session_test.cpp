@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: MIT
+#include "experiments/session.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+
+#include "tests/support/test_factory.h"
+#include "tests/support/test_meshes.h"
+
+using namespace harap;
+using namespace harap::testing;
+
+namespace {
+
+// A bent tube of 30 × 16 = 480 vertices: fast, and enough for a three-level octree hierarchy.
+struct SmallBentTube : BentTube {
+  SmallBentTube() : BentTube(30, 16, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4)) {}
+};
+
+const char* const kClassic =
+    "[optimizer]\ntype = \"classic\"\ntolerance = 0\nmax_iterations = 25\n";
+const char* const kHierarchical =
+    "[optimizer]\ntype = \"hierarchical\"\ntolerance = 0\nmax_iterations = 20\n"
+    "[hierarchy]\nmin_vertices = 60\n";
+
+bool Close(double a, double b, double relative) {
+  return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b));
+}
+
+std::unique_ptr<ConfiguredSession> Session(
+    const TestSetup& setup, const Mesh& mesh,
+    SessionOptions::FrameStart start = SessionOptions::FrameStart::kCorrected) {
+  return MakeSession(setup.registries, mesh, setup.config, 2, start);
+}
+
+}  // namespace
+
+TEST_CASE("session: the first solve equals the one-shot optimizer", "[session]") {
+  SmallBentTube tube;
+  for (const char* config : {kClassic, kHierarchical}) {
+    DYNAMIC_SECTION(config) {
+      TestSetup setup(config);
+      const OptimizeResult reference =
+          setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context::WithThreads(2));
+      auto configured = Session(setup, tube.mesh);
+      DeformationSession& session = configured->session();
+      const HandleEditResult edit =
+          session.SetHandles(tube.problem.constraints.indices, tube.problem.constraints.targets);
+      CHECK(edit.levels.size() == reference.levels.size());
+      const OptimizeResult result = session.Solve();
+      REQUIRE(result.levels.size() == reference.levels.size());
+      if (std::string(config) == kHierarchical) CHECK(result.levels.size() >= 3);
+      for (size_t l = 0; l < result.levels.size(); ++l) {
+        INFO("level " << result.levels[l].level);
+        CHECK(result.levels[l].level == reference.levels[l].level);
+        CHECK(result.levels[l].iterations == reference.levels[l].iterations);
+        CHECK(result.levels[l].unknowns == reference.levels[l].unknowns);
+        CHECK(Close(result.levels[l].energy, reference.levels[l].energy, 1e-10));
+      }
+      CHECK(Close(result.energy, reference.energy, 1e-10));
+      CHECK((result.positions - reference.positions).cwiseAbs().maxCoeff() < 1e-8);
+      CHECK(result.constraints.constrained_vertices == 32);
+    }
+  }
+}
+
+TEST_CASE("session: after adding and removing handles a solve equals a fresh session's",
+          "[session]") {
+  SmallBentTube tube;
+  const Constraints& handles = tube.problem.constraints;
+  // A ring in the middle of the tube, pulled sideways.
+  std::vector<Index> extra;
+  for (Index s = 0; s < 16; ++s) extra.push_back(15 * 16 + s);
+  Positions extra_targets(extra.size(), 3);
+  for (size_t k = 0; k < extra.size(); ++k) {
+    extra_targets.row(k) = tube.mesh.vertices.row(extra[k]) + Eigen::RowVector3d(0.3, 0.0, 0.0);
+  }
+  const Positions start = SmoothlyDeformed(tube.mesh.vertices, 0.05);
+  for (const char* config : {kClassic, kHierarchical}) {
+    DYNAMIC_SECTION(config) {
+      TestSetup setup(config);
+      auto edited = Session(setup, tube.mesh);
+      DeformationSession& session = edited->session();
+      session.SetHandles(handles.indices, handles.targets);
+      session.Solve();
+      const HandleEditResult added = session.AddHandles(extra, extra_targets);
+      CHECK(added.constraints.constrained_vertices == 48);
+      for (const auto& level : added.levels) {
+        INFO("level " << level.level);
+        CHECK(level.factored);
+        CHECK(level.changed_rows > 0);
+      }
+      const OptimizeResult with_extra = session.Solve();
+      CHECK(std::isfinite(with_extra.energy));
+      const HandleEditResult removed = session.RemoveHandles(extra);
+      CHECK(removed.constraints.constrained_vertices == 32);
+      CHECK(session.handles() == handles.indices);
+      CHECK(session.targets() == handles.targets);
+      session.SetPositions(start);
+      const OptimizeResult after_edits = session.Solve();
+
+      auto fresh_session = Session(setup, tube.mesh);
+      fresh_session->session().SetHandles(handles.indices, handles.targets);
+      fresh_session->session().SetPositions(start);
+      const OptimizeResult fresh = fresh_session->session().Solve();
+      REQUIRE(after_edits.levels.size() == fresh.levels.size());
+      for (size_t l = 0; l < fresh.levels.size(); ++l) {
+        INFO("level " << fresh.levels[l].level);
+        CHECK(after_edits.levels[l].iterations == fresh.levels[l].iterations);
+        CHECK(Close(after_edits.levels[l].energy, fresh.levels[l].energy, 1e-10));
+      }
+      CHECK(Close(after_edits.energy, fresh.energy, 1e-10));
+      CHECK((after_edits.positions - fresh.positions).cwiseAbs().maxCoeff() < 1e-8);
+    }
+  }
+}
+
+TEST_CASE("session: bad calls throw InputError, change nothing, and the session keeps working",
+          "[session]") {
+  SmallBentTube tube;
+  TestSetup setup("[optimizer]\ntype = \"hierarchical\"\n[hierarchy]\nmin_vertices = 60\n");
+  auto configured = Session(setup, tube.mesh);
+  DeformationSession& session = configured->session();
+  const Index n = tube.mesh.num_vertices();
+  CHECK_THROWS_WITH(session.Solve(), Catch::Contains("no handles"));
+  CHECK_THROWS_WITH(session.Preview(), Catch::Contains("no handles"));
+  CHECK_THROWS_WITH(session.SetTargets(Positions::Zero(1, 3)), Catch::Contains("no handles"));
+  const Constraints& handles = tube.problem.constraints;
+  session.SetHandles(handles.indices, handles.targets);
+  const OptimizeResult first = session.Solve({1e-8, -1, 0.0});
+  REQUIRE(std::isfinite(first.energy));
+
+  Positions nan_targets = handles.targets;
+  nan_targets(3, 1) = std::nan("");
+  Positions inf_targets = handles.targets;
+  inf_targets(5, 2) = INFINITY;
+  Positions bad_positions = tube.mesh.vertices;
+  bad_positions(7, 0) = -INFINITY;
+  std::vector<Index> duplicate = handles.indices;
+  duplicate[1] = duplicate[0];
+  std::vector<Index> out_of_range = handles.indices;
+  out_of_range.back() = n;
+  std::vector<Index> negative = handles.indices;
+  negative[2] = -1;
+  const std::vector<std::pair<std::string, std::function<void()>>> bad_calls = {
+      {"targets for", [&] { session.SetTargets(handles.targets.topRows(5)); }},
+      {"not finite", [&] { session.SetTargets(nan_targets); }},
+      {"not finite", [&] { session.SetTargets(inf_targets); }},
+      {"out of range", [&] { session.SetHandles(out_of_range); }},
+      {"out of range", [&] { session.SetHandles(negative, handles.targets); }},
+      {"given twice", [&] { session.SetHandles(duplicate); }},
+      {"no vertex indices", [&] { session.SetHandles({}); }},
+      {"targets for", [&] { session.SetHandles(handles.indices, handles.targets.topRows(3)); }},
+      {"not finite", [&] { session.SetHandles(handles.indices, nan_targets); }},
+      {"a handle already",
+       [&] { session.AddHandles({handles.indices[0]}, Positions::Zero(1, 3)); }},
+      {"targets for",
+       [&] {
+         session.AddHandles({200, 201}, Positions::Zero(1, 3));
+       }},
+      {"out of range", [&] { session.AddHandles({n + 5}, Positions::Zero(1, 3)); }},
+      {"not finite", [&] { session.AddHandles({200}, nan_targets.row(3)); }},
+      {"not a handle", [&] { session.RemoveHandles({200}); }},
+      {"every handle", [&] { session.RemoveHandles(handles.indices); }},
+      {"given twice",
+       [&] {
+         session.RemoveHandles({handles.indices[0], handles.indices[0]});
+       }},
+      {"positions for", [&] { session.SetPositions(Positions::Zero(3, 3)); }},
+      {"not all finite", [&] { session.SetPositions(bad_positions); }},
+      {"time budget",
+       [&] {
+         session.Solve({-1.0, -1, -2.0});
+       }},
+  };
+  for (const auto& [message, call] : bad_calls) {
+    INFO("expected an error containing '" << message << "'");
+    CHECK_THROWS_AS(call(), InputError);
+    CHECK_THROWS_WITH(call(), Catch::Contains(message));
+    // Unchanged: the same handles and targets, and a solve from the converged state stays there.
+    CHECK(session.handles() == handles.indices);
+    CHECK(session.targets() == handles.targets);
+    const OptimizeResult again = session.Solve({1e-8, -1, 0.0});
+    INFO("energy " << again.energy << " after the bad call, " << first.energy << " before");
+    CHECK(again.energy <= first.energy * (1 + 1e-12));
+    CHECK(Close(again.energy, first.energy, 1e-4));
+  }
+}
+
+TEST_CASE("session: a warm-started solve with unchanged targets takes very few iterations",
+          "[session]") {
+  SmallBentTube tube;
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+      "[hierarchy]\nmin_vertices = 60\n");
+  for (const auto start :
+       {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kPrevious,
+        SessionOptions::FrameStart::kCorrected}) {
+    DYNAMIC_SECTION("frame start " << static_cast<int>(start)) {
+      auto configured = Session(setup, tube.mesh, start);
+      DeformationSession& session = configured->session();
+      session.SetHandles(tube.problem.constraints.indices, tube.problem.constraints.targets);
+      const OptimizeResult first = session.Solve();
+      const OptimizeResult second = session.Solve();
+      INFO("first " << first.iterations << " iterations, second " << second.iterations);
+      CHECK(first.iterations > 5);
+      // The coarsest level always starts from its own solution; the finest from the up-sampled
+      // coarse one in the cascade (as many iterations as a first solve), else from its own.
+      CHECK(second.levels.back().iterations <= 2);
+      CHECK(second.iterations <= 2);
+      CHECK(second.converged);
+      CHECK(second.energy <= first.energy * (1.0 + 1e-6));
+    }
+  }
+}
+
+TEST_CASE("session: moving targets, preview, time budget and a stopping callback", "[session]") {
+  SmallBentTube tube;
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+      "[hierarchy]\nmin_vertices = 60\n");
+  auto configured = Session(setup, tube.mesh);
+  DeformationSession& session = configured->session();
+  const Constraints& handles = tube.problem.constraints;
+  session.SetHandles(handles.indices);  // targets: the rest positions
+  CHECK(session.targets() == Positions(tube.mesh.vertices(handles.indices, Eigen::all)));
+  const OptimizeResult rest = session.Solve();
+  CHECK(rest.energy < 1e-20);
+  // Move the handles halfway, then all the way: the solution follows.
+  session.SetTargets(0.5 * (handles.targets + session.targets()));
+  const OptimizeResult halfway = session.Solve();
+  session.SetTargets(handles.targets);
+  const OptimizeResult preview = session.Preview();
+  CHECK(preview.iterations == 1);
+  CHECK(std::isnan(preview.energy));
+  const double preview_energy = session.CurrentEnergy();
+  for (size_t k = 0; k < handles.indices.size(); ++k) {
+    CHECK((preview.positions.row(handles.indices[k]) - handles.targets.row(k)).norm() == 0.0);
+  }
+  const OptimizeResult full = session.Solve();
+  CHECK(halfway.energy > 0.0);
+  CHECK(full.energy > halfway.energy);
+  CHECK(preview_energy >= full.energy * (1.0 - 1e-9));
+  CHECK(preview_energy < 10.0 * full.energy);
+  CHECK(session.CurrentEnergy() == Approx(full.energy).epsilon(1e-9));
+  CHECK(full.converged);
+
+  // A budget that runs out at once still returns the handles at their targets.
+  session.SetTargets(handles.targets * 1.01);
+  const OptimizeResult rushed = session.Solve({-1.0, -1, 1e-9});
+  CHECK_FALSE(rushed.converged);
+  CHECK(rushed.levels.front().iterations == 1);
+  CHECK(std::isfinite(rushed.energy));
+  REQUIRE_FALSE(rushed.notes.empty());
+  CHECK(rushed.notes.back().find("time budget") != std::string::npos);
+
+  // A callback stops the solve; the next one without it converges.
+  int calls = 0;
+  session.set_iteration_callback([&](const IterationSummary&) {
+    return ++calls == 2 ? CallbackAction::kStop : CallbackAction::kContinue;
+  });
+  session.SetTargets(handles.targets);
+  const OptimizeResult stopped = session.Solve();
+  CHECK(stopped.stopped_by_callback);
+  CHECK(std::isfinite(stopped.energy));
+  session.set_iteration_callback({});
+  const OptimizeResult resumed = session.Solve();
+  CHECK(resumed.converged);
+  INFO("resumed " << resumed.energy << ", full " << full.energy);
+  CHECK(resumed.energy <= full.energy * (1.0 + 1e-3));
+  CHECK(Close(resumed.energy, full.energy, 1e-2));
+}
+
+TEST_CASE("session: a piece without handles is pinned with a note", "[session]") {
+  const Mesh mesh = Concatenate(Tube(6, 8), Icosphere(1));
+  TestSetup setup(kClassic);
+  auto configured = Session(setup, mesh);
+  DeformationSession& session = configured->session();
+  const HandleEditResult edit = session.SetHandles({0, 1, 2, 40, 41});
+  CHECK(edit.constraints.free_components == 1);
+  REQUIRE(edit.notes.size() == 1);
+  CHECK(edit.notes[0].find("pinned") != std::string::npos);
+  Positions targets = session.targets();
+  targets.col(0).array() += 0.1;
+  session.SetTargets(targets);
+  const OptimizeResult result = session.Solve();
+  CHECK(std::isfinite(result.energy));
+  CHECK(result.notes == edit.notes);
+  // Adding a handle on the sphere unpins it.
+  const HandleEditResult added =
+      session.AddHandles({48 + 3}, mesh.vertices.row(48 + 3) + Eigen::RowVector3d(0, 0.2, 0));
+  CHECK(added.constraints.free_components == 0);
+  CHECK(added.notes.empty());
+  CHECK(std::isfinite(session.Solve().energy));
+}
+
+TEST_CASE("session: options a session cannot run are rejected clearly", "[session]") {
+  SmallBentTube tube;
+  const auto make = [&](const std::string& toml) {
+    TestSetup setup(toml);
+    return Session(setup, tube.mesh);
+  };
+  CHECK_THROWS_WITH(make("[optimizer]\ntype = \"hierarchical\"\nnewton = 10\n"),
+                    Catch::Contains("newton = 0"));
+  CHECK_THROWS_WITH(make("[optimizer]\ntype = \"admm_pd\"\n"), Catch::Contains("classic"));
+  CHECK_THROWS_WITH(make("[optimizer]\ntype = \"hierarchical\"\ninner = \"wrapd\"\n[energy]\n"
+                         "type = \"elements\"\n"),
+                    Catch::Contains("ADMM"));
+  // Anderson acceleration works on the masked system.
+  TestSetup anderson("[optimizer]\ntype = \"classic\"\nanderson = 5\ntolerance = 1e-7\n");
+  auto configured = Session(anderson, tube.mesh);
+  configured->session().SetHandles(tube.problem.constraints.indices,
+                                   tube.problem.constraints.targets);
+  const OptimizeResult accelerated = configured->session().Solve();
+  const OptimizeResult reference =
+      anderson.MakeOptimizer()->Optimize(tube.problem, anderson.factory, Context());
+  CHECK(accelerated.converged);
+  CHECK(Close(accelerated.energy, reference.energy, 1e-6));
+}
+
+TEST_CASE("session: a drag in frames ends near the one-shot solution with the cascade starts",
+          "[session]") {
+  SmallBentTube tube;
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n"
+      "[hierarchy]\nmin_vertices = 60\n");
+  const OptimizeResult reference =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context::WithThreads(2));
+  const Constraints& handles = tube.problem.constraints;
+  const Positions rest = tube.mesh.vertices(handles.indices, Eigen::all);
+  for (const auto start :
+       {SessionOptions::FrameStart::kUpsampled, SessionOptions::FrameStart::kCorrected}) {
+    DYNAMIC_SECTION("frame start " << static_cast<int>(start)) {
+      auto configured = Session(setup, tube.mesh, start);
+      DeformationSession& session = configured->session();
+      session.SetHandles(handles.indices);
+      OptimizeResult last;
+      for (int frame = 1; frame <= 4; ++frame) {
+        session.SetTargets(rest + (handles.targets - rest) * (frame / 4.0));
+        last = session.Solve();
+        CHECK(last.converged);
+      }
+      INFO("last frame " << last.energy << ", one-shot " << reference.energy);
+      CHECK(Close(last.energy, reference.energy, 1e-2));
+    }
+  }
+}
