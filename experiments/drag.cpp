@@ -52,18 +52,6 @@ HandleMotion FitMotion(const Mesh& mesh, const ScenarioHandle& handle) {
   return motion;
 }
 
-std::string RouteName(LinearSolver::RefactorRoute route) {
-  switch (route) {
-    case LinearSolver::RefactorRoute::kFull:
-      return "full";
-    case LinearSolver::RefactorRoute::kNumeric:
-      return "numeric";
-    case LinearSolver::RefactorRoute::kUpdate:
-      return "update";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
@@ -394,7 +382,7 @@ std::string DragReportJson(const Scenario& scenario, const DragOutcome& outcome)
                                {"constrained_vertices", level.constrained_vertices},
                                {"changed_rows", level.changed_rows},
                                {"factored", level.factored},
-                               {"route", RouteName(level.route)},
+                               {"route", std::string(RefactorRouteName(level.route))},
                                {"seconds", level.seconds}});
       }
       entry["edit_seconds"] = frame.edit->seconds;
@@ -431,7 +419,7 @@ std::string DragTable(const DragOutcome& outcome) {
       for (size_t k = 0; k < frame.edit->levels.size(); ++k) {
         const auto& level = frame.edit->levels[k];
         table += fmt::format("{}level {}: {} rows, {} {:.4f} s", k ? "; " : "", level.level,
-                             level.changed_rows, level.factored ? RouteName(level.route) : "none",
+                             level.changed_rows, level.factored ? RefactorRouteName(level.route) : "none",
                              level.seconds);
       }
       table += ")\n";

@@ -3,9 +3,11 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "experiments/component_factory.h"
+#include "experiments/deform.h"
 #include "framework/config.h"
 #include "framework/mesh.h"
 #include "framework/mesh_checks.h"
@@ -29,9 +31,15 @@ class ConfiguredSession {
   /// The mesh the session solves (the input's vertices; duplicate elements dropped if the
   /// `[mesh]` table asks for it).
   const Mesh& mesh() const { return mesh_; }
+  /// The mesh's checks at construction, made without handles (every component "without a
+  /// handle"); MeshChecksFor() counts a handle set's.
   const MeshCheckReport& mesh_checks() const { return mesh_checks_; }
   /// One line per mesh finding (PreparedProblem::Summary).
   const std::vector<std::string>& mesh_summary() const { return mesh_summary_; }
+  /// mesh_checks() with each component's `constrained_vertices` and
+  /// `components_without_constraints` counted for `handles` (valid vertex indices), as
+  /// CheckMesh would count them, without checking the mesh again.
+  MeshCheckReport MeshChecksFor(const std::vector<Index>& handles) const;
 
   // The registry names the run config resolved to.
   const std::string& optimizer() const { return optimizer_; }
@@ -39,6 +47,9 @@ class ConfiguredSession {
   std::string solver_name() const { return factory_->solver_name(); }
   std::string resolved_config() const { return config_.ToToml(); }
   int threads() const { return threads_; }
+  /// The factory that made the session's pieces (which hierarchy, upsampler and per-level
+  /// solvers the session uses).
+  const RegistryComponentFactory& factory() const { return *factory_; }
 
  private:
   Registries registries_;
@@ -46,6 +57,7 @@ class ConfiguredSession {
   Mesh mesh_;
   MeshCheckReport mesh_checks_;
   std::vector<std::string> mesh_summary_;
+  std::vector<Index> vertex_component_;  ///< index into mesh_checks_.components; -1: isolated
   std::unique_ptr<RegistryComponentFactory> factory_;
   std::string optimizer_;
   int threads_ = 0;
@@ -61,5 +73,22 @@ class ConfiguredSession {
 std::unique_ptr<ConfiguredSession> MakeSession(
     const Registries& registries, const Mesh& mesh, const ConfigNode& run_config, int threads,
     SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected);
+
+/// "full", "numeric" or "update" (how a handle edit refactored a level).
+std::string_view RefactorRouteName(LinearSolver::RefactorRoute route);
+
+/// A session's Solve() or Preview() result as a DeformOutcome, so that DeformReportJson gives it
+/// the keys of `harap deform --report` (docs/report.md) where they apply: the pieces the session
+/// resolved, each level's solver, the mesh checks of its construction, the run warnings.
+/// `scenario` holds the session's mesh and its current handles (one group); `trace` the solve's
+/// iterations.
+DeformOutcome SessionOutcome(const ConfiguredSession& session, const Scenario& scenario,
+                             OptimizeResult result, std::vector<TraceEntry> trace);
+
+/// A handle edit as JSON: {"seconds", "levels": [{"level", "constrained_vertices",
+/// "changed_rows", "factored", "route", "seconds"}] (finest first), "constraints":
+/// {"constrained_vertices", "isolated_vertices", "free_components",
+/// "vertices_in_free_components"}, "notes"}. `route` is "none" on a level the edit left alone.
+std::string HandleEditJson(const HandleEditResult& edit);
 
 }  // namespace harap

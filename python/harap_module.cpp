@@ -24,6 +24,7 @@
 #include "experiments/builtins.h"
 #include "experiments/deform.h"
 #include "experiments/library.h"
+#include "experiments/session.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
@@ -202,6 +203,12 @@ void CheckThreads(int threads) {
   if (threads < 0) throw ConfigError(fmt::format("threads must be >= 0 (0: all cores), got {}", threads));
 }
 
+void CheckCallback(const py::object& callback) {
+  if (!callback.is_none() && !PyCallable_Check(callback.ptr())) {
+    throw ConfigError("callback must be callable as callback(level, iteration, energy) or None");
+  }
+}
+
 // A solve on a worker thread, watched by the calling thread (see the top of the file). The
 // worker reports every iteration (OnIteration, the optimizer's progress callback); the calling
 // thread, woken by each report and at least every 20 ms, takes the GIL, runs Python's signal
@@ -314,9 +321,7 @@ py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targ
                  const Settings& settings, py::handle initial, std::optional<bool> planar,
                  py::object callback, int threads, bool trace) {
   CheckThreads(threads);
-  if (!callback.is_none() && !PyCallable_Check(callback.ptr())) {
-    throw ConfigError("callback must be callable as callback(level, iteration, energy) or None");
-  }
+  CheckCallback(callback);
   const ConfigNode config = ConfigFromSettings(settings);
   Mesh mesh = ToMesh(V, F);
   const std::vector<Index> handle_vertices = ToIndices(handles, "handles");
@@ -335,6 +340,183 @@ py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targ
                         DeformReportJson(scenario, outcome, trace),
                         outcome.result.stopped_by_callback);
 }
+
+// harap._harap.Session: a ConfiguredSession (experiments/session.h) driven from Python. The calls
+// that compute (construction, handle edits, solves, the energy) run without the GIL; solves run
+// as WatchedSolve does for deform (signals and the callback on the calling thread). The C++
+// session checks every call before changing anything, so a call that raises leaves the session
+// as it was. A session is not thread-safe: a call while another thread is inside one raises
+// harap.Error instead of racing.
+class PySession {
+ public:
+  PySession(py::handle V, py::handle F, const Settings& settings, py::handle initial,
+            std::optional<bool> planar, int threads, const std::string& frame_start) {
+    CheckThreads(threads);
+    const ConfigNode config = ConfigFromSettings(settings);
+    const SessionOptions::FrameStart start = SessionOptions::ParseFrameStart(frame_start);
+    // Checks the arrays and decides `planar` as deform does (no handles yet: from V and initial).
+    scenario_ = ScenarioFromArrays(ToMesh(V, F), {}, Positions(0, 3),
+                                   ToOptionalPositions(initial, "initial"), planar, "arrays V, F");
+    py::gil_scoped_release release;
+    owned_ = MakeSession(BuiltinRegistries(), scenario_.mesh, config, threads, start);
+    if (scenario_.initial) owned_->session().SetPositions(*scenario_.initial);
+  }
+
+  std::string SetHandles(py::handle indices, py::handle targets) {
+    const Use use(*this);
+    const std::vector<Index> handles = ToIndices(indices, "indices");
+    const std::optional<Positions> positions = ToOptionalPositions(targets, "targets");
+    return Edit([&] {
+      return positions ? session().SetHandles(handles, *positions) : session().SetHandles(handles);
+    });
+  }
+
+  std::string AddHandles(py::handle indices, py::handle targets) {
+    const Use use(*this);
+    const std::vector<Index> handles = ToIndices(indices, "indices");
+    const Positions positions = ToPositions(targets, "targets");
+    return Edit([&] { return session().AddHandles(handles, positions); });
+  }
+
+  std::string RemoveHandles(py::handle indices) {
+    const Use use(*this);
+    const std::vector<Index> handles = ToIndices(indices, "indices");
+    return Edit([&] { return session().RemoveHandles(handles); });
+  }
+
+  void SetTargets(py::handle targets) {
+    const Use use(*this);
+    session().SetTargets(ToPositions(targets, "targets"));
+  }
+
+  void SetPositions(py::handle positions) {
+    const Use use(*this);
+    session().SetPositions(ToPositions(positions, "positions"));
+  }
+
+  // (positions, report JSON text, stopped by the callback), as deform returns.
+  py::tuple Solve(double tolerance, int max_iterations, double time_budget, py::object callback,
+                  bool trace) {
+    const Use use(*this);
+    SessionSolveOptions options;
+    options.tolerance = tolerance;
+    options.max_iterations = max_iterations;
+    options.time_budget_seconds = time_budget;
+    return Watch(std::move(callback), trace, [&] { return session().Solve(options); });
+  }
+
+  py::tuple Preview(py::object callback, bool trace) {
+    const Use use(*this);
+    return Watch(std::move(callback), trace, [&] { return session().Preview(); });
+  }
+
+  double Energy() {
+    const Use use(*this);
+    py::gil_scoped_release release;
+    return session().CurrentEnergy();
+  }
+
+  py::array_t<double> positions() {
+    const Use use(*this);
+    return FromPositions(session().positions());
+  }
+  py::array_t<long long> handles() {
+    const Use use(*this);
+    return FromVector(session().handles());
+  }
+  py::array_t<double> targets() {
+    const Use use(*this);
+    return FromPositions(session().targets());
+  }
+  int num_levels() {
+    const Use use(*this);
+    return session().num_levels();
+  }
+
+  // What the session resolved and its setup: names, solved levels, H and P seconds, the config.
+  py::dict Info() {
+    const Use use(*this);
+    const RegistryComponentFactory& factory = owned_->factory();
+    py::dict info;
+    info["optimizer"] = owned_->optimizer();
+    info["energy"] = owned_->energy_name();
+    info["solver"] = owned_->solver_name();
+    info["hierarchy"] = factory.made_hierarchy() ? py::object(py::str(factory.hierarchy_name()))
+                                                 : py::object(py::none());
+    info["upsampler"] = factory.made_upsampler() ? py::object(py::str(factory.upsampler_name()))
+                                                 : py::object(py::none());
+    info["solved_levels"] = session().solved_levels();
+    info["threads"] = owned_->threads();
+    info["planar"] = scenario_.mesh.planar;
+    info["setup_timings"] = py::dict(py::arg("hierarchy") = session().setup_timings().hierarchy,
+                                     py::arg("precompute") = session().setup_timings().precompute);
+    info["mesh_summary"] = owned_->mesh_summary();
+    info["config"] = owned_->resolved_config();
+    return info;
+  }
+
+ private:
+  // Marks the session in use for one call (the GIL serializes the marking itself).
+  class Use {
+   public:
+    explicit Use(PySession& owner) : owner_(owner) {
+      if (owner_.busy_) {
+        throw Error("this harap.Session is in use by another thread (a session is not "
+                    "thread-safe: give each thread its own)");
+      }
+      owner_.busy_ = true;
+    }
+    ~Use() { owner_.busy_ = false; }
+    Use(const Use&) = delete;
+    Use& operator=(const Use&) = delete;
+
+   private:
+    PySession& owner_;
+  };
+
+  DeformationSession& session() { return owned_->session(); }
+
+  template <class Work>
+  std::string Edit(Work&& work) {
+    HandleEditResult edit;
+    {
+      py::gil_scoped_release release;
+      edit = work();
+    }
+    return HandleEditJson(edit);
+  }
+
+  template <class Work>
+  py::tuple Watch(py::object callback, bool trace, Work&& work) {
+    CheckCallback(callback);
+    WatchedSolve solve(std::move(callback));
+    std::vector<TraceEntry> entries;
+    session().set_iteration_callback([&](const IterationSummary& summary) {
+      entries.push_back({summary.seconds, summary.energy, summary.level, summary.inverted_elements});
+      return solve.OnIteration(summary);
+    });
+    // The callback refers to this frame's locals: unset it however the solve ends.
+    struct Unset {
+      DeformationSession& session;
+      ~Unset() { session.set_iteration_callback({}); }
+    } unset{session()};
+    OptimizeResult result;
+    solve.Run([&] { result = work(); });
+    // The report's handles: the session's current ones, as one group.
+    scenario_.handles.assign(1, ScenarioHandle{});
+    scenario_.handles[0].name = "handles";
+    scenario_.handles[0].vertices = session().handles();
+    const bool stopped = result.stopped_by_callback;
+    const DeformOutcome outcome =
+        SessionOutcome(*owned_, scenario_, std::move(result), std::move(entries));
+    return py::make_tuple(FromPositions(outcome.result.positions),
+                          DeformReportJson(scenario_, outcome, trace), stopped);
+  }
+
+  Scenario scenario_;  // the input mesh (for the report) and the initial positions
+  std::unique_ptr<ConfiguredSession> owned_;
+  bool busy_ = false;
+};
 
 py::tuple ReadMeshArrays(const std::string& path) {
   Mesh mesh;
@@ -515,5 +697,23 @@ PYBIND11_MODULE(_harap, m) {
   m.def("energy", &EnergyValue, py::arg("V"), py::arg("F"), py::arg("U"), py::arg("settings"),
         py::arg("planar"), py::arg("threads"));
   m.def("components", &Components);
-  // harap.Session: bound here once the session (issue 21) is merged.
+  py::class_<PySession>(m, "Session")
+      .def(py::init<py::handle, py::handle, const Settings&, py::handle, std::optional<bool>, int,
+                    const std::string&>(),
+           py::arg("V"), py::arg("F"), py::arg("settings"), py::arg("initial"),
+           py::arg("planar"), py::arg("threads"), py::arg("frame_start"))
+      .def("set_handles", &PySession::SetHandles, py::arg("indices"), py::arg("targets"))
+      .def("add_handles", &PySession::AddHandles, py::arg("indices"), py::arg("targets"))
+      .def("remove_handles", &PySession::RemoveHandles, py::arg("indices"))
+      .def("set_targets", &PySession::SetTargets, py::arg("targets"))
+      .def("set_positions", &PySession::SetPositions, py::arg("positions"))
+      .def("solve", &PySession::Solve, py::arg("tolerance"), py::arg("max_iterations"),
+           py::arg("time_budget"), py::arg("callback"), py::arg("trace"))
+      .def("preview", &PySession::Preview, py::arg("callback"), py::arg("trace"))
+      .def("energy", &PySession::Energy)
+      .def("positions", &PySession::positions)
+      .def("handles", &PySession::handles)
+      .def("targets", &PySession::targets)
+      .def("num_levels", &PySession::num_levels)
+      .def("info", &PySession::Info);
 }

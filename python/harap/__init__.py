@@ -29,11 +29,10 @@ from . import _harap
 from ._harap import ConfigError, Error, InputError, InternalError, NumericalError
 
 __all__ = [
-    "deform", "DeformResult", "read_mesh", "write_mesh", "load_scenario", "Scenario",
+    "deform", "DeformResult", "Session", "read_mesh", "write_mesh", "load_scenario", "Scenario",
     "builtin_mesh", "hierarchy", "HierarchyLevel", "energy", "EnergyValue", "components",
     "Error", "ConfigError", "InputError", "NumericalError", "InternalError",
 ]
-# harap.Session (the interactive session, issue 21) is added here once it is merged.
 
 
 def _toml_literal(key, value):
@@ -80,6 +79,20 @@ def _with_types(settings, **types):
     pairs = [(f"{table}.type", _toml_literal(f"{table}.type", name))
              for table, name in types.items() if name is not None]
     return pairs + settings
+
+
+def _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
+                  max_iterations):
+    """The run config of deform and Session: the pieces' types, the options, and tolerance /
+    max_iterations as optimizer options (as the command's flags set them)."""
+    settings = _with_types(_settings(options), optimizer=optimizer, energy=energy,
+                           solver=solver, hierarchy=hierarchy, upsampler=upsampler)
+    if tolerance is not None:
+        settings.append(("optimizer.tolerance", _toml_literal("optimizer.tolerance", tolerance)))
+    if max_iterations is not None:
+        settings.append(("optimizer.max_iterations",
+                         _toml_literal("optimizer.max_iterations", max_iterations)))
+    return settings
 
 
 class DeformResult:
@@ -131,16 +144,163 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
 
     Returns a DeformResult (positions, report, stopped).
     """
-    settings = _with_types(_settings(options), optimizer=optimizer, energy=energy,
-                           solver=solver, hierarchy=hierarchy, upsampler=upsampler)
-    if tolerance is not None:
-        settings.append(("optimizer.tolerance", _toml_literal("optimizer.tolerance", tolerance)))
-    if max_iterations is not None:
-        settings.append(("optimizer.max_iterations",
-                         _toml_literal("optimizer.max_iterations", max_iterations)))
+    settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
+                             max_iterations)
     positions, report, stopped = _harap.deform(V, F, handles, targets, settings, initial, planar,
                                                callback, int(threads), bool(trace))
     return DeformResult(positions, _json.loads(report), stopped)
+
+
+def _limit(name, value, *, integer=False, positive=False):
+    """A solve limit given to Session.solve: None, or a finite number >= 0 (an integer >= 1)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, _numbers.Real) or (
+            integer and not isinstance(value, _numbers.Integral)):
+        kind = "an integer" if integer else "a number"
+        raise ConfigError(f"{name} must be {kind} or None, got {value!r}")
+    if integer:
+        value = int(value)
+        if value < 1 or value > 2**31 - 1:
+            raise ConfigError(f"{name} must be >= 1, got {value}")
+        return value
+    value = float(value)
+    if not _math.isfinite(value) or value < 0 or (positive and value == 0):
+        bound = "> 0" if positive else ">= 0"
+        raise ConfigError(f"{name} must be a finite number {bound}, got {value!r}")
+    return value
+
+
+class Session:
+    """An interactive deformation session (docs/session.md): the hierarchy and every level's
+    precomputation are built once here; set_handles() constrains (factors every level);
+    set_targets() moves the handles without refactoring; solve() is warm-started from the last
+    solution; add_handles()/remove_handles() update the factorizations instead of refactoring
+    where that is cheaper; preview() is the paper's coarse approximation.
+
+        session = harap.Session(V, F, options={"optimizer.tolerance": 1e-6})
+        session.set_handles(handles)             # targets: where they are now
+        for t in np.linspace(0, 1, 10):
+            session.set_targets(rest + t * offset)
+            result = session.solve()             # result.positions, result.report
+
+    V, F and the keywords optimizer ("hierarchical" or "classic"), energy, solver, hierarchy,
+    upsampler, options, tolerance, max_iterations, initial, planar and threads are those of
+    harap.deform (planar is decided from V and initial: handle targets come later).
+    frame_start: where the finer levels start a frame, "corrected" (default), "upsampled" or
+    "previous" (docs/session.md).
+
+    Every call checks its input before changing anything: a call that raises harap.Error leaves
+    the session as it was. Arrays are accepted as by deform. Not thread-safe: a call while
+    another thread is inside one raises harap.Error (solves release the GIL).
+    """
+
+    def __init__(self, V, F, *, optimizer="hierarchical", energy=None, solver=None,
+                 hierarchy=None, upsampler=None, options=None, tolerance=None,
+                 max_iterations=None, initial=None, planar=None, threads=0,
+                 frame_start="corrected"):
+        settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler,
+                                 tolerance, max_iterations)
+        if not isinstance(frame_start, str):
+            raise ConfigError(f"frame_start must be a string, got {frame_start!r}")
+        if isinstance(threads, bool) or not isinstance(threads, _numbers.Integral):
+            raise ConfigError(f"threads must be an integer (0: all cores), got {threads!r}")
+        self._session = _harap.Session(V, F, settings, initial, planar, int(threads),
+                                       frame_start)
+
+    def set_handles(self, indices, targets=None):
+        """Makes `indices` (k,) the handles (unique, in range, at least one) with `targets`
+        (k, 3), or, if None, their current positions (the last solution or the start). Factors
+        every level (the C phase). Returns the edit summary (see add_handles)."""
+        return _json.loads(self._session.set_handles(indices, targets))
+
+    def set_targets(self, targets):
+        """Moves the handles: (k, 3), one row per handle in the order of `handles`. No
+        refactoring."""
+        self._session.set_targets(targets)
+
+    def add_handles(self, indices, targets):
+        """Adds vertices that are not handles yet, with their (k, 3) targets; updates every
+        level's factorization on the rows that changed. Returns the edit summary: {"seconds",
+        "levels": [{"level", "constrained_vertices", "changed_rows", "factored", "route"
+        ("full", "numeric", "update", "none"), "seconds"}] (finest first), "constraints",
+        "notes"}."""
+        return _json.loads(self._session.add_handles(indices, targets))
+
+    def remove_handles(self, indices):
+        """Frees handles (each must be one; at least one must stay); the others keep their order
+        and targets. Returns the edit summary (see add_handles)."""
+        return _json.loads(self._session.remove_handles(indices))
+
+    def set_positions(self, positions):
+        """Sets the (n, 3) positions the next solve starts from and forgets the previous
+        solutions (the next solve starts like harap.deform from `positions`)."""
+        self._session.set_positions(positions)
+
+    def solve(self, tolerance=None, max_iterations=None, time_budget=None, callback=None,
+              trace=True):
+        """Minimizes the energy for the current handles and targets, warm-started from the
+        previous solution. tolerance / max_iterations (per level): None takes the session's
+        options; time_budget: seconds for the whole solve (None: no limit; when it runs out on a
+        coarse level the solution is carried to the finest level with one iteration there).
+        callback, Ctrl-C and the GIL as in harap.deform. Returns a DeformResult whose report has
+        harap.deform's keys (energy, iterations, converged, timings, levels, trace, ...)."""
+        tolerance = _limit("tolerance", tolerance)
+        max_iterations = _limit("max_iterations", max_iterations, integer=True)
+        time_budget = _limit("time_budget", time_budget, positive=True)
+        positions, report, stopped = self._session.solve(
+            -1.0 if tolerance is None else tolerance,
+            -1 if max_iterations is None else max_iterations,
+            0.0 if time_budget is None else time_budget, callback, bool(trace))
+        return DeformResult(positions, _json.loads(report), stopped)
+
+    def preview(self, callback=None, trace=True):
+        """The paper's coarse approximation for live feedback: the coarsest level solved
+        (warm-started), up-sampled to the finest level and one global solve there. The report's
+        energy is NaN (not evaluated; energy() gives it). Returns a DeformResult."""
+        positions, report, stopped = self._session.preview(callback, bool(trace))
+        report = _json.loads(report)
+        # JSON has no NaN (the report writes null): the finest level's energy is not evaluated.
+        for entry in [report] + report["levels"]:
+            if entry["energy"] is None:
+                entry["energy"] = _math.nan
+        return DeformResult(positions, report, stopped)
+
+    def energy(self):
+        """The energy of the current positions, rotations fitted to them."""
+        return self._session.energy()
+
+    @property
+    def positions(self):
+        """(n, 3) float64: the last solution (or the start), a copy."""
+        return self._session.positions()
+
+    @property
+    def handles(self):
+        """(k,) int64: the handle vertices, in the order targets use."""
+        return self._session.handles()
+
+    @property
+    def targets(self):
+        """(k, 3) float64: the handles' targets."""
+        return self._session.targets()
+
+    @property
+    def num_levels(self):
+        """The hierarchy's levels (1 for classic)."""
+        return self._session.num_levels()
+
+    @property
+    def info(self):
+        """What the session resolved: optimizer, energy, solver, hierarchy, upsampler,
+        solved_levels (coarsest first), threads, planar, setup_timings {hierarchy, precompute}
+        (seconds), mesh_summary, config (TOML)."""
+        return self._session.info()
+
+    def __repr__(self):
+        info = self.info
+        return (f"Session({len(self.positions)} vertices, {info['optimizer']}, "
+                f"{self.num_levels} levels, {len(self.handles)} handles)")
 
 
 def read_mesh(path):
