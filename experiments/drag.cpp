@@ -418,9 +418,9 @@ std::string DragTable(const DragOutcome& outcome) {
                            frame.edit_description, frame.edit->seconds);
       for (size_t k = 0; k < frame.edit->levels.size(); ++k) {
         const auto& level = frame.edit->levels[k];
-        table += fmt::format("{}level {}: {} rows, {} {:.4f} s", k ? "; " : "", level.level,
-                             level.changed_rows, level.factored ? RefactorRouteName(level.route) : "none",
-                             level.seconds);
+        table += fmt::format(
+            "{}level {}: {} rows, {} {:.4f} s", k ? "; " : "", level.level, level.changed_rows,
+            level.factored ? RefactorRouteName(level.route) : "none", level.seconds);
       }
       table += ")\n";
     }

@@ -153,12 +153,13 @@ std::string HandleEditJson(const HandleEditResult& edit) {
   using nlohmann::json;
   json levels = json::array();
   for (const HandleEditResult::Level& level : edit.levels) {
-    levels.push_back({{"level", level.level},
-                      {"constrained_vertices", level.constrained_vertices},
-                      {"changed_rows", level.changed_rows},
-                      {"factored", level.factored},
-                      {"route", level.factored ? std::string(RefactorRouteName(level.route)) : "none"},
-                      {"seconds", level.seconds}});
+    levels.push_back(
+        {{"level", level.level},
+         {"constrained_vertices", level.constrained_vertices},
+         {"changed_rows", level.changed_rows},
+         {"factored", level.factored},
+         {"route", level.factored ? std::string(RefactorRouteName(level.route)) : "none"},
+         {"seconds", level.seconds}});
   }
   const ConstraintReport& c = edit.constraints;
   const json result = {{"seconds", edit.seconds},

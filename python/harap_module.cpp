@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The compiled part of the Python package `harap` (harap._harap): converts numpy arrays to and
 // from harap's types and calls the library (experiments/deform.h, experiments/library.h,
-// framework/io). No algorithm lives here; python/harap/__init__.py is the public API.
+// experiments/session.h, framework/io). No algorithm lives here; python/harap/__init__.py is the
+// public API.
 //
 // Threads and signals: a solve runs on a worker thread with the GIL released. The calling thread
 // waits; after every iteration (and every 20 ms) it takes the GIL, runs Python's signal handlers
@@ -461,8 +462,9 @@ class PySession {
    public:
     explicit Use(PySession& owner) : owner_(owner) {
       if (owner_.busy_) {
-        throw Error("this harap.Session is in use by another thread (a session is not "
-                    "thread-safe: give each thread its own)");
+        throw Error(
+            "this harap.Session is in use by another thread (a session is not "
+            "thread-safe: give each thread its own)");
       }
       owner_.busy_ = true;
     }
@@ -492,7 +494,8 @@ class PySession {
     WatchedSolve solve(std::move(callback));
     std::vector<TraceEntry> entries;
     session().set_iteration_callback([&](const IterationSummary& summary) {
-      entries.push_back({summary.seconds, summary.energy, summary.level, summary.inverted_elements});
+      entries.push_back(
+          {summary.seconds, summary.energy, summary.level, summary.inverted_elements});
       return solve.OnIteration(summary);
     });
     // The callback refers to this frame's locals: unset it however the solve ends.
@@ -700,8 +703,8 @@ PYBIND11_MODULE(_harap, m) {
   py::class_<PySession>(m, "Session")
       .def(py::init<py::handle, py::handle, const Settings&, py::handle, std::optional<bool>, int,
                     const std::string&>(),
-           py::arg("V"), py::arg("F"), py::arg("settings"), py::arg("initial"),
-           py::arg("planar"), py::arg("threads"), py::arg("frame_start"))
+           py::arg("V"), py::arg("F"), py::arg("settings"), py::arg("initial"), py::arg("planar"),
+           py::arg("threads"), py::arg("frame_start"))
       .def("set_handles", &PySession::SetHandles, py::arg("indices"), py::arg("targets"))
       .def("add_handles", &PySession::AddHandles, py::arg("indices"), py::arg("targets"))
       .def("remove_handles", &PySession::RemoveHandles, py::arg("indices"))
