@@ -10,6 +10,9 @@
     result.positions            # (n, 3) float64
     result.report["energy"]     # the keys of `harap deform --report` (docs/report.md)
 
+    session = harap.Session(V, F)  # interactive: set up once, then solve frame after frame
+    session.set_handles(handles, targets); session.solve(); session.set_targets(targets + 0.1)
+
 Every function calls harap's C++ library (the module harap._harap); options are validated as in
 config files (an unknown key fails listing the valid ones), and C++ errors are raised as
 harap.Error subclasses (ValueError) with the same messages.

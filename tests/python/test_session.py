@@ -277,12 +277,62 @@ def test_bad_construction(cylinder, arguments, error, message):
 
 def test_arrays_of_any_layout_and_dtype_are_accepted(cylinder):
     V, F, handles, targets = cylinder
-    s = harap.Session(np.asfortranarray(V), F.astype(np.int32), options=OPTIONS)
-    s.set_handles(handles.astype(np.uint32)[::-1][::-1], np.asfortranarray(targets))
+
+    def strided(array):
+        """The same values in a non-contiguous view (every other row of a doubled array)."""
+        view = np.repeat(array, 2, axis=0)[::2]
+        assert not view.flags.c_contiguous and not view.flags.f_contiguous
+        return view
+
+    s = harap.Session(strided(V), np.asfortranarray(F.astype(np.int32)), options=OPTIONS)
+    s.set_handles(strided(handles.astype(np.uint32)), strided(targets))
     reference = harap.deform(V, F, handles, targets, options=OPTIONS)
     assert relative(s.solve().energy, reference.energy) < 1e-10
-    s.set_targets(np.ascontiguousarray(targets.astype(np.float32))[:, ::-1][:, ::-1])
+    s.set_targets(np.asfortranarray(targets.astype(np.float32)))
+    np.testing.assert_array_equal(s.targets, targets.astype(np.float32))
     assert s.solve().report["converged"]
+    s.set_targets(targets.tolist())  # nested lists too
+    np.testing.assert_array_equal(s.targets, targets)
+
+
+def test_tetrahedra_as_deform(tmp_path):
+    scenario = tmp_path / "tets.toml"
+    scenario.write_text("""
+mesh = { tetrahedralize = { builtin = "cylinder", vertices = 300 }, max_volume = 0.01 }
+[[handle]]
+select.slab = { axis = "z", from = 0.0, to = 0.05 }
+[[handle]]
+select.slab = { axis = "z", from = 0.95, to = 1.0 }
+translate = [0.2, 0.0, 0.0]
+""")
+    V, F, handles, targets = harap.load_scenario(scenario)
+    assert F.shape[1] == 4
+    s = harap.Session(V, F, options=OPTIONS)
+    s.set_handles(handles, targets)
+    result = s.solve()
+    reference = harap.deform(V, F, handles, targets, options=OPTIONS)
+    assert result.report["energy_type"] == "elements"
+    assert result.report["mesh"]["element_kind"] == "tetrahedron"
+    assert relative(result.energy, reference.energy) < 1e-10
+
+
+def test_planar_meshes_as_deform():
+    V, F = harap.builtin_mesh("rectangle", vertices=400)
+    left = np.flatnonzero(V[:, 0] < 0.05)
+    right = np.flatnonzero(V[:, 0] > 3.95)
+    handles = np.concatenate([left, right])
+    targets = np.concatenate([V[left], V[right] + [0.0, 1.0, 0.0]])
+    s = harap.Session(V, F, optimizer="classic")
+    assert s.info["planar"] and s.info["energy"] == "elements"
+    s.set_handles(handles, targets)
+    result = s.solve()
+    reference = harap.deform(V, F, handles, targets, optimizer="classic")
+    assert relative(result.energy, reference.energy) < 1e-10
+    assert np.all(result.positions[:, 2] == 0.0)
+    with pytest.raises(harap.InputError, match="the mesh is planar"):
+        s.set_targets(targets + [0.0, 0.0, 0.5])
+    assert s.solve().report["converged"]
+    assert not harap.Session(V, F, optimizer="classic", planar=False).info["planar"]
 
 
 # Interrupts, callbacks and the GIL, as for harap.deform (test_interrupts.py).
