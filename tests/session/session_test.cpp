@@ -346,3 +346,38 @@ TEST_CASE("session: a drag in frames ends near the one-shot solution with the ca
     }
   }
 }
+
+TEST_CASE("session: mesh checks and edit summaries for the current handles", "[session]") {
+  // Three pieces: a tube, a sphere and a grid, the sphere without handles at first.
+  const Mesh tube_and_sphere = Concatenate(Tube(6, 8), Icosphere(1));
+  const Mesh mesh = Concatenate(tube_and_sphere, Grid(4, 4));
+  const Index grid_start = tube_and_sphere.num_vertices();
+  TestSetup setup(kClassic);
+  auto configured = Session(setup, mesh);
+  // Made without handles: every piece is without one.
+  CHECK(configured->mesh_checks().components_without_constraints == 3);
+  for (const std::vector<Index>& handles :
+       {std::vector<Index>{0, 1, 2, grid_start + 5}, std::vector<Index>{0, 48 + 3, 48 + 7},
+        std::vector<Index>{grid_start, grid_start + 1}}) {
+    const MeshCheckReport counted = configured->MeshChecksFor(handles);
+    const MeshCheckReport reference = CheckMesh(mesh, handles);
+    CHECK(counted.components_without_constraints == reference.components_without_constraints);
+    REQUIRE(counted.components.size() == reference.components.size());
+    for (size_t c = 0; c < counted.components.size(); ++c) {
+      CHECK(counted.components[c].first_element == reference.components[c].first_element);
+      CHECK(counted.components[c].constrained_vertices ==
+            reference.components[c].constrained_vertices);
+    }
+    // The summary's components line (CheckMesh alone leaves the findings' actions empty;
+    // PreparedProblem fills them in).
+    CHECK(SummarizeMeshChecks(counted).back() == SummarizeMeshChecks(reference).back());
+  }
+
+  const HandleEditResult edit = configured->session().SetHandles({0, 1, 2, grid_start + 5});
+  const std::string json = HandleEditJson(edit);
+  CHECK(json.find("\"route\":\"full\"") != std::string::npos);
+  CHECK(json.find("\"free_components\":1") != std::string::npos);
+  CHECK(json.find("pinned") != std::string::npos);
+  CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kUpdate) == "update");
+  CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kNumeric) == "numeric");
+}
