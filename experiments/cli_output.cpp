@@ -41,9 +41,12 @@ std::string IterationsLine(const DeformOutcome& outcome) {
   } else {
     state = r.converged ? "converged" : (r.stopped_by_callback ? "stopped" : "not converged");
   }
-  if (r.levels.size() > 1 || !outcome.hierarchy.empty()) {
-    return fmt::format("{} finest level / {} all {} solved levels ({})", r.iterations,
+  if (r.levels.size() > 1) {
+    return fmt::format("{} on the finest level / {} over all {} levels ({})", r.iterations,
                        r.total_iterations, r.levels.size(), state);
+  }
+  if (!outcome.hierarchy.empty()) {
+    return fmt::format("{} on the hierarchy's only level ({})", r.iterations, state);
   }
   return fmt::format("{} ({})", r.iterations, state);
 }

@@ -196,25 +196,8 @@ Constraints FrameConstraints(const Scenario& scenario, double t) {
                               t * motion.translation + t * motion.remainder.row(k);
     }
   }
-  // Merge as the scenario does (first handle wins), without copying the mesh.
-  const Index n = scenario.mesh.num_vertices();
-  std::vector<std::pair<int, Index>> owner(n, {-1, 0});
-  for (size_t h = 0; h < handles.size(); ++h) {
-    for (size_t i = 0; i < handles[h].vertices.size(); ++i) {
-      const Index v = handles[h].vertices[i];
-      if (owner[v].first < 0) owner[v] = {static_cast<int>(h), static_cast<Index>(i)};
-    }
-  }
-  Constraints constraints;
-  for (Index v = 0; v < n; ++v) {
-    if (owner[v].first >= 0) constraints.indices.push_back(v);
-  }
-  constraints.targets.resize(static_cast<Index>(constraints.indices.size()), 3);
-  for (size_t k = 0; k < constraints.indices.size(); ++k) {
-    const auto [h, row] = owner[constraints.indices[k]];
-    constraints.targets.row(static_cast<Index>(k)) = handles[h].targets.row(row);
-  }
-  return constraints;
+  // Merged as the scenario does (first handle wins), without copying the mesh.
+  return MergeHandles(scenario.mesh.num_vertices(), handles);
 }
 
 DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,

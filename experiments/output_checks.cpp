@@ -69,6 +69,14 @@ void RefuseMeshAsScenario(const fs::path& file) {
       file.string(), scenario.string(), file.filename().string(), scenario.string()));
 }
 
+void RefuseMeshAsToml(const fs::path& file, std::string_view option, std::string_view expected) {
+  if (!LooksLikeMeshFile(file)) return;
+  throw InputError(fmt::format(
+      "{} {}: this is a mesh file, but {} takes {}. A mesh goes into a scenario "
+      "(mesh = \"{}\" with its [[handle]] tables, docs/input.md), which harap deform runs",
+      option, file.string(), option, expected, file.filename().string()));
+}
+
 std::string ScenarioLoadingPhase(const fs::path& file) {
   const std::string plain = "reading the scenario and its mesh";
   toml::table root;

@@ -22,6 +22,17 @@ bool LooksLikeMeshFile(const std::filesystem::path& file);
 /// scenario for it to start from (instead of the TOML parser's syntax error).
 void RefuseMeshAsScenario(const std::filesystem::path& file);
 
+/// What `--config` takes, for RefuseMeshAsToml.
+inline constexpr std::string_view kConfigFileKinds =
+    "a TOML file of options ([optimizer], [energy], [solver], [hierarchy], [upsampler] tables, "
+    "the keys `harap list` shows)";
+
+/// Throws InputError when `file` is a mesh file given to `option` (e.g. "harap run",
+/// "--config"), which takes a TOML file of the kind `expected` describes, naming what goes where
+/// (instead of the TOML parser's syntax error).
+void RefuseMeshAsToml(const std::filesystem::path& file, std::string_view option,
+                      std::string_view expected);
+
 /// The progress label for loading the scenario `file`: what LoadScenario will do, read from the
 /// scenario's top-level keys (a built-in mesh is built, a surface tetrahedralized, `refine`
 /// subdivides), e.g. "reading the scenario, tetrahedralizing its mesh (TetGen)". A file that

@@ -43,6 +43,11 @@ struct Scenario {
   Constraints MergedConstraints() const;
 };
 
+/// `handles` (of a mesh with `num_vertices` vertices) merged into one set of constraints, sorted
+/// by vertex; a vertex selected by several handles takes the first handle's target. For handles
+/// whose targets differ from the scenario's (a frame of `harap drag`).
+Constraints MergeHandles(Index num_vertices, const std::vector<ScenarioHandle>& handles);
+
 /// Upper bounds on what a scenario may make the program build, for callers that parse untrusted
 /// text (the fuzz harness). Exceeding one is a ConfigError naming the key. Default: no bound
 /// beyond the index type.

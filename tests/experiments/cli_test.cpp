@@ -270,7 +270,8 @@ TEST_CASE("the summary says what it measured: direct solvers, pieces, levels, --
   CHECK_THAT(hierarchical.output,
              Contains("pieces      optimizer hierarchical | energy spokes_and_rims | solver "
                       "cholmod | hierarchy octree | upsampler rotations"));
-  CHECK_THAT(hierarchical.output, Contains(" finest level / ") && Contains(" all "));
+  CHECK_THAT(hierarchical.output, Contains(" on the finest level / ") && Contains(" over all ") &&
+                                      Contains(" levels ("));
 
   const CommandResult version = RunHarap("--version");
   CHECK(version.status == 0);
