@@ -84,18 +84,13 @@ std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
   }
   const toml::array* entries = root["edit"].as_array();
   if (!entries) throw ConfigError(fmt::format("{}: no [[edit]] entries", file));
-  // The box of the referenced vertices, as scenarios select.
+  // As scenarios select: vertices some element references, in their box.
   std::vector<bool> referenced(mesh.num_vertices(), false);
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     for (int a = 0; a < mesh.simplex_size(); ++a) referenced[mesh.elements(e, a)] = true;
   }
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
-  for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    if (!referenced[v]) continue;
-    lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
-    hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
-  }
+  const auto [box_min, box_max] = SelectionBox(mesh);
+  const Eigen::Vector3d lo = box_min, hi = box_max;  // used in lambdas below
   const Eigen::Vector3d extent = hi - lo;
   const double diagonal = BoundingBoxDiagonal(mesh);
   const auto vector3 = [&](size_t entry, const toml::node* node, const char* what) {

@@ -770,13 +770,8 @@ class Parser {
     // Box of the referenced vertices (see the top of this file).
     const Mesh& mesh = scenario.mesh;
     const std::vector<bool> referenced = ReferencedVertices(mesh);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-      if (!referenced[v]) continue;
-      lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
-      hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
-    }
+    const auto [box_min, box_max] = SelectionBox(mesh);
+    const Eigen::Vector3d lo = box_min, hi = box_max;  // used in lambdas below
     const Eigen::Vector3d extent = hi - lo;
     const double diagonal = BoundingBoxDiagonal(mesh);
     scenario.box_min = lo;
@@ -1038,6 +1033,18 @@ void DecidePlanar(Scenario& scenario, std::optional<bool> setting,
 
 Constraints Scenario::MergedConstraints() const {
   return MergeHandles(mesh.num_vertices(), handles);
+}
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> SelectionBox(const Mesh& mesh) {
+  const std::vector<bool> referenced = ReferencedVertices(mesh);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    if (!referenced[v]) continue;
+    lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
+    hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
+  }
+  return {lo, hi};
 }
 
 Constraints MergeHandles(Index n, const std::vector<ScenarioHandle>& handles) {
