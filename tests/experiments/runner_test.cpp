@@ -56,21 +56,10 @@ translate = [0.0, 0.0, 0.2]
   }
 };
 
-const char* kSmallSweep = R"(
-[experiment]
-name = "small"
-[scenarios]
-files = ["cylinder.toml", "plane.toml"]
-[optimizer]
-tolerance = 1e-5
-[[variant]]
-name = "classic"
-optimizer.type = "classic"
-[[variant]]
-name = "hierarchical"
-optimizer.type = "hierarchical"
-hierarchy.min_vertices = 100
-)";
+const std::string kSmallSweep = std::string(
+                                    "[experiment]\nname = \"small\"\n[scenarios]\n"
+                                    "files = [\"cylinder.toml\", \"plane.toml\"]\n") +
+                                testing::kClassicAndHierarchicalVariants;
 
 std::vector<std::string> SplitCsvLine(const std::string& line) {
   std::vector<std::string> fields(1);

@@ -33,19 +33,8 @@ struct Folder : TempFolder {
   }
 };
 
-const char* kTwoVariants = R"(
-[scenarios]
-files = ["cylinder.toml"]
-[optimizer]
-tolerance = 1e-5
-[[variant]]
-name = "classic"
-optimizer.type = "classic"
-[[variant]]
-name = "hierarchical"
-optimizer.type = "hierarchical"
-hierarchy.min_vertices = 100
-)";
+const std::string kTwoVariants = std::string("[scenarios]\nfiles = [\"cylinder.toml\"]\n") +
+                                 harap::testing::kClassicAndHierarchicalVariants;
 
 TEST_CASE("harap run checks [report] before any run: figures, keys, compare",
           "[experiments][sweep_ux]") {

@@ -21,6 +21,20 @@ select.slab = { axis = "z", from = 0.95, to = 1.0 }
 rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
 )";
 
+/// The tables of a sweep comparing classic and hierarchical ARAP on small meshes (tolerance 1e-5,
+/// a hierarchy down to 100 vertices), for experiment configs after their [scenarios].
+inline constexpr const char* kClassicAndHierarchicalVariants = R"(
+[optimizer]
+tolerance = 1e-5
+[[variant]]
+name = "classic"
+optimizer.type = "classic"
+[[variant]]
+name = "hierarchical"
+optimizer.type = "hierarchical"
+hierarchy.min_vertices = 100
+)";
+
 /// A bar along x in [0, 3] with a 1 x 1 cross-section as OFF: rings of 4 vertices at x = 0, 1,
 /// 2, 3 (vertex 4 * ring + k), the sides triangulated (24 faces), with `caps` the two ends too
 /// (28 faces, closed).
