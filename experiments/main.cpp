@@ -165,6 +165,7 @@ int RunSweep(const RunArguments& args) {
   RefuseMeshAsToml(args.config, "harap run",
                    "an experiment config: [scenarios] files = [...] and [[variant]] tables "
                    "(docs/experiments.md)");
+  RefuseScenarioAsConfig(args.config);
   const Experiment experiment = LoadExperiment(args.config);
   RunnerOptions options;
   options.out_dir = args.out.empty() ? std::filesystem::path("results") / experiment.name

@@ -19,8 +19,17 @@ void CheckWritable(const std::filesystem::path& file, std::string_view option);
 bool LooksLikeMeshFile(const std::filesystem::path& file);
 
 /// Throws InputError when `file` is a mesh file given where a scenario is expected, with a
-/// scenario for it to start from (instead of the TOML parser's syntax error).
+/// scenario for it to start from (instead of the TOML parser's syntax error), or an experiment
+/// config (RefuseConfigAsScenario).
 void RefuseMeshAsScenario(const std::filesystem::path& file);
+
+/// Throws InputError when `file` is an experiment config (top-level [scenarios] or [[variant]],
+/// no mesh) given where a scenario is expected, naming `harap run` (instead of "unknown key").
+void RefuseConfigAsScenario(const std::filesystem::path& file);
+
+/// Throws InputError when `file` is a scenario (top-level mesh or [[handle]], no [scenarios])
+/// given to `harap run`, with a config that runs it and the `harap deform` command.
+void RefuseScenarioAsConfig(const std::filesystem::path& file);
 
 /// What `--config` takes, for RefuseMeshAsToml.
 inline constexpr std::string_view kConfigFileKinds =

@@ -149,6 +149,24 @@ TEST_CASE("a mesh or a wrong output name fails before any work, saying what goes
   CHECK(run.status == 1);
   CHECK_THAT(run.output, Contains("this is a mesh file, but harap run takes an experiment config"));
   CHECK_FALSE(fs::exists(folder.dir / "out"));
+  // A scenario given to harap run, an experiment config where a scenario is expected.
+  const auto run_scenario =
+      RunHarap(fmt::format("run {} --out {}", scenario, (folder.dir / "out").string()));
+  CHECK(run_scenario.status == 1);
+  CHECK_THAT(run_scenario.output, Contains("is a scenario (mesh and [[handle]]), but harap run "
+                                           "takes an experiment config") &&
+                                      Contains("files = [\"bar.toml\"]") &&
+                                      Contains("harap deform " + scenario));
+  CHECK_FALSE(fs::exists(folder.dir / "out"));
+  const std::string sweep = folder.Write(
+      "sweep.toml", "[scenarios]\nfiles = [\"bar.toml\"]\n[[variant]]\nname = \"classic\"\n");
+  for (const char* command : {"deform", "handles", "hierarchy", "drag"}) {
+    const auto wrong = RunHarap(fmt::format("{} {}", command, sweep));
+    INFO(command << ": " << wrong.output);
+    CHECK(wrong.status == 1);
+    CHECK_THAT(wrong.output, Contains("is an experiment config") &&
+                                 Contains("run the config with harap run " + sweep));
+  }
   for (const char* command : {"deform", "hierarchy", "drag"}) {
     const auto config = RunHarap(fmt::format("{} {} --config {}", command, scenario, mesh));
     INFO(command << ": " << config.output);
