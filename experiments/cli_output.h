@@ -15,6 +15,10 @@ namespace harap {
 /// the mesh checks (and, after a repair, those of the repaired mesh), notes and warnings.
 void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome);
 
+/// The summary's timings: the phases and the total in seconds, with a remark when the phases
+/// add up to more than the total (a hierarchical run sets levels up while others solve).
+std::string TimingsLine(const PhaseTimings& timings);
+
 /// `harap list [KIND]`: every registered piece with its options, or only those of one KIND
 /// (optimizers, energies, solvers, hierarchies, upsamplers, mesh, builtins; singular names
 /// too). An unknown KIND throws ConfigError listing the valid ones.

@@ -72,18 +72,13 @@ std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
   }
   const toml::array* entries = root["edit"].as_array();
   if (!entries) throw ConfigError(fmt::format("{}: no [[edit]] entries", file));
-  // The box of the referenced vertices, as scenarios select.
+  // As scenarios select: vertices some element references, in their box.
   std::vector<bool> referenced(mesh.num_vertices(), false);
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     for (int a = 0; a < mesh.simplex_size(); ++a) referenced[mesh.elements(e, a)] = true;
   }
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
-  for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    if (!referenced[v]) continue;
-    lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
-    hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
-  }
+  const auto [box_min, box_max] = SelectionBox(mesh);
+  const Eigen::Vector3d lo = box_min, hi = box_max;  // used in lambdas below
   const Eigen::Vector3d extent = hi - lo;
   const double diagonal = BoundingBoxDiagonal(mesh);
   const auto vector3 = [&](size_t entry, const toml::node* node, const char* what) {
@@ -184,25 +179,8 @@ Constraints FrameConstraints(const Scenario& scenario, double t) {
                               t * motion.translation + t * motion.remainder.row(k);
     }
   }
-  // Merge as the scenario does (first handle wins), without copying the mesh.
-  const Index n = scenario.mesh.num_vertices();
-  std::vector<std::pair<int, Index>> owner(n, {-1, 0});
-  for (size_t h = 0; h < handles.size(); ++h) {
-    for (size_t i = 0; i < handles[h].vertices.size(); ++i) {
-      const Index v = handles[h].vertices[i];
-      if (owner[v].first < 0) owner[v] = {static_cast<int>(h), static_cast<Index>(i)};
-    }
-  }
-  Constraints constraints;
-  for (Index v = 0; v < n; ++v) {
-    if (owner[v].first >= 0) constraints.indices.push_back(v);
-  }
-  constraints.targets.resize(static_cast<Index>(constraints.indices.size()), 3);
-  for (size_t k = 0; k < constraints.indices.size(); ++k) {
-    const auto [h, row] = owner[constraints.indices[k]];
-    constraints.targets.row(static_cast<Index>(k)) = handles[h].targets.row(row);
-  }
-  return constraints;
+  // Merged as the scenario does (first handle wins), without copying the mesh.
+  return MergeHandles(scenario.mesh.num_vertices(), handles);
 }
 
 DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,

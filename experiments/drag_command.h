@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -14,15 +15,14 @@
 
 #include "experiments/builtins.h"
 #include "experiments/drag.h"
+#include "experiments/output_checks.h"
+#include "experiments/piece_flags.h"
 #include "framework/error.h"
 
 namespace harap {
 
-struct DragCommandArguments {
-  std::string scenario, config_file, optimizer, solver, hierarchy, upsampler, energy;
-  std::optional<double> tolerance;
-  std::optional<int> max_iterations;
-  std::vector<std::string> settings;
+struct DragCommandArguments : PieceFlags {
+  std::string scenario;
   std::string report, edits, frame_start = "corrected";
   bool quiet = false;
   DragOptions options;
@@ -65,27 +65,19 @@ inline CLI::App* AddDragCommand(CLI::App& app, DragCommandArguments& a) {
 }
 
 inline int RunDragCommand(const DragCommandArguments& a) {
-  ConfigNode config = a.config_file.empty() ? ConfigNode::Parse("", "<command line>")
-                                            : ConfigNode::ParseFile(a.config_file);
-  const auto set_type = [&](const char* table, const std::string& name) {
-    if (!name.empty()) config.Set(fmt::format("{}.type", table), fmt::format("\"{}\"", name));
-  };
-  set_type("optimizer", a.optimizer);
-  set_type("energy", a.energy);
-  set_type("solver", a.solver);
-  set_type("hierarchy", a.hierarchy);
-  set_type("upsampler", a.upsampler);
-  if (a.tolerance) config.Set("optimizer.tolerance", fmt::format("{}", *a.tolerance));
-  if (a.max_iterations) {
-    config.Set("optimizer.max_iterations", fmt::format("{}", *a.max_iterations));
-  }
-  for (const auto& setting : a.settings) {
-    const auto eq = setting.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw ConfigError(fmt::format("--set '{}': expected KEY=VALUE", setting));
+  // Wrong file names fail now, not after the frames are solved.
+  RefuseMeshAsScenario(a.scenario);
+  // The frames' folder first, as the run would make it: a report may go beside the frames.
+  if (!a.options.out_frames.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(a.options.out_frames, error);
+    if (error) {
+      throw InputError(fmt::format("--out-frames {}: cannot create the folder ({})",
+                                   a.options.out_frames, error.message()));
     }
-    config.Set(setting.substr(0, eq), setting.substr(eq + 1));
   }
+  if (!a.report.empty()) CheckWritable(a.report, "--report");
+  const ConfigNode config = a.BuildConfig();
   DragOptions options = a.options;
   options.frame_start = SessionOptions::ParseFrameStart(a.frame_start);
   const Registries registries = MakeBuiltinRegistries();

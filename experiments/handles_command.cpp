@@ -5,12 +5,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <vector>
 
+#include "experiments/output_checks.h"
 #include "framework/error.h"
 
 namespace harap {
@@ -29,7 +31,12 @@ constexpr NamedColor kColors[] = {
     {{227, 119, 194}, "pink"}, {{188, 189, 34}, "olive"},  {{140, 86, 75}, "brown"}};
 constexpr unsigned char kFreeGrey = 190;
 
-std::string Vec(const Eigen::RowVector3d& v) {
+// `scale` > 0: components below 1e-12 * scale are rounding noise of a computed point (a
+// centred mesh's centroid at 1e-17) and print as 0.
+std::string Vec(Eigen::RowVector3d v, double scale = 0.0) {
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(v[k]) <= 1e-12 * scale) v[k] = 0.0;
+  }
   return fmt::format("({:.6g}, {:.6g}, {:.6g})", v[0], v[1], v[2]);
 }
 
@@ -83,7 +90,8 @@ std::string DescribeHandles(const Scenario& scenario) {
     text += fmt::format("handle {}   '{}' ({} in the PLY)\n", h + 1, handle.name, color);
     text += fmt::format("  vertices  {}\n", handle.vertices.size());
     text += fmt::format("  selected  {}\n", handle.selection.empty() ? "-" : handle.selection);
-    text += fmt::format("  centroid  {} -> {}\n", Vec(rest / count), Vec(target / count));
+    text += fmt::format("  centroid  {} -> {}\n", Vec(rest / count, extent.norm()),
+                        Vec(target / count, extent.norm()));
     text += fmt::format("  motion    {}\n", handle.motion.empty() ? "-" : handle.motion);
     text += fmt::format("  moves     at most {:.6g} ({:.3g} box diagonals)\n", largest_move,
                         extent.norm() > 0 ? largest_move / extent.norm() : 0.0);
@@ -160,8 +168,7 @@ void WriteHandlesPly(const std::filesystem::path& file, const Scenario& scenario
 }
 
 int HandlesCommand(const std::string& scenario_file, const std::string& out) {
-  const Scenario scenario = LoadScenario(scenario_file);
-  // Checked before writing anything: a typo in --out should not cost a second mesh load.
+  // Checked before the mesh is read: a typo in --out should not cost a mesh load.
   if (!out.empty()) {
     std::string extension = std::filesystem::path(out).extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
@@ -171,7 +178,9 @@ int HandlesCommand(const std::string& scenario_file, const std::string& out) {
                                    "a file name ending in .ply",
                                    out));
     }
+    CheckWritable(out, "--out");
   }
+  const Scenario scenario = LoadScenario(scenario_file);
   fmt::print("{}", DescribeHandles(scenario));
   if (!out.empty()) {
     WriteHandlesPly(out, scenario);

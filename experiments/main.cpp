@@ -22,6 +22,7 @@
 #include "experiments/handles_command.h"
 #include "experiments/interrupt.h"
 #include "experiments/output_checks.h"
+#include "experiments/piece_flags.h"
 #include "experiments/process.h"
 #include "experiments/progress.h"
 #include "experiments/runner.h"
@@ -35,13 +36,8 @@ namespace {
 
 using namespace harap;
 
-struct DeformArguments {
+struct DeformArguments : PieceFlags {
   std::string scenario;
-  std::string config_file;
-  std::string optimizer, energy, solver, hierarchy, upsampler;
-  std::optional<double> tolerance;
-  std::optional<int> max_iterations;
-  std::vector<std::string> settings;
   std::string out, report;
   std::string out_rest, out_handles;
   bool trace = false;
@@ -50,39 +46,12 @@ struct DeformArguments {
   int threads = 0;
 };
 
-// The run config: --config file, then the shortcut flags, then --set KEY=VALUE.
-ConfigNode BuildRunConfig(const DeformArguments& args) {
-  ConfigNode config = args.config_file.empty() ? ConfigNode::Parse("", "<command line>")
-                                               : ConfigNode::ParseFile(args.config_file);
-  auto set_type = [&](const char* table, const std::string& name) {
-    if (!name.empty()) config.Set(fmt::format("{}.type", table), fmt::format("\"{}\"", name));
-  };
-  set_type("optimizer", args.optimizer);
-  set_type("energy", args.energy);
-  set_type("solver", args.solver);
-  set_type("hierarchy", args.hierarchy);
-  set_type("upsampler", args.upsampler);
-  if (args.tolerance) config.Set("optimizer.tolerance", fmt::format("{}", *args.tolerance));
-  if (args.max_iterations) {
-    config.Set("optimizer.max_iterations", fmt::format("{}", *args.max_iterations));
-  }
-  for (const auto& setting : args.settings) {
-    const auto eq = setting.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw ConfigError(fmt::format("--set '{}': expected KEY=VALUE, e.g. energy.lambda=0.5",
-                                    setting));
-    }
-    config.Set(setting.substr(0, eq), setting.substr(eq + 1));
-  }
-  return config;
-}
-
 // What the command is doing, for the out-of-memory message (std::bad_alloc carries no context).
 std::string_view current_stage = "starting";
 
 int Deform(const DeformArguments& args) {
   const Registries registries = MakeBuiltinRegistries();
-  const ConfigNode config = BuildRunConfig(args);
+  const ConfigNode config = args.BuildConfig();
   RefuseMeshAsScenario(args.scenario);
   // Output names are checked before any long work (the mesh format below, once it is known).
   const std::pair<const std::string*, const char*> outputs[] = {
@@ -145,7 +114,7 @@ int Deform(const DeformArguments& args) {
 // prints a per-level table.
 int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   const Registries registries = MakeBuiltinRegistries();
-  const ConfigNode config = BuildRunConfig(args);
+  const ConfigNode config = args.BuildConfig();
   ValidateRunConfig(config);
   RefuseMeshAsScenario(args.scenario);
   ProgressDisplay progress(stderr, ProgressOptions::For(stderr, false));
@@ -193,6 +162,10 @@ struct RunArguments {
 
 // `harap run CONFIG.toml`: the experiment sweep (docs/experiments.md).
 int RunSweep(const RunArguments& args) {
+  RefuseMeshAsToml(args.config, "harap run",
+                   "an experiment config: [scenarios] files = [...] and [[variant]] tables "
+                   "(docs/experiments.md)");
+  RefuseScenarioAsConfig(args.config);
   const Experiment experiment = LoadExperiment(args.config);
   RunnerOptions options;
   options.out_dir = args.out.empty() ? std::filesystem::path("results") / experiment.name

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -50,7 +51,48 @@ bool LooksLikeMeshFile(const fs::path& file) {
   return false;
 }
 
+namespace {
+
+// The top-level table of `file`, or nothing when it cannot be read or parsed (the loader that
+// runs next reports that with line and column).
+std::optional<toml::table> TopLevel(const fs::path& file) {
+  try {
+    return toml::parse_file(file.string());
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+void RefuseConfigAsScenario(const fs::path& file) {
+  const std::optional<toml::table> root = TopLevel(file);
+  if (!root || root->contains("mesh") || root->contains("handle")) return;
+  if (!root->contains("scenarios") && !root->contains("variant")) return;
+  throw InputError(fmt::format(
+      "{} is an experiment config ([scenarios], [[variant]]), but a scenario is expected here; "
+      "run the config with harap run {}, or give one of the scenarios it lists",
+      file.string(), file.string()));
+}
+
+void RefuseScenarioAsConfig(const fs::path& file) {
+  const std::optional<toml::table> root = TopLevel(file);
+  if (!root || root->contains("scenarios")) return;
+  if (!root->contains("mesh") && !root->contains("handle")) return;
+  throw InputError(fmt::format(
+      "{} is a scenario (mesh and [[handle]]), but harap run takes an experiment config that "
+      "lists scenarios and variants (docs/experiments.md), for example\n"
+      "    [scenarios]\n"
+      "    files = [\"{}\"]\n"
+      "    [[variant]]\n"
+      "    name = \"classic\"\n"
+      "    optimizer.type = \"classic\"\n"
+      "To deform this one scenario: harap deform {}",
+      file.string(), file.filename().string(), file.string()));
+}
+
 void RefuseMeshAsScenario(const fs::path& file) {
+  RefuseConfigAsScenario(file);
   if (!LooksLikeMeshFile(file)) return;
   fs::path scenario = file;
   if (scenario.extension() == ".xz") scenario.replace_extension();
@@ -67,6 +109,14 @@ void RefuseMeshAsScenario(const fs::path& file) {
       "(slab bounds are fractions of the bounding box; see docs/input.md), then run harap "
       "deform {}",
       file.string(), scenario.string(), file.filename().string(), scenario.string()));
+}
+
+void RefuseMeshAsToml(const fs::path& file, std::string_view option, std::string_view expected) {
+  if (!LooksLikeMeshFile(file)) return;
+  throw InputError(fmt::format(
+      "{} {}: this is a mesh file, but {} takes {}. A mesh goes into a scenario "
+      "(mesh = \"{}\" with its [[handle]] tables, docs/input.md), which harap deform runs",
+      option, file.string(), option, expected, file.filename().string()));
 }
 
 std::string ScenarioLoadingPhase(const fs::path& file) {

@@ -19,8 +19,28 @@ void CheckWritable(const std::filesystem::path& file, std::string_view option);
 bool LooksLikeMeshFile(const std::filesystem::path& file);
 
 /// Throws InputError when `file` is a mesh file given where a scenario is expected, with a
-/// scenario for it to start from (instead of the TOML parser's syntax error).
+/// scenario for it to start from (instead of the TOML parser's syntax error), or an experiment
+/// config (RefuseConfigAsScenario).
 void RefuseMeshAsScenario(const std::filesystem::path& file);
+
+/// Throws InputError when `file` is an experiment config (top-level [scenarios] or [[variant]],
+/// no mesh) given where a scenario is expected, naming `harap run` (instead of "unknown key").
+void RefuseConfigAsScenario(const std::filesystem::path& file);
+
+/// Throws InputError when `file` is a scenario (top-level mesh or [[handle]], no [scenarios])
+/// given to `harap run`, with a config that runs it and the `harap deform` command.
+void RefuseScenarioAsConfig(const std::filesystem::path& file);
+
+/// What `--config` takes, for RefuseMeshAsToml.
+inline constexpr std::string_view kConfigFileKinds =
+    "a TOML file of options ([optimizer], [energy], [solver], [hierarchy], [upsampler] tables, "
+    "the keys `harap list` shows)";
+
+/// Throws InputError when `file` is a mesh file given to `option` (e.g. "harap run",
+/// "--config"), which takes a TOML file of the kind `expected` describes, naming what goes where
+/// (instead of the TOML parser's syntax error).
+void RefuseMeshAsToml(const std::filesystem::path& file, std::string_view option,
+                      std::string_view expected);
 
 /// The progress label for loading the scenario `file`: what LoadScenario will do, read from the
 /// scenario's top-level keys (a built-in mesh is built, a surface tetrahedralized, `refine`

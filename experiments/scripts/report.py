@@ -35,11 +35,17 @@ import sys
 import time
 from collections import OrderedDict, defaultdict
 
-import matplotlib
+try:
+    import matplotlib
+    import numpy as np
+except ImportError as missing:  # a clear message instead of a traceback
+    sys.exit(f"harap report: {sys.executable} cannot import {missing.name}, which the report's "
+             "figures need. Install it (Debian: sudo apt-get install python3-matplotlib "
+             "python3-numpy; .ci/setup does this) or give harap report --python an interpreter "
+             "that has both.")
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 try:
     import tomllib  # Python 3.11

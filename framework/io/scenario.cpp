@@ -85,6 +85,15 @@ struct HandleSpec {
 
 std::string Vec(const Eigen::Vector3d& v) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", v[0], v[1], v[2]); }
 
+// A computed point (a centroid) of a mesh of size `scale`: rounding noise far below the mesh's
+// size (a centred mesh's centroid at 1e-17) prints as 0, not as a number that looks meaningful.
+std::string Point(Eigen::Vector3d v, double scale) {
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(v[k]) <= 1e-12 * scale) v[k] = 0.0;
+  }
+  return Vec(v);
+}
+
 // The box, for every message about a selection: the numbers only mean something against it.
 std::string DescribeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   return fmt::format("x in [{:.6g}, {:.6g}], y in [{:.6g}, {:.6g}], z in [{:.6g}, {:.6g}]", lo[0],
@@ -761,13 +770,8 @@ class Parser {
     // Box of the referenced vertices (see the top of this file).
     const Mesh& mesh = scenario.mesh;
     const std::vector<bool> referenced = ReferencedVertices(mesh);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector3d hi = -lo;
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-      if (!referenced[v]) continue;
-      lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
-      hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
-    }
+    const auto [box_min, box_max] = SelectionBox(mesh);
+    const Eigen::Vector3d lo = box_min, hi = box_max;  // used in lambdas below
     const Eigen::Vector3d extent = hi - lo;
     const double diagonal = BoundingBoxDiagonal(mesh);
     scenario.box_min = lo;
@@ -823,7 +827,7 @@ class Parser {
         std::vector<std::string> parts;
         if (spec.has_rotation) {
           parts.push_back(fmt::format("rotate {}° about {} through {}{}", spec.degrees,
-                                      Vec(spec.axis_vector.normalized()), Vec(center),
+                                      Vec(spec.axis_vector.normalized()), Point(center, diagonal),
                                       spec.center ? "" : " (the handle's centroid)"));
         }
         if (spec.has_translation) {
@@ -1028,7 +1032,22 @@ void DecidePlanar(Scenario& scenario, std::optional<bool> setting,
 }
 
 Constraints Scenario::MergedConstraints() const {
-  const Index n = mesh.num_vertices();
+  return MergeHandles(mesh.num_vertices(), handles);
+}
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> SelectionBox(const Mesh& mesh) {
+  const std::vector<bool> referenced = ReferencedVertices(mesh);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    if (!referenced[v]) continue;
+    lo = lo.cwiseMin(mesh.vertices.row(v).transpose());
+    hi = hi.cwiseMax(mesh.vertices.row(v).transpose());
+  }
+  return {lo, hi};
+}
+
+Constraints MergeHandles(Index n, const std::vector<ScenarioHandle>& handles) {
   // For each vertex, the first handle (and row) that selects it.
   std::vector<std::pair<int, Index>> owner(n, {-1, 0});
   for (size_t h = 0; h < handles.size(); ++h) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "framework/mesh.h"
@@ -42,6 +43,16 @@ struct Scenario {
   /// All handles merged; a vertex selected by several handles takes the first handle's target.
   Constraints MergedConstraints() const;
 };
+
+/// The box that selections refer to, {min, max}: of the vertices some element references, so
+/// that stray unreferenced vertices do not move it (docs/input.md). Infinite (min > max) for a
+/// mesh without elements.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> SelectionBox(const Mesh& mesh);
+
+/// `handles` (of a mesh with `num_vertices` vertices) merged into one set of constraints, sorted
+/// by vertex; a vertex selected by several handles takes the first handle's target. For handles
+/// whose targets differ from the scenario's (a frame of `harap drag`).
+Constraints MergeHandles(Index num_vertices, const std::vector<ScenarioHandle>& handles);
 
 /// Upper bounds on what a scenario may make the program build, for callers that parse untrusted
 /// text (the fuzz harness). Exceeding one is a ConfigError naming the key. Default: no bound

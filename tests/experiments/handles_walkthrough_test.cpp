@@ -4,66 +4,27 @@
 // Small generated meshes only.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "tests/support/run_harap.h"
+#include "tests/support/temp_folder.h"
+#include "tests/support/test_files.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
+using harap::testing::BarOff;
+using harap::testing::ReadText;
 using harap::testing::RunHarap;
-
-struct Folder {
-  explicit Folder(const std::string& name)
-      : dir(fs::temp_directory_path() / fmt::format("harap-ux-{}-{}", name, getpid())) {
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~Folder() {
-    std::error_code ignore;
-    fs::remove_all(dir, ignore);
-  }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(dir / name) << text;
-    return (dir / name).string();
-  }
-  fs::path dir;
-};
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
-}
-
-// A bar along x in [0, 3] with a 1 x 1 cross-section, rings at x = 0, 1, 2, 3, as OFF.
-std::string BarOff() {
-  std::string off = "OFF\n16 28 0\n";
-  for (int ring = 0; ring < 4; ++ring) {
-    off += fmt::format("{} 0 0\n{} 1 0\n{} 1 1\n{} 0 1\n", ring, ring, ring, ring);
-  }
-  for (int ring = 0; ring < 3; ++ring) {
-    for (int k = 0; k < 4; ++k) {
-      const int a = 4 * ring + k, b = 4 * ring + (k + 1) % 4, c = a + 4, d = b + 4;
-      off += fmt::format("3 {} {} {}\n3 {} {} {}\n", a, b, d, a, d, c);
-    }
-  }
-  off += "3 0 2 1\n3 0 3 2\n3 12 13 14\n3 12 14 15\n";  // caps
-  return off;
-}
+using harap::testing::TempFolder;
 
 TEST_CASE("harap handles: box, per-handle count, centroid and motion; coloured PLY",
           "[experiments][handles]") {
-  Folder folder("handles");
-  folder.Write("bar.off", BarOff());
+  TempFolder folder("ux-handles");
+  folder.Write("bar.off", BarOff(/*caps=*/true));
   const std::string scenario = folder.Write(
       "bar.toml", "mesh = \"bar.off\"\n"
                   "[[handle]]\nname = \"left\"\nselect.slab = { axis = \"x\", from = 0, to = 0.1 }\n"
@@ -115,8 +76,8 @@ TEST_CASE("harap handles: box, per-handle count, centroid and motion; coloured P
 
 TEST_CASE("deformation benchmark files and per-vertex targets: handles, then deform",
           "[experiments][handles]") {
-  Folder folder("benchmark");
-  folder.Write("bar.off", BarOff());
+  TempFolder folder("ux-benchmark");
+  folder.Write("bar.off", BarOff(/*caps=*/true));
   std::string labels;
   for (int v = 0; v < 16; ++v) labels += v < 4 ? "0\n" : v < 12 ? "1\n" : "2\n";
   folder.Write("bar.sel", labels);
@@ -154,7 +115,7 @@ TEST_CASE("deformation benchmark files and per-vertex targets: handles, then def
 }
 
 TEST_CASE("refine = 1 of a non-manifold mesh refines with a note", "[experiments][handles]") {
-  Folder folder("nonmanifold");
+  TempFolder folder("ux-nonmanifold");
   // Three triangles on the edge (0, 1) and a second fan touching vertex 2.
   folder.Write("book.obj",
                "v 0 0 0\nv 2 0 0\nv 1 1 0\nv 1 -1 0\nv 1 0 1\nv 2 2 0\nv 0 2 0\nv 1 3 0\n"
@@ -168,6 +129,95 @@ TEST_CASE("refine = 1 of a non-manifold mesh refines with a note", "[experiments
   CHECK_THAT(result.output, Contains("(20 vertices, 20 faces)"));  // 8 + 12 edges, 4 x 5
   CHECK_THAT(result.output, Contains("Loop variant"));
   CHECK_THAT(result.output, Contains("1 non-manifold edge "));
+}
+
+TEST_CASE("a mesh or a wrong output name fails before any work, saying what goes where",
+          "[experiments][handles]") {
+  TempFolder folder("ux-wrong-files");
+  folder.Write("bar.off", BarOff(/*caps=*/true));
+  const std::string scenario =
+      folder.Write("bar.toml",
+                   "mesh = \"bar.off\"\n[[handle]]\nselect.slab = { axis = \"x\", from = 0, "
+                   "to = 0.1 }\n[[handle]]\nselect.slab = { axis = \"x\", from = 0.9, to = 1 }\n"
+                   "translate = [0, 0.2, 0]\n");
+  const std::string mesh = (folder.dir / "bar.off").string();
+  // Where a scenario is expected (harap drag as harap deform), an experiment config, a --config.
+  const auto drag = RunHarap("drag " + mesh);
+  CHECK(drag.status == 1);
+  CHECK_THAT(drag.output, Contains("is a mesh file, but a scenario (TOML) is expected"));
+  const auto run = RunHarap(fmt::format("run {} --out {}", mesh, (folder.dir / "out").string()));
+  CHECK(run.status == 1);
+  CHECK_THAT(run.output, Contains("this is a mesh file, but harap run takes an experiment config"));
+  CHECK_FALSE(fs::exists(folder.dir / "out"));
+  // A scenario given to harap run, an experiment config where a scenario is expected.
+  const auto run_scenario =
+      RunHarap(fmt::format("run {} --out {}", scenario, (folder.dir / "out").string()));
+  CHECK(run_scenario.status == 1);
+  CHECK_THAT(run_scenario.output, Contains("is a scenario (mesh and [[handle]]), but harap run "
+                                           "takes an experiment config") &&
+                                      Contains("files = [\"bar.toml\"]") &&
+                                      Contains("harap deform " + scenario));
+  CHECK_FALSE(fs::exists(folder.dir / "out"));
+  const std::string sweep = folder.Write(
+      "sweep.toml", "[scenarios]\nfiles = [\"bar.toml\"]\n[[variant]]\nname = \"classic\"\n");
+  for (const char* command : {"deform", "handles", "hierarchy", "drag"}) {
+    const auto wrong = RunHarap(fmt::format("{} {}", command, sweep));
+    INFO(command << ": " << wrong.output);
+    CHECK(wrong.status == 1);
+    CHECK_THAT(wrong.output, Contains("is an experiment config") &&
+                                 Contains("run the config with harap run " + sweep));
+  }
+  for (const char* command : {"deform", "hierarchy", "drag"}) {
+    const auto config = RunHarap(fmt::format("{} {} --config {}", command, scenario, mesh));
+    INFO(command << ": " << config.output);
+    CHECK(config.status == 1);
+    CHECK_THAT(config.output, Contains("--config " + mesh + ": this is a mesh file"));
+    CHECK_THAT(config.output, !Contains("TOML syntax error"));
+  }
+  // Output folders that do not exist: before the mesh is read (handles) or solved (drag).
+  const std::string nowhere = (folder.dir / "no-such-folder").string();
+  const auto handles = RunHarap(fmt::format("handles {} --out {}/h.ply", scenario, nowhere));
+  CHECK(handles.status == 1);
+  CHECK_THAT(handles.output, Contains("the folder " + nowhere + " does not exist"));
+  CHECK_THAT(handles.output, !Contains("bounding box"));  // nothing was loaded or printed
+  const auto report =
+      RunHarap(fmt::format("drag {} --frames 2 --report {}/d.json", scenario, nowhere));
+  CHECK(report.status == 1);
+  CHECK_THAT(report.output, Contains("--report " + nowhere + "/d.json: the folder"));
+}
+
+TEST_CASE("harap handles prints a centred mesh's centroids without rounding noise",
+          "[experiments][handles]") {
+  // The built-in cylinder is centred on the z axis: its ring centroids are x = y = 0 up to
+  // rounding (1e-17), which printed as "-2.67985e-17".
+  TempFolder folder("ux-centroid");
+  const auto result =
+      RunHarap("handles " + folder.Write("c.toml", harap::testing::kCylinderBendScenario));
+  INFO(result.output);
+  REQUIRE(result.status == 0);
+  CHECK_THAT(result.output, Contains("centroid  (0, 0, 0.046798) -> (0, 0, 0.046798)"));
+  CHECK_THAT(result.output, Contains("through (0, 0, 3.9532) (the handle's centroid)"));
+  CHECK_THAT(result.output, !Contains("e-1"));
+}
+
+TEST_CASE("harap report without matplotlib says what to install, no traceback",
+          "[experiments][handles]") {
+  TempFolder folder("ux-no-matplotlib");
+  // A Python without its site packages (where Debian's matplotlib lives) stands in for a
+  // machine without matplotlib; the run folder needs one finished run.
+  const std::string python = folder.Write("python", "#!/bin/sh\nexec /usr/bin/python3 -S \"$@\"\n");
+  fs::permissions(python, fs::perms::owner_all);
+  folder.Write("c.toml", harap::testing::kCylinderBendScenario);
+  const std::string config = folder.Write(
+      "sweep.toml", "[scenarios]\nfiles = [\"c.toml\"]\n[[variant]]\nname = \"classic\"\n");
+  const std::string out = (folder.dir / "out").string();
+  REQUIRE(RunHarap(fmt::format("run {} --out {} -q", config, out)).status == 0);
+  const auto report = RunHarap(fmt::format("report {} --python {} --no-render", out, python));
+  INFO(report.output);
+  CHECK(report.status == 1);
+  CHECK_THAT(report.output, Contains("cannot import matplotlib"));
+  CHECK_THAT(report.output, Contains("python3-matplotlib"));
+  CHECK_THAT(report.output, !Contains("Traceback"));
 }
 
 }  // namespace

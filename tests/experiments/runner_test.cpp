@@ -4,12 +4,9 @@
 // vertices keep every sweep well under a second per run.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -19,27 +16,18 @@
 #include "experiments/runner.h"
 #include "framework/error.h"
 #include "tests/support/shared_data.h"
+#include "tests/support/temp_folder.h"
+#include "tests/support/test_files.h"
 
 using namespace harap;
 namespace fs = std::filesystem;
+using testing::ReadText;
 
 namespace {
 
-struct Workspace {
-  explicit Workspace(const std::string& name)
-      : dir(fs::temp_directory_path() / fmt::format("harap-runner-{}-{}", name, getpid())) {
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    Write("cylinder.toml", R"(
-mesh = { builtin = "cylinder", vertices = 600 }
-[[handle]]
-name = "bottom"
-select.slab = { axis = "z", from = 0.0, to = 0.05 }
-[[handle]]
-name = "top"
-select.slab = { axis = "z", from = 0.95, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
-)");
+struct Workspace : testing::TempFolder {
+  explicit Workspace(const std::string& name) : TempFolder("runner-" + name) {
+    Write("cylinder.toml", testing::kCylinderBendScenario);
     Write("plane.toml", R"(
 mesh = { builtin = "plane", vertices = 500 }
 [[handle]]
@@ -51,14 +39,6 @@ select.slab = { axis = "x", from = 0.95, to = 1.0 }
 translate = [0.0, 0.0, 0.2]
 )");
     Write("broken.toml", "mesh = \"no-such-mesh.obj\"\n");
-  }
-  ~Workspace() {
-    std::error_code ignore;
-    fs::remove_all(dir, ignore);
-  }
-  fs::path Write(const std::string& name, const std::string& text) const {
-    std::ofstream(dir / name) << text;
-    return dir / name;
   }
   Experiment Load(const std::string& config_text) const {
     return LoadExperiment(Write("experiment.toml", config_text));
@@ -74,31 +54,12 @@ translate = [0.0, 0.0, 0.2]
     options.quiet = true;
     return RunExperiment(experiment, options);
   }
-  fs::path dir;
 };
 
-const char* kSmallSweep = R"(
-[experiment]
-name = "small"
-[scenarios]
-files = ["cylinder.toml", "plane.toml"]
-[optimizer]
-tolerance = 1e-5
-[[variant]]
-name = "classic"
-optimizer.type = "classic"
-[[variant]]
-name = "hierarchical"
-optimizer.type = "hierarchical"
-hierarchy.min_vertices = 100
-)";
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
-}
+const std::string kSmallSweep = std::string(
+                                    "[experiment]\nname = \"small\"\n[scenarios]\n"
+                                    "files = [\"cylinder.toml\", \"plane.toml\"]\n") +
+                                testing::kClassicAndHierarchicalVariants;
 
 std::vector<std::string> SplitCsvLine(const std::string& line) {
   std::vector<std::string> fields(1);

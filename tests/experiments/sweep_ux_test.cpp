@@ -5,74 +5,36 @@
 // leaves no partial file.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 
 #include "experiments/experiment.h"
 #include "framework/error.h"
 #include "tests/support/run_harap.h"
+#include "tests/support/temp_folder.h"
+#include "tests/support/test_files.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
+using harap::testing::ReadText;
 using harap::testing::RunCommand;
 using harap::testing::RunHarap;
+using harap::testing::TempFolder;
 
-struct Folder {
-  explicit Folder(const std::string& name)
-      : dir(fs::temp_directory_path() / fmt::format("harap-sweep-ux-{}-{}", name, getpid())) {
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    Write("cylinder.toml", R"(
-mesh = { builtin = "cylinder", vertices = 600 }
-[[handle]]
-name = "bottom"
-select.slab = { axis = "z", from = 0.0, to = 0.05 }
-[[handle]]
-name = "top"
-select.slab = { axis = "z", from = 0.95, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
-)");
+// Each case's folder with the scenario its configs name.
+struct Folder : TempFolder {
+  explicit Folder(const std::string& name) : TempFolder("sweep-ux-" + name) {
+    Write("cylinder.toml", harap::testing::kCylinderBendScenario);
   }
-  ~Folder() {
-    std::error_code ignore;
-    fs::remove_all(dir, ignore);
-  }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(dir / name) << text;
-    return (dir / name).string();
-  }
-  fs::path dir;
 };
 
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
-}
-
-const char* kTwoVariants = R"(
-[scenarios]
-files = ["cylinder.toml"]
-[optimizer]
-tolerance = 1e-5
-[[variant]]
-name = "classic"
-optimizer.type = "classic"
-[[variant]]
-name = "hierarchical"
-optimizer.type = "hierarchical"
-hierarchy.min_vertices = 100
-)";
+const std::string kTwoVariants = std::string("[scenarios]\nfiles = [\"cylinder.toml\"]\n") +
+                                 harap::testing::kClassicAndHierarchicalVariants;
 
 TEST_CASE("harap run checks [report] before any run: figures, keys, compare",
           "[experiments][sweep_ux]") {

@@ -4,11 +4,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <fmt/format.h>
 
 #include "framework/error.h"
 #include "framework/io/scenario.h"
 #include "tests/io/io_test_util.h"
+#include "tests/support/test_files.h"
 
 namespace harap {
 namespace {
@@ -172,18 +172,8 @@ TEST_CASE("scenario target_file: per-vertex targets, errors name file and line",
 // A generated example of the deformation benchmark's format (Botsch & Sorkine 2008): a bar as
 // OFF, one label per vertex, the handle's transform.
 void WriteBenchmarkBar(const ScratchDir& dir) {
-  // 2 x 2 cross-section rings at x = 0, 1, 2, 3 (16 vertices), the sides triangulated.
-  std::string off = "OFF\n16 24 0\n";
-  for (int ring = 0; ring < 4; ++ring) {
-    off += fmt::format("{} 0 0\n{} 1 0\n{} 1 1\n{} 0 1\n", ring, ring, ring, ring);
-  }
-  for (int ring = 0; ring < 3; ++ring) {
-    for (int k = 0; k < 4; ++k) {
-      const int a = 4 * ring + k, b = 4 * ring + (k + 1) % 4, c = a + 4, d = b + 4;
-      off += fmt::format("3 {} {} {}\n3 {} {} {}\n", a, b, d, a, d, c);
-    }
-  }
-  dir.Write("bar.off", off);
+  // Rings at x = 0, 1, 2, 3 (16 vertices), the sides triangulated, the ends open.
+  dir.Write("bar.off", testing::BarOff(/*caps=*/false));
   // Ring 0 fixed, rings 1 and 2 free, ring 3 the handle.
   std::string labels = "# 0 fixed, 1 free, 2 handle\n";
   for (int v = 0; v < 16; ++v) labels += v < 4 ? "0\n" : v < 12 ? "1\n" : "2\n";
