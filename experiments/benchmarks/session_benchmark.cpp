@@ -57,8 +57,8 @@ std::unique_ptr<ConfiguredSession> MakeSolvedSession(const std::string& refactor
   const Scenario& scenario = LoadedScenario();
   const Registries registries = MakeBuiltinRegistries();
   const ConfigNode config = ConfigNode::Parse(
-      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n[solver]\nrefactor = \"" +
-          refactor + "\"\n",
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n[solver]\nrefactor = \"" + refactor +
+          "\"\n",
       "session benchmark");
   auto session = MakeSession(registries, scenario.mesh, config, kThreads);
   const Constraints pose = FrameConstraints(scenario, (kFrames - 1.0) / kFrames);

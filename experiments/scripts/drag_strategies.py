@@ -138,7 +138,8 @@ def main():
             run(args, strategy, path)
         reports[strategy] = load(path)
     summary(reports)
-    title = f"{os.path.basename(args.scenario)}: {args.frames} frames, tolerance {args.tolerance:g}"
+    name = os.path.splitext(os.path.basename(args.scenario))[0]
+    title = f"{name}: {args.frames} frames, tolerance {args.tolerance:g}"
     plot(reports, os.path.join(args.out, "drag_strategies.png"), title)
 
 

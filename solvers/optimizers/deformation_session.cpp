@@ -307,8 +307,8 @@ HandleEditResult DeformationSession::ConstrainLevels() {
       constrained = static_cast<Index>(level.constraints.vertices.size());
       summary = solver.ConstrainMasked(level.constraints.vertices, factory, context_);
     }
-    done[l] = HandleEditResult::Level{l,           constrained,      summary.changed_rows,
-                                      summary.factored, summary.route, summary.seconds};
+    done[l] = HandleEditResult::Level{
+        l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds};
   };
   context_.Run([&] {
     // The levels are independent: the finest level (most of the work) in this thread, the
@@ -431,7 +431,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
   // so with a direct solver the result is identical (an iterative one starts from the last
   // frame's positions instead of the up-sampled ones).
-  const bool straight = preview && preview_straight_ && top > 0 && upsampler_->output() == UpsampleOutput::kRotations &&
+  const bool straight = preview && preview_straight_ && top > 0 &&
+                        upsampler_->output() == UpsampleOutput::kRotations &&
                         upsampler_->RotationsFollowCoarseVertex(site_);
   if (straight && preview_map_.empty()) {
     preview_map_.resize(mesh_.num_vertices());
@@ -451,8 +452,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
                           [&](const tbb::blocked_range<size_t>& range) {
                             for (size_t v = range.begin(); v != range.end(); ++v) {
                               const Index c = preview_map_[v];
-                              work.rotations[v] =
-                                  c == kNoVertex ? Rotation::Identity() : coarse[c];
+                              work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
                             }
                           });
         start_with_global_step = true;
