@@ -84,6 +84,12 @@ class LinearSolver {
     double seconds = 0.0;
   };
 
+  /// Call before Factorize() when Refactor() will follow (an interactive session's levels):
+  /// solvers that keep copies to make Refactor() cheaper (the analysis, the matrix) keep them
+  /// only then, so one-shot runs that never refactor pay neither the memory nor the copying.
+  /// Refactor() works without it too (it may then factor from scratch). Default: nothing.
+  virtual void PrepareForRefactor() {}
+
   /// Brings the factorization up to date for `a`, which has the same size and sparsity pattern
   /// (explicit zeros included) as the matrix of the last Factorize(), and whose values differ
   /// only in the rows and columns `changed_rows` (sorted, unique). Interactive sessions change

@@ -37,6 +37,13 @@ class Upsampler {
                         RotationSite site, const LevelState& coarse_state,
                         LevelState& fine_state, const Context& context) const = 0;
 
+  /// True when the rotations Upsample() produces at `site` are exactly each fine vertex's
+  /// coarse vertex's rotation (HierarchyLevel::coarse_vertex; the identity for kNoVertex): no
+  /// averaging, no smoothing. Up-sampling through several levels is then one gather along the
+  /// composed vertex map (a session's Preview() goes straight from the coarsest level to the
+  /// finest so).
+  virtual bool RotationsFollowCoarseVertex(RotationSite /*site*/) const { return false; }
+
  protected:
   Upsampler() = default;
 };

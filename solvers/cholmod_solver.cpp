@@ -423,8 +423,15 @@ struct CholmodSolver::Impl {
     symbolic = nullptr;
   }
 
-  // Keeps copies for Refactor() (the matrix also for check_residual).
-  bool keeps_copies() const { return options.refactor != RefactorChoice::kFull; }
+  // Keeps copies for Refactor() (the matrix also for check_residual): with an explicit
+  // numeric or update route, or with auto after PrepareForRefactor() (a one-shot run that never
+  // refactors keeps nothing: ~110 bytes per vertex and the copying time on a surface mesh).
+  bool keeps_copies() const {
+    return options.refactor == RefactorChoice::kNumeric ||
+           options.refactor == RefactorChoice::kUpdate ||
+           (options.refactor == RefactorChoice::kAuto && prepared_for_refactor);
+  }
+  bool prepared_for_refactor = false;
 
   // The numeric factorization of `view` into `factor` (symbolic on entry), timed.
   void FactorNumeric(cholmod_sparse& view, const SparseMatrix& a) {
@@ -706,6 +713,8 @@ std::unique_ptr<LinearSolver> CholmodSolver::Create(const ConfigNode& node) {
 const CholmodSolver::Options& CholmodSolver::options() const { return impl_->options; }
 
 const CholmodSolver::FactorInfo& CholmodSolver::factor_info() const { return impl_->info; }
+
+void CholmodSolver::PrepareForRefactor() { impl_->prepared_for_refactor = true; }
 
 void CholmodSolver::set_refactor(RefactorChoice choice) {
   HARAP_CHECK(choice != RefactorChoice::kUpdate || impl_->options.mode != Mode::kSupernodal,

@@ -83,10 +83,12 @@ class CholmodSolver final : public LinearSolver {
     /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
     /// Factorize() sets it.
     int native_threads = 1;
-    /// Refactor()'s route. Anything but kFull keeps a copy of the analysis (the symbolic
-    /// factor, a few MB) and of the factored matrix (12 bytes per nonzero of A) between calls,
-    /// to reuse the one and to check the pattern and find the changed rows' old values with the
-    /// other. kUpdate needs a simplicial factor (modes auto and simplicial).
+    /// Refactor()'s route. kNumeric and kUpdate, and kAuto after PrepareForRefactor(), keep a
+    /// copy of the analysis (the symbolic factor, a few MB) and of the factored matrix (12 bytes
+    /// per nonzero of A) between calls, to reuse the one and to check the pattern and find the
+    /// changed rows' old values with the other; kAuto without PrepareForRefactor() (one-shot
+    /// runs) keeps none, and its Refactor() factors from scratch. kUpdate needs a simplicial
+    /// factor (modes auto and simplicial).
     RefactorChoice refactor = RefactorChoice::kAuto;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
@@ -140,6 +142,9 @@ class CholmodSolver final : public LinearSolver {
   RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                            const Context& context) override;
 
+  /// With refactor = "auto": keep the copies Refactor() reuses from the next Factorize() on.
+  void PrepareForRefactor() override;
+
   /// Seconds per factor entry touched by the deletions and by the additions of an update before
   /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
   /// ball of 1% of the vertices (docs/solvers.md).
@@ -174,7 +179,7 @@ class CholmodSolver final : public LinearSolver {
 
   const Options& options() const;
   /// Changes Options::refactor for the next Refactor() calls (experiments, tests). Switching
-  /// from "full" takes effect after the next Factorize(), which keeps the copies.
+  /// to a route that keeps copies takes effect after the next Factorize(), which keeps them.
   void set_refactor(RefactorChoice choice);
 
   static std::string_view ToString(Mode mode);

@@ -128,7 +128,11 @@ std::unique_ptr<CholmodSolver> MakeSolver(const std::string& refactor, int nativ
   ConfigNode node;
   node.Set("refactor", "\"" + refactor + "\"");
   node.Set("native_threads", std::to_string(native_threads));
-  return std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(node));
+  auto solver = std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(node));
+  // As a session's level (LocalGlobalSolver::ConstrainMasked): refactor = "auto" keeps the
+  // copies Refactor() reuses only when prepared.
+  solver->PrepareForRefactor();
+  return solver;
 }
 
 // The relative residual of a 3-column solve with the current factor; `seconds`: the solve's

@@ -46,6 +46,11 @@ class CellUpsampler final : public Upsampler {
   void Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse, RotationSite site,
                 const LevelState& coarse_state, LevelState& fine_state,
                 const Context& context) const override;
+  /// "rotations" at vertex sites: the prolonged rotations are the coarse vertex's, copied
+  /// (elements average the vertex rotations, "smoothed_rotations" smooths them).
+  bool RotationsFollowCoarseVertex(RotationSite site) const override {
+    return options_.mode == Mode::kRotations && site == RotationSite::kVertex;
+  }
 
  private:
   Options options_;

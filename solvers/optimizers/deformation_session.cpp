@@ -2,6 +2,10 @@
 #include "solvers/optimizers/deformation_session.h"
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +14,7 @@
 
 #include "framework/error.h"
 #include "solvers/optimizers/classic_optimizer.h"
+#include "solvers/optimizers/level_setup_pipeline.h"
 
 namespace harap {
 
@@ -262,49 +267,82 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
 HandleEditResult DeformationSession::ConstrainLevels() {
   Stopwatch clock;
   HandleEditResult result;
-  context_.Run([&] {
-    const Constraints finest{handles_, targets_};
-    for (auto it = solved_levels_.rbegin(); it != solved_levels_.rend(); ++it) {
-      const int l = *it;
-      Level& level = *levels_[l];
-      LocalGlobalSolver& solver = *level.solver;
-      LocalGlobalSolver::ConstrainSummary summary;
-      Index constrained = static_cast<Index>(handles_.size());
-      if (l == 0) {
-        summary = solver.ConstrainMasked(handles_, factory_, context_);
-      } else {
-        // As the hierarchical optimizer's level setup: clusters holding a handle are
-        // constrained; per-element energies average the rotations of the incident elements.
-        const Mesh& level_mesh = hierarchy_.levels[l].mesh;
-        level.constraints = MapConstraints(hierarchy_, l, finest);
-        if (site_ == RotationSite::kElement) {
-          auto& incident = level.constraints.incident_elements;
-          incident.assign(level.constraints.vertices.size(), {});
-          std::vector<Index> slot(level_mesh.num_vertices(), kNoVertex);
-          for (size_t k = 0; k < level.constraints.vertices.size(); ++k) {
-            slot[level.constraints.vertices[k]] = static_cast<Index>(k);
-          }
-          for (Index e = 0; e < level_mesh.num_elements(); ++e) {
-            for (int a = 0; a < level_mesh.simplex_size(); ++a) {
-              if (slot[level_mesh.elements(e, a)] != kNoVertex) {
-                incident[slot[level_mesh.elements(e, a)]].push_back(e);
-              }
+  // Creating a level's linear solver reads config tables: two threads take turns.
+  const SerializedFactory factory(factory_);
+  std::vector<HandleEditResult::Level> done(levels_.size());
+  const Constraints finest{handles_, targets_};
+  const auto constrain = [&](int l) {
+    Level& level = *levels_[l];
+    LocalGlobalSolver& solver = *level.solver;
+    LocalGlobalSolver::ConstrainSummary summary;
+    Index constrained = static_cast<Index>(handles_.size());
+    if (l == 0) {
+      summary = solver.ConstrainMasked(handles_, factory, context_);
+    } else {
+      // As the hierarchical optimizer's level setup: clusters holding a handle are
+      // constrained; per-element energies average the rotations of the incident elements.
+      const Mesh& level_mesh = hierarchy_.levels[l].mesh;
+      level.constraints = MapConstraints(hierarchy_, l, finest);
+      if (site_ == RotationSite::kElement) {
+        auto& incident = level.constraints.incident_elements;
+        incident.assign(level.constraints.vertices.size(), {});
+        std::vector<Index> slot(level_mesh.num_vertices(), kNoVertex);
+        for (size_t k = 0; k < level.constraints.vertices.size(); ++k) {
+          slot[level.constraints.vertices[k]] = static_cast<Index>(k);
+        }
+        for (Index e = 0; e < level_mesh.num_elements(); ++e) {
+          for (int a = 0; a < level_mesh.simplex_size(); ++a) {
+            if (slot[level_mesh.elements(e, a)] != kNoVertex) {
+              incident[slot[level_mesh.elements(e, a)]].push_back(e);
             }
           }
         }
-        const MeshOrdering& ordering = solver.ordering();
-        level.internal = level.constraints;
-        for (Index& v : level.internal.vertices) v = ordering.new_vertex[v];
-        for (auto& elements : level.internal.incident_elements) {
-          for (Index& e : elements) e = ordering.new_element[e];
-        }
-        constrained = static_cast<Index>(level.constraints.vertices.size());
-        summary = solver.ConstrainMasked(level.constraints.vertices, factory_, context_);
       }
-      result.levels.push_back(HandleEditResult::Level{
-          l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds});
+      const MeshOrdering& ordering = solver.ordering();
+      level.internal = level.constraints;
+      for (Index& v : level.internal.vertices) v = ordering.new_vertex[v];
+      for (auto& elements : level.internal.incident_elements) {
+        for (Index& e : elements) e = ordering.new_element[e];
+      }
+      constrained = static_cast<Index>(level.constraints.vertices.size());
+      summary = solver.ConstrainMasked(level.constraints.vertices, factory, context_);
     }
+    done[l] = HandleEditResult::Level{
+        l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds};
+  };
+  context_.Run([&] {
+    // The levels are independent: the finest level (most of the work) in this thread, the
+    // coarse ones beside it in a task, as the hierarchical optimizer overlaps its level set-ups
+    // (CHOLMOD factors on one thread by default, so two factorizations use both cores).
+    std::vector<int> coarse;
+    for (int l : solved_levels_) {
+      if (l != 0) coarse.push_back(l);
+    }
+    const bool has_finest = levels_[0] != nullptr;
+    if (coarse.empty() || !has_finest || tbb::this_task_arena::max_concurrency() < 2) {
+      for (auto it = solved_levels_.rbegin(); it != solved_levels_.rend(); ++it) constrain(*it);
+      return;
+    }
+    tbb::task_group group;
+    group.run([&] {
+      for (int l : coarse) constrain(l);
+    });
+    try {
+      constrain(0);
+    } catch (...) {
+      try {
+        group.wait();
+      } catch (...) {
+        // The finest level's error is the one reported.
+      }
+      throw;
+    }
+    group.wait();
   });
+  // Finest first, as before.
+  for (auto it = solved_levels_.rbegin(); it != solved_levels_.rend(); ++it) {
+    result.levels.push_back(done[*it]);
+  }
   result.constraints = levels_[0]->solver->system().report();
   result.notes = DescribeConstraintHandling(result.constraints);
   result.seconds = clock.Seconds();
@@ -386,10 +424,39 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   bool start_with_global_step = false;
   // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
   int coarse_before_level = -1;
+  // A preview whose upsampler only copies each coarse vertex's rotation down: straight from the
+  // coarsest level to the finest along the composed map (the paper's Fig. 15), one parallel
+  // gather into the kept state instead of up-sampling positions and rotations through every
+  // level (fresh arrays per level). The finest level's rotations are the same; its positions
+  // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
+  // so with a direct solver the result is identical (an iterative one starts from the last
+  // frame's positions instead of the up-sampled ones).
+  const bool straight = preview && preview_straight_ && top > 0 &&
+                        upsampler_->output() == UpsampleOutput::kRotations &&
+                        upsampler_->RotationsFollowCoarseVertex(site_);
+  if (straight && preview_map_.empty()) {
+    preview_map_.resize(mesh_.num_vertices());
+    for (Index v = 0; v < mesh_.num_vertices(); ++v) {
+      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
+    }
+  }
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       LevelState& work = work_[l];
-      if (l == top) {
+      if (straight && l != top && l != 0) continue;  // the levels in between: skipped
+      if (straight && l == 0) {
+        const Rotations& coarse = cur->rotations;
+        if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
+        work.rotations.resize(preview_map_.size());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                            for (size_t v = range.begin(); v != range.end(); ++v) {
+                              const Index c = preview_map_[v];
+                              work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
+                            }
+                          });
+        start_with_global_step = true;
+      } else if (l == top) {
         Level* level = levels_[l].get();
         if (level->has_solution) {
           // Warm start: the previous solution's rotations drive the first global step, which

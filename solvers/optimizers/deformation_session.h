@@ -143,6 +143,10 @@ class DeformationSession {
   const Positions& positions() const;
   /// Timings of the construction: hierarchy and precompute (constrain and solve are 0).
   const PhaseTimings& setup_timings() const { return setup_timings_; }
+  /// Whether Preview() gathers the coarsest level's rotations straight into the finest level
+  /// when the upsampler allows it (Upsampler::RotationsFollowCoarseVertex; the default, the same
+  /// result with a direct solver) or up-samples through every level (experiments, tests).
+  void set_preview_straight(bool straight) { preview_straight_ = straight; }
 
  private:
   struct Level;
@@ -173,6 +177,10 @@ class DeformationSession {
   long long version_ = 0;      ///< bumped by every change of handles, targets or positions
   /// Solve()'s per-level states, kept between solves (see Run()).
   std::vector<LevelState> work_, scratch_;
+  /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's
+  /// coarsest-level vertex (the composed maps; kNoVertex: identity), built on first use.
+  std::vector<Index> preview_map_;
+  bool preview_straight_ = true;
   PhaseTimings setup_timings_;
 };
 

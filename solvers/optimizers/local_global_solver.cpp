@@ -75,6 +75,8 @@ LocalGlobalSolver::ConstrainSummary LocalGlobalSolver::ConstrainMasked(
     masked_ = system.get();
     system_ = std::move(system);
     solver_ = factory.MakeLinearSolver(level_, masked_->num_unknowns());
+    // Handle edits refactor this level: the solver may keep what makes that cheaper.
+    solver_->PrepareForRefactor();
     needs_factorization_ = true;
     reduced_rhs_.resize(system_->num_unknowns(), 3);
     reduced_x_.resize(system_->num_unknowns(), 3);

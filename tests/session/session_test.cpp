@@ -246,6 +246,24 @@ TEST_CASE("session: moving targets, preview, time budget and a stopping callback
   CHECK(session.CurrentEnergy() == Approx(full.energy).epsilon(1e-9));
   CHECK(full.converged);
 
+  // The preview gathered straight from the coarsest level equals the one up-sampled through
+  // every level (a direct solver: the up-sampled positions are overwritten).
+  {
+    auto other_configured = Session(setup, tube.mesh);
+    DeformationSession& other = other_configured->session();
+    other.set_preview_straight(false);
+    session.set_preview_straight(true);
+    other.SetHandles(handles.indices);
+    other.Solve();
+    other.SetTargets(0.5 * (handles.targets + tube.mesh.vertices(handles.indices, Eigen::all)));
+    other.Solve();
+    other.SetTargets(handles.targets);
+    const OptimizeResult through = other.Preview();
+    CHECK((through.positions - preview.positions).cwiseAbs().maxCoeff() <=
+          1e-12 * preview.positions.cwiseAbs().maxCoeff());
+    CHECK(other.CurrentEnergy() == Approx(preview_energy).epsilon(1e-12));
+  }
+
   // A budget that runs out at once still returns the handles at their targets.
   session.SetTargets(handles.targets * 1.01);
   const OptimizeResult rushed = session.Solve({-1.0, -1, 1e-9});

@@ -116,6 +116,7 @@ TEST_CASE("refactor: every cholmod route solves the new matrix after handle edit
       DYNAMIC_SECTION(mode << ", refactor = " << refactor) {
         auto solver = MakeSolver(registry, "cholmod",
                                  "mode = \"" + mode + "\"\nrefactor = \"" + refactor + "\"");
+        solver->PrepareForRefactor();  // as a session's level does (auto keeps copies only then)
         std::set<Index> current = first;
         SparseMatrix a = Masked(laplacian, current);
         solver->Factorize(a, context);
@@ -150,6 +151,7 @@ TEST_CASE("refactor: auto takes the route its estimate says, large edits estimat
   const Context context;
   const SparseMatrix laplacian = GridLaplacian(kSide, kSide, 11);
   auto solver = MakeSolver(registry, "cholmod");
+  solver->PrepareForRefactor();
   const auto& cholmod = dynamic_cast<const CholmodSolver&>(*solver);
   std::set<Index> handles = FirstRow();
   SparseMatrix a = Masked(laplacian, handles);
@@ -200,6 +202,7 @@ TEST_CASE("refactor: routes can follow each other on one factor", "[solvers][cho
   using Choice = CholmodSolver::RefactorChoice;
   for (const std::string mode : {"auto", "simplicial"}) {
     auto solver = MakeSolver(registry, "cholmod", "mode = \"" + mode + "\"");
+    solver->PrepareForRefactor();
     auto& cholmod = dynamic_cast<CholmodSolver&>(*solver);
     std::set<Index> current = FirstRow();
     SparseMatrix a = Masked(laplacian, current);
@@ -235,6 +238,7 @@ TEST_CASE("refactor: a different pattern factors from scratch", "[solvers][cholm
   const Context context;
   for (const std::string refactor : {"auto", "numeric", "update"}) {
     auto solver = MakeSolver(registry, "cholmod", "refactor = \"" + refactor + "\"");
+    solver->PrepareForRefactor();
     const std::set<Index> handles = FirstRow();
     solver->Factorize(Masked(GridLaplacian(kSide, kSide, 3), handles), context);
     // Another grid size, and the same size with one more edge.
@@ -266,6 +270,7 @@ TEST_CASE("refactor: misuse is an error that keeps the factor, a non-SPD result 
   const std::set<Index> handles = FirstRow();
   const SparseMatrix a = Masked(laplacian, handles);
   auto solver = MakeSolver(registry, "cholmod");
+  solver->PrepareForRefactor();
   solver->Factorize(a, context);
 
   std::set<Index> more = handles;
@@ -300,6 +305,39 @@ TEST_CASE("refactor: misuse is an error that keeps the factor, a non-SPD result 
     forced->Factorize(a, context);
     RequireSolves(*forced, a, context);
   }
+}
+
+TEST_CASE("refactor: auto keeps copies only after PrepareForRefactor, explicit routes always",
+          "[solvers][cholmod][refactor]") {
+#ifdef HARAP_HAVE_CHOLMOD
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const Context context;
+  const SparseMatrix laplacian = GridLaplacian(kSide, kSide, 17);
+  const std::set<Index> handles = FirstRow();
+  std::set<Index> more = handles;
+  for (Index v : Ball(20, 20, 4.0)) more.insert(v);
+  const SparseMatrix a = Masked(laplacian, handles);
+  const SparseMatrix b = Masked(laplacian, more);
+  for (const std::string refactor : {"auto", "full", "numeric", "update"}) {
+    for (const bool prepare : {false, true}) {
+      DYNAMIC_SECTION("refactor = " << refactor << (prepare ? ", prepared" : "")) {
+        auto solver = MakeSolver(registry, "cholmod", "refactor = \"" + refactor + "\"");
+        const auto& cholmod = dynamic_cast<const CholmodSolver&>(*solver);
+        if (prepare) solver->PrepareForRefactor();
+        solver->Factorize(a, context);
+        // A one-shot run (auto, not prepared) and "full" keep nothing; the others keep the
+        // analysis and the matrix.
+        const bool keeps =
+            refactor == "numeric" || refactor == "update" || (refactor == "auto" && prepare);
+        CHECK((cholmod.factor_info().refactor_bytes > 0.0) == keeps);
+        const auto summary = solver->Refactor(b, SymmetricDifference(handles, more), context);
+        CHECK((summary.route != Route::kFull) == keeps);
+        RequireSolves(*solver, b, context);
+      }
+    }
+  }
+#endif
 }
 
 TEST_CASE("refactor: options are validated", "[solvers][cholmod][refactor]") {
