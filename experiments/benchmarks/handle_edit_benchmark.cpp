@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/benchmarks/edit_ball.h"
 #include "experiments/builtins.h"
 #include "framework/config.h"
 #include "framework/context.h"
@@ -84,29 +85,13 @@ struct EditFixture {
     auto energy = registries.energies.Create("spokes_and_rims", ConfigNode());
     energy->Precompute(scenario.mesh, context);
     const Index n = scenario.mesh.num_vertices();
+    std::vector<Index> handles;
+    for (Index v : scenario.MergedConstraints().indices) handles.push_back(ordering.new_vertex[v]);
     std::vector<char> handle(n, 0);
-    for (Index v : scenario.MergedConstraints().indices) handle[ordering.new_vertex[v]] = 1;
+    for (Index v : handles) handle[v] = 1;
     before = Masked(energy->system_matrix(), handle);
 
-    // The ball: the 1% of the vertices nearest to a free vertex halfway up the mesh, on its
-    // surface (largest x at mid height).
-    const Positions& p = scenario.mesh.vertices;
-    const double low = p.col(1).minCoeff(), high = p.col(1).maxCoeff();
-    Index centre = -1;
-    for (Index v = 0; v < n; ++v) {
-      if (handle[v] || std::abs(p(v, 1) - 0.5 * (low + high)) > 0.02 * (high - low)) continue;
-      if (centre < 0 || p(v, 0) > p(centre, 0)) centre = v;
-    }
-    std::vector<Index> order(n);
-    std::iota(order.begin(), order.end(), 0);
-    const auto distance = [&](Index v) { return (p.row(v) - p.row(centre)).squaredNorm(); };
-    const size_t size = static_cast<size_t>(fraction * static_cast<double>(n));
-    std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(size), order.end(),
-                     [&](Index x, Index y) { return distance(x) < distance(y); });
-    for (size_t k = 0; k < size; ++k) {
-      if (!handle[order[k]]) ball.push_back(order[k]);
-    }
-    std::sort(ball.begin(), ball.end());
+    ball = EditBall(scenario.mesh, handles, fraction);
     for (Index v : ball) handle[v] = 1;
     after = Masked(energy->system_matrix(), handle);
     rhs = Eigen::MatrixXd::Random(n, 3);

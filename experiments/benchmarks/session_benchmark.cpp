@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/benchmarks/edit_ball.h"
 #include "experiments/builtins.h"
 #include "experiments/drag.h"
 #include "experiments/session.h"
@@ -86,37 +87,10 @@ void Frame(benchmark::State& state, bool preview) {
   state.counters["vertices"] = static_cast<double>(scenario.mesh.num_vertices());
 }
 
-// 1% of the vertices nearest to a free vertex on the surface halfway up the mesh (largest x at
-// mid height), as handle_edit_benchmark.cpp chooses its ball.
-std::vector<Index> Ball(const Mesh& mesh, const std::vector<Index>& handles) {
-  const Index n = mesh.num_vertices();
-  std::vector<char> handle(n, 0);
-  for (Index v : handles) handle[v] = 1;
-  const Positions& p = mesh.vertices;
-  const double low = p.col(1).minCoeff(), high = p.col(1).maxCoeff();
-  Index centre = -1;
-  for (Index v = 0; v < n; ++v) {
-    if (handle[v] || std::abs(p(v, 1) - 0.5 * (low + high)) > 0.02 * (high - low)) continue;
-    if (centre < 0 || p(v, 0) > p(centre, 0)) centre = v;
-  }
-  std::vector<Index> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  const auto distance = [&](Index v) { return (p.row(v) - p.row(centre)).squaredNorm(); };
-  const size_t size = static_cast<size_t>(0.01 * static_cast<double>(n));
-  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(size), order.end(),
-                   [&](Index x, Index y) { return distance(x) < distance(y); });
-  std::vector<Index> ball;
-  for (size_t k = 0; k < size; ++k) {
-    if (!handle[order[k]]) ball.push_back(order[k]);
-  }
-  std::sort(ball.begin(), ball.end());
-  return ball;
-}
-
 void Edit(benchmark::State& state, const std::string& refactor) {
   auto configured = MakeSolvedSession(refactor);
   DeformationSession& session = configured->session();
-  const std::vector<Index> ball = Ball(configured->mesh(), session.handles());
+  const std::vector<Index> ball = EditBall(configured->mesh(), session.handles(), 0.01);
   Positions held(static_cast<Index>(ball.size()), 3);
   for (size_t k = 0; k < ball.size(); ++k) {
     held.row(static_cast<Index>(k)) = session.positions().row(ball[k]);
