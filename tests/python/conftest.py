@@ -4,6 +4,8 @@ shared data folder (tests needing it skip when it is absent)."""
 import os
 import pathlib
 import subprocess
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -39,3 +41,26 @@ def shared_dir():
     if not (SHARED_DIR / "scenarios").is_dir():
         pytest.skip(f"shared data not found under {SHARED_DIR}")
     return SHARED_DIR
+
+
+def ticks_while(call):
+    """Runs `call()` while another Python thread counts millisecond ticks; returns the ticks and
+    the call's seconds. A call that held the GIL throughout would leave (almost) no ticks."""
+    ticks = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            ticks.append(1)
+            time.sleep(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    try:
+        start = time.monotonic()
+        call()
+        seconds = time.monotonic() - start
+    finally:
+        stop.set()
+        counter.join()
+    return len(ticks), seconds

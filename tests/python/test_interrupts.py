@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import harap
+from conftest import ticks_while
 
 
 @pytest.fixture
@@ -109,25 +110,10 @@ def test_sigint_without_callback_stops_the_solve(long_solve):
 
 
 def test_the_gil_is_released_during_a_solve(long_solve):
-    ticks = []
-    stop = threading.Event()
-
-    def count():
-        while not stop.is_set():
-            ticks.append(1)
-            time.sleep(0.001)
-
-    counter = threading.Thread(target=count)
-    counter.start()
-    try:
-        start = time.monotonic()
-        run(long_solve, options={"optimizer.tolerance": 0.0, "optimizer.max_iterations": 3000})
-        seconds = time.monotonic() - start
-    finally:
-        stop.set()
-        counter.join()
+    options = {"optimizer.tolerance": 0.0, "optimizer.max_iterations": 3000}
+    ticks, seconds = ticks_while(lambda: run(long_solve, options=options))
     # Held for the whole solve, the GIL would leave the counter at (almost) nothing.
-    assert len(ticks) > min(20, 100 * seconds)
+    assert ticks > min(20, 100 * seconds)
 
 
 def test_solves_from_several_python_threads_at_once(cylinder):

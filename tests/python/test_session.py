@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import harap
+from conftest import ticks_while
 
 OPTIONS = {"optimizer.tolerance": 1e-6, "hierarchy.min_vertices": 100}
 
@@ -405,25 +406,9 @@ def test_sigint_stops_a_solve_with_keyboard_interrupt(long_session):
 
 
 def test_the_gil_is_released_during_a_solve(long_session):
-    ticks = []
-    stop = threading.Event()
-
-    def count():
-        while not stop.is_set():
-            ticks.append(1)
-            time.sleep(0.001)
-
-    counter = threading.Thread(target=count)
-    counter.start()
-    try:
-        start = time.monotonic()
-        long_session.solve(max_iterations=3000)
-        seconds = time.monotonic() - start
-    finally:
-        stop.set()
-        counter.join()
+    ticks, seconds = ticks_while(lambda: long_session.solve(max_iterations=3000))
     # Held for the whole solve, the GIL would leave the counter at (almost) nothing.
-    assert len(ticks) > min(20, 100 * seconds)
+    assert ticks > min(20, 100 * seconds)
 
 
 def test_a_call_from_another_thread_during_a_solve_is_refused(long_session):
