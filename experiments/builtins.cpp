@@ -2,10 +2,10 @@
 #include "experiments/builtins.h"
 
 #include "energies/register_energies.h"
-#include "hierarchies/register_hierarchies.h"
+#include "hierarchies/builders/register_hierarchies.h"
 #include "hierarchies/upsamplers/register_upsamplers.h"
 #include "solvers/optimizers/register_optimizers.h"
-#include "solvers/register_solvers.h"
+#include "solvers/linear/register_solvers.h"
 
 namespace harap {
 

@@ -14,7 +14,7 @@
 #include "experiments/component_factory.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 
 #ifndef HARAP_VERSION
 #define HARAP_VERSION "unknown"

@@ -8,10 +8,10 @@
 
 #include "framework/config.h"
 #include "framework/io/scenario.h"
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 #include "framework/optimizer.h"
 #include "framework/registries.h"
-#include "solvers/spectral_bounds.h"
+#include "solvers/linear/spectral_bounds.h"
 
 namespace harap {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "framework/io/scenario.h"
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 #include "framework/optimizer.h"
 
 namespace harap {

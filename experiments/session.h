@@ -10,7 +10,7 @@
 #include "experiments/deform.h"
 #include "framework/config.h"
 #include "framework/mesh.h"
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 #include "framework/registries.h"
 #include "solvers/optimizers/deformation_session.h"
 

@@ -28,8 +28,8 @@
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/scenario.h"
-#include "framework/mesh_checks.h"
-#include "solvers/cholmod_solver.h"
+#include "framework/io/mesh_repair.h"
+#include "solvers/linear/cholmod_solver.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
 namespace {

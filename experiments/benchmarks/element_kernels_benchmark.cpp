@@ -2,7 +2,7 @@
 // Micro-benchmarks of the per-element kernels of the ADMM optimizers and of the Anderson
 // acceleration step of local/global:
 //   SignedSvd_{jacobi_svd,right_svd,right_svd_warm}: one 3×3 signed SVD (Eigen's JacobiSVD, the
-//     cold and the warm-started Jacobi-on-FᵀF of framework/small_svd.h) over 100K deformation
+//     cold and the warm-started Jacobi-on-FᵀF of solvers/optimizers/small_svd.h) over 100K deformation
 //     gradients near rotations (stretch ±5%), as wrapd sees them; time per item = per element.
 //   AndersonStep/<rows>: one AndersonAcceleration::Step with a full history of 5 pairs, on
 //     rows×3 iterates (173K: the armadillo's free vertices).
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "framework/context.h"
-#include "framework/small_svd.h"
+#include "solvers/optimizers/small_svd.h"
 #include "solvers/optimizers/anderson_acceleration.h"
 
 namespace {

@@ -41,7 +41,7 @@
 #include "framework/config.h"
 #include "framework/context.h"
 #include "framework/io/scenario.h"
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
 namespace {

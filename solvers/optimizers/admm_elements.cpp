@@ -13,7 +13,7 @@
 
 #include "framework/error.h"
 #include "framework/rotation.h"
-#include "framework/small_svd.h"
+#include "solvers/optimizers/small_svd.h"
 #include "solvers/optimizers/classic_optimizer.h"
 #include "solvers/optimizers/local_global_solver.h"
 

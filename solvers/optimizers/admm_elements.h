@@ -10,7 +10,7 @@
 #include "framework/config.h"
 #include "framework/constrained_system.h"
 #include "framework/optimizer.h"
-#include "framework/small_svd.h"
+#include "solvers/optimizers/small_svd.h"
 
 namespace harap {
 

@@ -18,7 +18,7 @@
 
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 
 namespace harap::fuzzing {
 

@@ -2,7 +2,7 @@
 // EdgeCollapseHierarchy: nested, manifold levels from OpenMesh's decimater, the fine → coarse
 // maps from the collapse sequence, the octree's level counts, input it cannot take, and a
 // hierarchical optimization on it.
-#include "hierarchies/edge_collapse_hierarchy.h"
+#include "hierarchies/builders/edge_collapse_hierarchy.h"
 
 #include <algorithm>
 #include <array>
@@ -17,7 +17,7 @@
 #include "framework/disjoint_sets.h"
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
-#include "hierarchies/octree_hierarchy.h"
+#include "hierarchies/builders/octree_hierarchy.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // OctreeHierarchy: structure of the levels (Section 4 of the paper, Eqs. 2–5 and 10), the
 // topology check, the fine → coarse maps, options and determinism.
-#include "hierarchies/octree_hierarchy.h"
+#include "hierarchies/builders/octree_hierarchy.h"
 
 #include <algorithm>
 #include <array>

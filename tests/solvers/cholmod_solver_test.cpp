@@ -13,7 +13,7 @@
 
 #include "framework/context.h"
 #include "framework/error.h"
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 #include "tests/solvers/solver_test_matrices.h"
 
 #if defined(__linux__)

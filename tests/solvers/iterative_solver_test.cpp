@@ -12,9 +12,9 @@
 #include "framework/constrained_system.h"
 #include "framework/context.h"
 #include "framework/error.h"
-#include "solvers/chebyshev_solver.h"
-#include "solvers/gauss_seidel_solver.h"
-#include "solvers/spectral_bounds.h"
+#include "solvers/linear/chebyshev_solver.h"
+#include "solvers/linear/gauss_seidel_solver.h"
+#include "solvers/linear/spectral_bounds.h"
 #include "tests/solvers/solver_test_matrices.h"
 #include "tests/support/test_meshes.h"
 

@@ -14,7 +14,7 @@
 #include "tests/solvers/solver_test_matrices.h"
 
 #ifdef HARAP_HAVE_CHOLMOD
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 #endif
 
 namespace harap::testing {

@@ -14,7 +14,7 @@
 #include "framework/linear_solver.h"
 #include "framework/registry.h"
 #include "framework/types.h"
-#include "solvers/register_solvers.h"
+#include "solvers/linear/register_solvers.h"
 
 namespace harap::testing {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/solver_checks.h"
+#include "solvers/linear/solver_checks.h"
 
 #include <fmt/format.h>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/iterative_kernels.h"
+#include "solvers/linear/iterative_kernels.h"
 
 #include <fmt/format.h>
 

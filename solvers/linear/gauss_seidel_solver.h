@@ -7,7 +7,7 @@
 
 #include "framework/config.h"
 #include "framework/linear_solver.h"
-#include "solvers/iterative_kernels.h"
+#include "solvers/linear/iterative_kernels.h"
 
 namespace harap {
 

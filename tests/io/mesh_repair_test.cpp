@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "framework/mesh_checks.h"
+#include "framework/io/mesh_repair.h"
 
 #include <catch2/catch.hpp>
 

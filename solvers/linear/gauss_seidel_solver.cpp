@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/gauss_seidel_solver.h"
+#include "solvers/linear/gauss_seidel_solver.h"
 
 #include <fmt/format.h>
 
@@ -7,7 +7,7 @@
 #include <string>
 
 #include "framework/error.h"
-#include "solvers/solver_checks.h"
+#include "solvers/linear/solver_checks.h"
 
 namespace harap {
 

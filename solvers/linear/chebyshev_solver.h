@@ -7,8 +7,8 @@
 
 #include "framework/config.h"
 #include "framework/linear_solver.h"
-#include "solvers/iterative_kernels.h"
-#include "solvers/spectral_bounds.h"
+#include "solvers/linear/iterative_kernels.h"
+#include "solvers/linear/spectral_bounds.h"
 
 namespace harap {
 

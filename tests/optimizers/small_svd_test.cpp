@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "framework/small_svd.h"
+#include "solvers/optimizers/small_svd.h"
 
 #include <catch2/catch.hpp>
 #include <random>

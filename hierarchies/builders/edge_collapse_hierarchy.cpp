@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "hierarchies/edge_collapse_hierarchy.h"
+#include "hierarchies/builders/edge_collapse_hierarchy.h"
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "framework/error.h"
-#include "hierarchies/octree_hierarchy.h"
+#include "hierarchies/builders/octree_hierarchy.h"
 
 // Cost: the decimation dominates and is sequential (one priority queue): ~18 s of CPU for the
 // 173K-vertex armadillo-bend mesh, ~41 s for the 437K-vertex Dragon (HierarchyBuild benchmark on

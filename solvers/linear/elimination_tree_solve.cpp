@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/elimination_tree_solve.h"
+#include "solvers/linear/elimination_tree_solve.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

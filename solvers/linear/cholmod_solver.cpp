@@ -3,7 +3,7 @@
 // HARAP_HAVE_CHOLMOD); register_solvers.cpp registers it under the same condition.
 #ifdef HARAP_HAVE_CHOLMOD
 
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 
 #include <cholmod.h>
 #include <cholmod_modify.h>
@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "framework/error.h"
-#include "solvers/elimination_tree_solve.h"
-#include "solvers/solver_checks.h"
+#include "solvers/linear/elimination_tree_solve.h"
+#include "solvers/linear/solver_checks.h"
 
 namespace harap {
 namespace {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/conjugate_gradient_solver.h"
+#include "solvers/linear/conjugate_gradient_solver.h"
 
 #include <fmt/format.h>
 
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "framework/error.h"
-#include "solvers/solver_checks.h"
+#include "solvers/linear/solver_checks.h"
 
 namespace harap {
 

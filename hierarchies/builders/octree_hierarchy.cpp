@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "hierarchies/octree_hierarchy.h"
+#include "hierarchies/builders/octree_hierarchy.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
-#include "hierarchies/register_hierarchies.h"
+#include "hierarchies/builders/register_hierarchies.h"
 
-#include "hierarchies/edge_collapse_hierarchy.h"
-#include "hierarchies/octree_hierarchy.h"
+#include "hierarchies/builders/edge_collapse_hierarchy.h"
+#include "hierarchies/builders/octree_hierarchy.h"
 
 namespace harap {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/chebyshev_solver.h"
+#include "solvers/linear/chebyshev_solver.h"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "framework/error.h"
-#include "solvers/solver_checks.h"
+#include "solvers/linear/solver_checks.h"
 
 namespace harap {
 

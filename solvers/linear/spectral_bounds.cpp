@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/spectral_bounds.h"
+#include "solvers/linear/spectral_bounds.h"
 
 #include <Spectra/SymEigsShiftSolver.h>
 #include <Spectra/SymEigsSolver.h>
@@ -12,11 +12,11 @@
 
 #include "framework/config.h"
 #include "framework/error.h"
-#include "solvers/eigen_ldlt_solver.h"
-#include "solvers/iterative_kernels.h"
-#include "solvers/solver_checks.h"
+#include "solvers/linear/eigen_ldlt_solver.h"
+#include "solvers/linear/iterative_kernels.h"
+#include "solvers/linear/solver_checks.h"
 #ifdef HARAP_HAVE_CHOLMOD
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 #endif
 
 namespace harap {

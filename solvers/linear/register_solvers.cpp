@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: MIT
-#include "solvers/register_solvers.h"
+#include "solvers/linear/register_solvers.h"
 
 #include <string>
 
-#include "solvers/chebyshev_solver.h"
-#include "solvers/conjugate_gradient_solver.h"
-#include "solvers/eigen_ldlt_solver.h"
-#include "solvers/gauss_seidel_solver.h"
+#include "solvers/linear/chebyshev_solver.h"
+#include "solvers/linear/conjugate_gradient_solver.h"
+#include "solvers/linear/eigen_ldlt_solver.h"
+#include "solvers/linear/gauss_seidel_solver.h"
 #ifdef HARAP_HAVE_CHOLMOD
-#include "solvers/cholmod_solver.h"
+#include "solvers/linear/cholmod_solver.h"
 #endif
 
 namespace harap {
