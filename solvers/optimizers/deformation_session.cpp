@@ -70,6 +70,8 @@ struct DeformationSession::Level {
   LevelConstraints internal;     ///< the same in the solver's numbering (moving targets)
   LevelState state;              ///< the last solution, in the mesh's numbering
   bool has_solution = false;
+  /// Coarse levels: `constraints.mean_target` is not yet mapped from the current targets.
+  bool targets_stale = false;
   /// The session's problem version `state` solves (DeformationSession::version_).
   long long version = -1;
 };
@@ -179,7 +181,10 @@ void DeformationSession::SetTargets(const Positions& targets) {
   ValidateTargets(targets, handles_.size(), "SetTargets");
   targets_ = targets;
   ++version_;
-  UpdateCoarseTargets();
+  // Mapped when a solve uses the level (a preview uses only the coarsest one).
+  for (int l : solved_levels_) {
+    if (l != 0) levels_[l]->targets_stale = true;
+  }
 }
 
 HandleEditResult DeformationSession::AddHandles(const std::vector<Index>& indices,
@@ -238,6 +243,7 @@ void DeformationSession::SetPositions(const Positions& positions) {
   }
   start_positions_ = positions;
   ++version_;
+  preview_rotations_pending_ = false;
   for (const auto& level : levels_) {
     if (level) {
       level->has_solution = false;
@@ -283,6 +289,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
       // constrained; per-element energies average the rotations of the incident elements.
       const Mesh& level_mesh = hierarchy_.levels[l].mesh;
       level.constraints = MapConstraints(hierarchy_, l, finest);
+      level.targets_stale = false;
       if (site_ == RotationSite::kElement) {
         auto& incident = level.constraints.incident_elements;
         incident.assign(level.constraints.vertices.size(), {});
@@ -349,16 +356,31 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   return result;
 }
 
-void DeformationSession::UpdateCoarseTargets() {
-  const Constraints finest{handles_, targets_};
-  for (int l : solved_levels_) {
-    if (l == 0) continue;
-    Level& level = *levels_[l];
-    // The constrained vertices are the same (same handles): only the mean targets move.
-    const LevelConstraints mapped = MapConstraints(hierarchy_, l, finest);
-    level.constraints.mean_target = mapped.mean_target;
-    level.internal.mean_target = mapped.mean_target;
-  }
+void DeformationSession::UpdateCoarseTargets(int l) {
+  Level& level = *levels_[l];
+  if (l == 0 || !level.targets_stale) return;
+  // The constrained vertices are the same (same handles): only the mean targets move.
+  const LevelConstraints mapped = MapConstraints(hierarchy_, l, Constraints{handles_, targets_});
+  level.constraints.mean_target = mapped.mean_target;
+  level.internal.mean_target = mapped.mean_target;
+  level.targets_stale = false;
+}
+
+void DeformationSession::MaterializePreviewRotations() {
+  if (!preview_rotations_pending_) return;
+  Rotations& rotations = levels_[0]->state.rotations;
+  rotations.resize(preview_map_.size());
+  context_.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t v = range.begin(); v != range.end(); ++v) {
+                          const Index c = preview_map_[v];
+                          rotations[v] = c == kNoVertex ? Rotation::Identity()
+                                                        : preview_coarse_rotations_[c];
+                        }
+                      });
+  });
+  preview_rotations_pending_ = false;
 }
 
 OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
@@ -373,6 +395,7 @@ OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
 OptimizeResult DeformationSession::Preview() { return Run({}, /*preview=*/true); }
 
 double DeformationSession::CurrentEnergy() {
+  MaterializePreviewRotations();
   LevelState state;
   state.positions = positions();
   if (levels_[0]->has_solution) state.rotations = levels_[0]->state.rotations;
@@ -440,11 +463,30 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
     }
   }
+  // With per-vertex rotations the finest level's global step reads the coarse rotations
+  // straight into its own numbering (no finest rotations in the mesh's numbering at all).
+  const bool gathered = straight && site_ == RotationSite::kVertex &&
+                        levels_[0]->solver->energy().num_rotations() == mesh_.num_vertices();
+  if (gathered && preview_source_.empty()) {
+    const std::vector<Index>& old_vertex = levels_[0]->solver->ordering().old_vertex;
+    preview_source_.resize(old_vertex.size());
+    for (size_t s = 0; s < old_vertex.size(); ++s) preview_source_[s] = preview_map_[old_vertex[s]];
+  }
+  // Whatever this solve reads of the finest level's last rotations must be there.
+  if (!preview) MaterializePreviewRotations();
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       LevelState& work = work_[l];
       if (straight && l != top && l != 0) continue;  // the levels in between: skipped
-      if (straight && l == 0) {
+      // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
+      // numbering below.)
+      const bool gather_step = gathered && l == 0 && !user_stop;
+      if (gather_step) {
+        // GatheredGlobalStep below gathers these (the coarsest level's solution).
+        preview_coarse_rotations_ = cur->rotations;
+        if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
+        start_with_global_step = true;
+      } else if (straight && l == 0) {
         const Rotations& coarse = cur->rotations;
         if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
         work.rotations.resize(preview_map_.size());
@@ -520,6 +562,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
           state.positions.row(handles_[k]) = targets_.row(static_cast<Index>(k));
         }
       } else {
+        UpdateCoarseTargets(l);
         const bool have_rotations =
             static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations();
         PlaceConstrainedVertices(level->constraints, site_,
@@ -533,7 +576,15 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       const bool was_out_of_time = out_of_time;
       const bool had_solution = level->has_solution;
       LocalGlobalSolver::RunResult run;
-      if (l == 0 && preview && start_with_global_step &&
+      if (gather_step) {
+        // The straight preview: the coarsest rotations gathered into the level's own
+        // numbering by the global step; the finest rotations stay pending.
+        run.linear_solves.Add(solver.GatheredGlobalStep(preview_source_, preview_coarse_rotations_,
+                                                        handles_, targets_, state.positions,
+                                                        context));
+        run.iterations = 1;
+        run.energy = std::numeric_limits<double>::quiet_NaN();
+      } else if (l == 0 && preview && start_with_global_step &&
           static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations()) {
         // The paper's approximation: one global solve from the up-sampled rotations, no local
         // step (the energy is left to CurrentEnergy()).
@@ -547,6 +598,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       // the next finer level needs it).
       std::swap(level->state, work);
       cur = &level->state;
+      if (l == 0) preview_rotations_pending_ = gather_step;
       level->has_solution = true;
       coarse_before_level = had_solution ? l : -1;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.

@@ -155,7 +155,12 @@ class DeformationSession {
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
   HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
   HandleEditResult ConstrainLevels();
-  void UpdateCoarseTargets();
+  /// Level `l`'s coarse constraint targets for the current finest targets, if SetTargets()
+  /// changed them since (they are mapped only for the levels a solve uses).
+  void UpdateCoarseTargets(int l);
+  /// The finest rotations a preview left pending (see preview_coarse_rotations_) into
+  /// levels_[0]->state.
+  void MaterializePreviewRotations();
   /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
   /// FrameStart::kPrevious, the finest level alone).
   OptimizeResult Run(const SessionSolveOptions& options, bool preview);
@@ -180,6 +185,14 @@ class DeformationSession {
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's
   /// coarsest-level vertex (the composed maps; kNoVertex: identity), built on first use.
   std::vector<Index> preview_map_;
+  /// The same per rotation site of the finest level's solver in its internal numbering
+  /// (LocalGlobalSolver::GatheredGlobalStep), built on first use.
+  std::vector<Index> preview_source_;
+  /// After such a preview the finest level's rotations are these coarse ones gathered along
+  /// preview_map_; they are written into levels_[0]->state only when something reads them
+  /// (MaterializePreviewRotations): a preview frame never does.
+  Rotations preview_coarse_rotations_;
+  bool preview_rotations_pending_ = false;
   bool preview_straight_ = true;
   PhaseTimings setup_timings_;
 };

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/local_global_solver.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -162,6 +165,66 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   }
   system_->ScatterFree(reduced_x_, u);
   ordering_.ToOld(u, state.positions);
+  return summary;
+}
+
+SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& source,
+                                                   const Rotations& coarse,
+                                                   const std::vector<Index>& handles,
+                                                   const Positions& targets, Positions& positions,
+                                                   const Context& context) {
+  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
+  HARAP_CHECK(energy_->rotation_site() == RotationSite::kVertex &&
+                  static_cast<Index>(source.size()) == energy_->num_rotations(),
+              "{} rotation sources for {} sites", source.size(), energy_->num_rotations());
+  const Index n = system_->num_vertices();
+  HARAP_CHECK(positions.rows() == n && targets.rows() == static_cast<Index>(handles.size()),
+              "{} positions for {} vertices, {} targets for {} handles", positions.rows(), n,
+              targets.rows(), handles.size());
+  Positions& u = internal_state_.positions;
+  Rotations& rotations = internal_state_.rotations;
+  // Only the fixed rows are read (a direct solver ignores the rest; an iterative one starts
+  // from them all).
+  if (!solver_->is_direct() || u.rows() != n) {
+    ordering_.ToNew(positions, u);
+  } else {
+    for (Index v : system_->fixed_vertices()) u.row(v) = positions.row(ordering_.old_vertex[v]);
+  }
+  for (size_t k = 0; k < handles.size(); ++k) {
+    u.row(ordering_.new_vertex[handles[k]]) = targets.row(static_cast<Index>(k));
+  }
+  rotations.resize(source.size());
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, source.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t s = range.begin(); s != range.end(); ++s) {
+                          const Index c = source[s];
+                          rotations[s] = c == kNoVertex ? Rotation::Identity() : coarse[c];
+                        }
+                      });
+  });
+  system_->SetFixedPositions(u);
+  SolveSummary summary;
+  if (system_->num_free() > 0) {
+    energy_->AssembleRhs(rotations, rhs_, context);
+    system_->ReducedRhs(rhs_, reduced_rhs_);
+    if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
+    summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
+    if (!summary.success) {
+      throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
+                                       summary.message));
+    }
+    system_->ScatterFree(reduced_x_, u);
+  }
+  // Back to the mesh's numbering, in parallel (ToOld is a serial loop).
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, n, 4096),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index v = range.begin(); v != range.end(); ++v) {
+                          positions.row(v) = u.row(ordering_.new_vertex[v]);
+                        }
+                      });
+  });
   return summary;
 }
 

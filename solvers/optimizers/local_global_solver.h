@@ -130,6 +130,16 @@ class LocalGlobalSolver {
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
   /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
   SolveSummary GlobalStep(LevelState& state, const Context& context);
+  /// GlobalStep() for a preview whose rotations are gathered from a coarse level, without
+  /// renumbering rotations or positions into the level's order and back per call: internal
+  /// rotation site s takes coarse[source[s]] (kNoVertex: the identity; `source` in the internal
+  /// numbering of ordering(), one per site); the fixed rows take `handles`' `targets` and, for
+  /// the other fixed (pinned) vertices, their rows of `positions`; the free rows of `positions`
+  /// (the mesh's numbering) receive the solution. The same arithmetic as GlobalStep() on the
+  /// gathered rotations, so the same result. Vertex rotation sites only.
+  SolveSummary GatheredGlobalStep(const std::vector<Index>& source, const Rotations& coarse,
+                                  const std::vector<Index>& handles, const Positions& targets,
+                                  Positions& positions, const Context& context);
   /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
   std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
                                                   const Context& context) const;
