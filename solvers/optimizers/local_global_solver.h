@@ -136,7 +136,17 @@ class LocalGlobalSolver {
   /// numbering of ordering(), one per site); the fixed rows take `handles`' `targets` and, for
   /// the other fixed (pinned) vertices, their rows of `positions`; the free rows of `positions`
   /// (the mesh's numbering) receive the solution. The same arithmetic as GlobalStep() on the
-  /// gathered rotations, so the same result. Vertex rotation sites only.
+  /// gathered rotations. Vertex rotation sites only.
+  ///
+  /// The right-hand side B(R) is linear in the rotations and, for the ARAP energies, of the form
+  /// B_j = Σ_s R_s c_js over the sites s near vertex j; with the rotations gathered from a few
+  /// coarse ones that is B_j = Σ_c R_c w_jc with one or two clusters c per vertex. The first
+  /// call with a `source` finds the w_jc by probing AssembleRhs() (one probe per color of a
+  /// coloring of the clusters in which no vertex sees two clusters of one color) and verifies
+  /// them against AssembleRhs() on random matrices; if they agree (to rounding), later calls
+  /// evaluate B from w (a few entries per vertex, cache-resident coarse rotations) instead of
+  /// gathering one rotation per site and assembling from the energy's full coupling: the same
+  /// right-hand side up to rounding. Otherwise every call gathers and assembles.
   SolveSummary GatheredGlobalStep(const std::vector<Index>& source, const Rotations& coarse,
                                   const std::vector<Index>& handles, const Positions& targets,
                                   Positions& positions, const Context& context);
@@ -187,6 +197,20 @@ class LocalGlobalSolver {
   Eigen::MatrixXd current_free_, accelerated_free_;
   Positions trial_positions_;
   NewtonCgStep newton_;
+  // GatheredGlobalStep's right-hand side as a linear map of the coarse rotations (see there):
+  // per internal vertex the entries [offset[j], offset[j+1]) of (cluster, w); cluster
+  // num_coarse stands for the identity (sites without a source).
+  struct GatheredRhs {
+    std::vector<Index> source;  ///< what it was built for
+    Index num_coarse = -1;
+    bool linear = false;  ///< the probed map reproduced AssembleRhs()
+    std::vector<Index> offset, cluster;
+    std::vector<Eigen::Vector3d> weight;
+    Rotations coarse;  ///< per call: the coarse rotations and the identity
+  };
+  void BuildGatheredRhs(const std::vector<Index>& source, Index num_coarse,
+                        const Context& context);
+  GatheredRhs gathered_rhs_;
 };
 
 /// Initial positions of a problem: `problem.initial` or the rest positions, with constrained
