@@ -410,4 +410,5 @@ TEST_CASE("session: mesh checks and edit summaries for the current handles", "[s
   CHECK(json.find("pinned") != std::string::npos);
   CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kUpdate) == "update");
   CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kNumeric) == "numeric");
+  CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kPartial) == "partial");
 }
