@@ -150,6 +150,9 @@ class LocalGlobalSolver {
   SolveSummary GatheredGlobalStep(const std::vector<Index>& source, const Rotations& coarse,
                                   const std::vector<Index>& handles, const Positions& targets,
                                   Positions& positions, const Context& context);
+  /// Whether GatheredGlobalStep() evaluates its right-hand side from the probed linear map
+  /// (false before its first call or when the probe did not reproduce AssembleRhs()).
+  bool gathered_rhs_is_linear() const { return gathered_rhs_.linear; }
   /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
   std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
                                                   const Context& context) const;

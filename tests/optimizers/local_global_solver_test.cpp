@@ -49,3 +49,51 @@ TEST_CASE("local/global: constraint targets that keep raising the energy are fro
           Approx(tube.problem.constraints.targets(k, 2) + 0.3));
   }
 }
+
+TEST_CASE("local/global: the gathered global step equals the global step on gathered rotations",
+          "[optimizers][session]") {
+  // A preview's finest global step (sessions): rotations gathered from a few coarse ones, the
+  // right-hand side from the probed linear map instead of the energy's assembly.
+  const BentTube tube(20, 12, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4));
+  const Context context;
+  const Constraints& handles = tube.problem.constraints;
+  for (const std::string energy : {"spokes_and_rims", "spokes", "smooth_arap"}) {
+    DYNAMIC_SECTION(energy) {
+      const TestSetup setup("[energy]\ntype = \"" + energy + "\"\n");
+      LocalGlobalSolver solver(tube.mesh, setup.factory, 0, context);
+      solver.ConstrainMasked(handles.indices, setup.factory, context);
+      REQUIRE(solver.energy().rotation_site() == RotationSite::kVertex);
+      const Index n = tube.mesh.num_vertices();
+      // Seven coarse clusters in bands along the tube, a few vertices without one (identity).
+      const auto cluster = [&](Index v) { return v % 13 == 5 ? kNoVertex : (v / 36) % 7; };
+      std::vector<Index> source(n);
+      for (Index s = 0; s < n; ++s) source[s] = cluster(solver.ordering().old_vertex[s]);
+      for (int round = 0; round < 3; ++round) {
+        Rotations coarse(7);
+        for (int c = 0; c < 7; ++c) {
+          coarse[c] = Eigen::AngleAxisd(0.3 * c + 0.2 * round,
+                                        Eigen::Vector3d(1.0, c, round).normalized())
+                          .toRotationMatrix();
+        }
+        const Positions targets = handles.targets * (1.0 + 0.1 * round);
+        LevelState reference;
+        reference.positions = tube.mesh.vertices;
+        for (size_t k = 0; k < handles.indices.size(); ++k) {
+          reference.positions.row(handles.indices[k]) = targets.row(static_cast<Index>(k));
+        }
+        reference.rotations.resize(n);
+        for (Index v = 0; v < n; ++v) {
+          reference.rotations[v] =
+              cluster(v) == kNoVertex ? Rotation(Rotation::Identity()) : coarse[cluster(v)];
+        }
+        solver.GlobalStep(reference, context);
+        Positions gathered = tube.mesh.vertices;
+        solver.GatheredGlobalStep(source, coarse, handles.indices, targets, gathered, context);
+        CHECK(solver.gathered_rhs_is_linear());
+        INFO("round " << round);
+        CHECK((gathered - reference.positions).cwiseAbs().maxCoeff() <=
+              1e-12 * reference.positions.cwiseAbs().maxCoeff());
+      }
+    }
+  }
+}
