@@ -396,10 +396,17 @@ OptimizeResult DeformationSession::Preview() { return Run({}, /*preview=*/true);
 
 double DeformationSession::CurrentEnergy() {
   MaterializePreviewRotations();
-  LevelState state;
+  // Kept buffers: called after every preview frame of a drag, where fresh 10 MB arrays (page
+  // faults, unmapping) slowed the next frames down.
+  LevelState& state = energy_state_;
   state.positions = positions();
-  if (levels_[0]->has_solution) state.rotations = levels_[0]->state.rotations;
-  return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
+  if (levels_[0]->has_solution) {
+    state.rotations = levels_[0]->state.rotations;
+  } else {
+    state.rotations.clear();
+  }
+  return context_.Run(
+      [&] { return levels_[0]->solver->FitRotationsKeptBuffers(state, context_); });
 }
 
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {

@@ -193,6 +193,7 @@ class DeformationSession {
   /// (MaterializePreviewRotations): a preview frame never does.
   Rotations preview_coarse_rotations_;
   bool preview_rotations_pending_ = false;
+  LevelState energy_state_;  ///< CurrentEnergy()'s buffers
   bool preview_straight_ = true;
   PhaseTimings setup_timings_;
 };

@@ -145,6 +145,19 @@ double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context
   return energy;
 }
 
+double LocalGlobalSolver::FitRotationsKeptBuffers(LevelState& state, const Context& context) {
+  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
+  ordering_.ToNew(state.positions, internal_state_.positions);
+  ordering_.ToNew(state.rotations, per_element, internal_state_.rotations);
+  Rotations& rotations = internal_state_.rotations;
+  if (static_cast<Index>(rotations.size()) != energy_->num_rotations()) {
+    rotations.assign(energy_->num_rotations(), Rotation::Identity());
+  }
+  const double energy = energy_->FitRotations(internal_state_.positions, rotations, context);
+  ordering_.ToOld(rotations, per_element, state.rotations);
+  return energy;
+}
+
 SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& context) {
   HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;

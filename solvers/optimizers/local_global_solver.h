@@ -127,6 +127,9 @@ class LocalGlobalSolver {
   /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
   /// returns the energy.
   double FitRotations(LevelState& state, const Context& context) const;
+  /// The same in the level's kept buffers: no allocation once `state` has its sizes (a
+  /// session's CurrentEnergy() after every preview frame).
+  double FitRotationsKeptBuffers(LevelState& state, const Context& context);
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
   /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
   SolveSummary GlobalStep(LevelState& state, const Context& context);
