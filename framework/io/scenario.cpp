@@ -43,7 +43,8 @@
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
 #include "framework/io/subdivision.h"
-#include "framework/io/tet_mesh_io.h"
+#include "framework/io/file_reading.h"
+#include "framework/io/tetrahedra.h"
 #include "framework/io/tetrahedralize.h"
 #include "framework/io/text_scanning.h"
 
