@@ -173,6 +173,16 @@ void CheckElements(const Positions& vertices, const Elements& elements, std::str
   }
 }
 
+// The text of a surface format (CheckMeshOutputFormat has ruled out the others).
+using SurfaceWriter = std::string (*)(const Positions&, const Elements&);
+SurfaceWriter SurfaceText(OutputFormat format) {
+  if (format == OutputFormat::kObj) return ObjText;
+  if (format == OutputFormat::kOff) return OffText;
+  if (format == OutputFormat::kStl) return StlBinary;
+  HARAP_CHECK(format == OutputFormat::kPly, "no surface writer for this format");
+  return PlyBinary;
+}
+
 // The triangles a surface format writes: tetrahedra give their boundary.
 Elements SurfaceTriangles(const Elements& elements) {
   return elements.cols() == 4 ? BoundaryTriangles(elements) : elements;
@@ -227,30 +237,15 @@ void WriteMesh(const std::filesystem::path& file, const Positions& vertices,
   CheckElements(vertices, elements, "WriteMesh");
   CheckMeshOutputFormat(file,
                         elements.cols() == 4 ? ElementKind::kTetrahedron : ElementKind::kTriangle);
-  switch (FormatOf(file)) {
-    case OutputFormat::kPly:
-      WriteWholeFile(file, PlyBinary(vertices, SurfaceTriangles(elements)));
-      return;
-    case OutputFormat::kObj:
-      WriteWholeFile(file, ObjText(vertices, SurfaceTriangles(elements)));
-      return;
-    case OutputFormat::kOff:
-      WriteWholeFile(file, OffText(vertices, SurfaceTriangles(elements)));
-      return;
-    case OutputFormat::kStl:
-      WriteWholeFile(file, StlBinary(vertices, SurfaceTriangles(elements)));
-      return;
-    case OutputFormat::kMedit:
-      WriteWholeFile(file, MeditText(vertices, elements));
-      return;
-    case OutputFormat::kTetGen: {
-      const auto files = MeshOutputFiles(file);
-      WriteWholeFile(files[0], TetGenNodeText(vertices));
-      WriteWholeFile(files[1], TetGenEleText(elements));
-      return;
-    }
-    case OutputFormat::kUnknown:
-      break;  // CheckMeshOutputFormat threw
+  const OutputFormat format = FormatOf(file);
+  if (format == OutputFormat::kMedit) {
+    WriteWholeFile(file, MeditText(vertices, elements));
+  } else if (format == OutputFormat::kTetGen) {
+    const auto files = MeshOutputFiles(file);
+    WriteWholeFile(files[0], TetGenNodeText(vertices));
+    WriteWholeFile(files[1], TetGenEleText(elements));
+  } else {
+    WriteWholeFile(file, SurfaceText(format)(vertices, SurfaceTriangles(elements)));
   }
 }
 

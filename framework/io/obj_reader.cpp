@@ -20,13 +20,11 @@
 
 namespace harap {
 
-namespace {
-
 using namespace io_internal;
 
 // OBJ: `v x y z` and `f a b c ...` (a = i, i/t, i//n or i/t/n; 1-based, negative = relative).
 
-RawMesh ParseRaw(std::string_view data, const std::string& what) {
+Mesh ParseObj(std::string_view data, const std::string& what) {
   RawMesh raw;
   raw.xyz.reserve(data.size() / 16);
   raw.corners.reserve(data.size() / 8);
@@ -90,13 +88,7 @@ RawMesh ParseRaw(std::string_view data, const std::string& what) {
     }
     // Everything else (vt, vn, g, o, s, usemtl, mtllib, l, p, ...) carries nothing we use.
   }
-  return raw;
-}
-
-}  // namespace
-
-Mesh ParseObj(std::string_view data, const std::string& source) {
-  return BuildMesh(ParseRaw(data, source), source);
+  return BuildMesh(raw, what);
 }
 
 }  // namespace harap

@@ -21,14 +21,12 @@
 
 namespace harap {
 
-namespace {
-
 using namespace io_internal;
 
 // OFF (ASCII): header `OFF` (or COFF, NOFF, STOFF, ...), counts `nv nf ne`, then one vertex per
 // line (x y z, further values ignored) and one face per line (n i1 ... in, 0-based).
 
-RawMesh ParseRaw(std::string_view data, const std::string& what) {
+Mesh ParseOff(std::string_view data, const std::string& what) {
   RawMesh raw;
   LineReader lines(data);
   std::string_view line;
@@ -132,13 +130,7 @@ RawMesh ParseRaw(std::string_view data, const std::string& what) {
     }
     raw.AddPolygon(polygon, static_cast<int64_t>(lines.line_number()));
   }
-  return raw;
-}
-
-}  // namespace
-
-Mesh ParseOff(std::string_view data, const std::string& source) {
-  return BuildMesh(ParseRaw(data, source), source);
+  return BuildMesh(raw, what);
 }
 
 }  // namespace harap

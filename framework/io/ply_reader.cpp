@@ -295,7 +295,9 @@ class PlyBodyReader {
   const std::string& what_;
 };
 
-RawMesh ParseRaw(std::string_view data, const std::string& what) {
+}  // namespace
+
+Mesh ParsePly(std::string_view data, const std::string& what) {
   const PlyHeader header = ParsePlyHeader(data, what);
   const std::string_view body = data.substr(header.data_offset);
   const bool binary = header.format != PlyFormat::kAscii;
@@ -434,13 +436,7 @@ RawMesh ParseRaw(std::string_view data, const std::string& what) {
     vertices_done = vertices_done || is_vertex;
     if (is_face && vertices_done) break;  // later elements hold nothing we use
   }
-  return raw;
-}
-
-}  // namespace
-
-Mesh ParsePly(std::string_view data, const std::string& source) {
-  return BuildMesh(ParseRaw(data, source), source);
+  return BuildMesh(raw, what);
 }
 
 }  // namespace harap

@@ -33,6 +33,15 @@ using namespace io_internal;
 
 // STL through OpenMesh, collecting raw positions and triangles.
 
+// The colours and status of one kind of item (vertex, edge, face), which RawImporter ignores:
+// BaseImporter declares them pure virtual, once per item kind.
+#define HARAP_IGNORE_COLORS_AND_STATUS(Handle)                                 \
+  void set_color(Handle, const OpenMesh::Vec3uc&) override {}                  \
+  void set_color(Handle, const OpenMesh::Vec4uc&) override {}                  \
+  void set_color(Handle, const OpenMesh::Vec3f&) override {}                   \
+  void set_color(Handle, const OpenMesh::Vec4f&) override {}                   \
+  void set_status(Handle, const OpenMesh::Attributes::StatusInfo&) override {}
+
 // Collects what an OpenMesh reader produces without building a halfedge mesh (a halfedge mesh
 // would refuse non-manifold faces, and real meshes have them).
 class RawImporter final : public OpenMesh::IO::BaseImporter {
@@ -79,12 +88,8 @@ class RawImporter final : public OpenMesh::IO::BaseImporter {
   void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
   void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
   void set_normal(OpenMesh::VertexHandle, const OpenMesh::Vec3d&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
   void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
-  void set_status(OpenMesh::VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  HARAP_IGNORE_COLORS_AND_STATUS(OpenMesh::VertexHandle)
   void set_next(OpenMesh::HalfedgeHandle, OpenMesh::HalfedgeHandle) override {}
   void set_face(OpenMesh::HalfedgeHandle, OpenMesh::FaceHandle) override {}
   void request_face_texcoords2D() override {}
@@ -92,18 +97,10 @@ class RawImporter final : public OpenMesh::IO::BaseImporter {
   void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
   void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
   void set_status(OpenMesh::HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
-  void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  HARAP_IGNORE_COLORS_AND_STATUS(OpenMesh::EdgeHandle)
   void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
   void set_normal(OpenMesh::FaceHandle, const OpenMesh::Vec3d&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3uc&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4uc&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec3f&) override {}
-  void set_color(OpenMesh::FaceHandle, const OpenMesh::Vec4f&) override {}
-  void set_status(OpenMesh::FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+  HARAP_IGNORE_COLORS_AND_STATUS(OpenMesh::FaceHandle)
   void add_texture_information(int, std::string) override {}
 
  private:
@@ -111,6 +108,8 @@ class RawImporter final : public OpenMesh::IO::BaseImporter {
   std::vector<int64_t> polygon_;
   int64_t faces_ = 0;
 };
+
+#undef HARAP_IGNORE_COLORS_AND_STATUS
 
 // Checks what OpenMesh's STL readers take on trust (see the top of this file). Returns whether
 // the data is binary STL.
@@ -190,7 +189,9 @@ bool PrevalidateStl(std::string_view data, const std::string& what) {
   return false;
 }
 
-RawMesh ParseRaw(const std::string& data, const std::string& what) {
+}  // namespace
+
+Mesh ParseStl(std::string_view data, const std::string& what) {
   const bool binary = PrevalidateStl(data, what);
   RawMesh raw;
   raw.origin_kind = "triangle";
@@ -198,19 +199,13 @@ RawMesh ParseRaw(const std::string& data, const std::string& what) {
   OpenMesh::IO::Options options;
   if (binary) options += OpenMesh::IO::Options::Binary;
   io_internal::OpenMeshLogCapture capture;
-  std::istringstream stream(data);
+  std::istringstream stream{std::string(data)};
   if (!OpenMesh::IO::IOManager().read(stream, "stl", importer, options)) {
     const std::string errors = capture.Errors();
     Fail(what, fmt::format("OpenMesh's STL reader failed{}",
                            errors.empty() ? "" : fmt::format(": {}", errors)));
   }
-  return raw;
-}
-
-}  // namespace
-
-Mesh ParseStl(std::string_view data, const std::string& source) {
-  return BuildMesh(ParseRaw(std::string(data), source), source);
+  return BuildMesh(raw, what);
 }
 
 }  // namespace harap

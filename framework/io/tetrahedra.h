@@ -4,7 +4,6 @@
 #pragma once
 
 #include <Eigen/Core>
-
 #include <vector>
 
 #include "framework/mesh.h"
@@ -19,8 +18,8 @@ double TetrahedronDeterminant(const Eigen::Vector3d& a, const Eigen::Vector3d& b
 
 /// What OrientTetrahedra found.
 struct TetrahedronOrientation {
-  Index reoriented = 0;              ///< Tetrahedra with negative volume, now swapped.
-  std::vector<Index> degenerate;     ///< Flat tetrahedra (see OrientTetrahedra), ascending.
+  Index reoriented = 0;           ///< Tetrahedra with negative volume, now swapped.
+  std::vector<Index> degenerate;  ///< Flat tetrahedra (see OrientTetrahedra), ascending.
 };
 
 /// Makes every tetrahedron of `mesh` positively oriented by swapping its last two corners where
