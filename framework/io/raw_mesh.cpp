@@ -87,7 +87,10 @@ Positions ToPositions(const std::vector<double>& xyz) {
   return positions;
 }
 
-// The Mesh of `raw`, oriented; flat tetrahedra are errors naming their line.
+// The Mesh of `raw`, oriented; flat tetrahedra are errors naming their line. Every tetrahedron
+// comes out positively oriented (OrientTetrahedra): a rest tetrahedron's corner order carries no
+// meaning, so files written with the opposite convention are accepted (with a note). Flat
+// tetrahedra are errors: no energy can use them.
 Mesh BuildTetrahedralMesh(const RawTetrahedra& raw, std::vector<std::string>* notes) {
   Mesh mesh;
   mesh.vertices = ToPositions(raw.xyz);
