@@ -13,7 +13,7 @@
 #include "experiments/component_factory.h"
 #include "experiments/session.h"
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 
 namespace harap {
 

@@ -11,6 +11,7 @@
 #include <toml++/toml.h>
 
 #include "framework/error.h"
+#include "framework/toml_reading.h"
 
 namespace harap {
 
@@ -36,10 +37,8 @@ const toml::table* FindTable(const toml::table& root, const std::string& path) {
   return node ? node->as_table() : nullptr;
 }
 
-std::string DescribeSource(const toml::source_region& region, const std::string& fallback) {
-  std::string file = region.path ? std::string(*region.path) : fallback;
-  if (region.begin.line == 0) return file;
-  return fmt::format("{}:{}:{}", file, region.begin.line, region.begin.column);
+std::string DescribeSource(const toml::source_region& region, const std::string& source) {
+  return TomlReader(source).Where(region);
 }
 
 void RecordOption(ConfigNode::State& state, const std::string& path, std::string_view key,
@@ -63,13 +62,8 @@ ConfigNode::ConfigNode(std::shared_ptr<State> state, std::string path)
 
 ConfigNode ConfigNode::Parse(std::string_view toml_text, std::string source) {
   ConfigNode node;
-  node.state_->source = source;
-  try {
-    node.state_->root = toml::parse(toml_text, std::string_view(source));
-  } catch (const toml::parse_error& error) {
-    throw ConfigError(fmt::format("{}: TOML syntax error: {}",
-                                  DescribeSource(error.source(), source), error.description()));
-  }
+  node.state_->root = TomlReader(source).Parse(toml_text);
+  node.state_->source = std::move(source);
   return node;
 }
 
