@@ -118,33 +118,11 @@ std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAnother() const {
   return std::make_unique<AdmmLevelSolver>(options_);
 }
 
-void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
-                                 const Context& context) {
-  if (setup.handle_edits) {
-    throw ConfigError("the ADMM level solvers eliminate their constrained vertices once; they "
-                      "do not support handle edits (interactive sessions): use local_global");
-  }
-  const Mesh& mesh = *setup.mesh;
-  const int level = setup.level;
-  // Only the input level needs the factory's energy (final energy and measures); coarse levels
-  // drop their inverted elements (Section 7: "filtering all inverted elements").
-  const bool with_energy = setup.input_mesh == nullptr;
-  const bool drop_misoriented = setup.input_mesh != nullptr;
-  const double beta = options_.beta;
-  mesh_ = &mesh;
-  level_ = level;
-  planar_ = mesh.planar;
-  simplex_size_ = mesh.simplex_size();
-  elements_ = mesh.elements;
-  Stopwatch clock;
-  context.ReportPhase(fmt::format("precomputing level {}", level));
+void AdmmLevelSolver::ElementOperators(const Mesh& mesh, bool drop_misoriented,
+                                       const Context& context) {
   const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
-  if (!tetrahedra && !mesh.planar) {
-    throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
-                     "`elements`); this mesh is a surface");
-  }
   const Index num_elements = mesh.num_elements();
-  const Index num_vertices = mesh.num_vertices();
+  const double beta = options_.beta;
   gradients_.assign(num_elements, Eigen::Matrix<double, 4, 3>::Zero());
   volume_.assign(num_elements, 0.0);
   weight_.assign(num_elements, 0.0);
@@ -193,7 +171,11 @@ void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory
     volume_[t] = std::abs(signed_volume[t]);
     weight_[t] = beta * volume_[t];
   }
+}
 
+void AdmmLevelSolver::AssembleA0() {
+  const Index num_elements = elements_.rows();
+  const Index num_vertices = mesh_->num_vertices();
   // Vertex → (element, corner) incidence, for the allocation-free parallel gathers.
   incidence_start_.assign(num_vertices + 1, 0);
   for (Index t = 0; t < num_elements; ++t) {
@@ -220,9 +202,40 @@ void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory
       }
     }
   }
-  SparseMatrix& a0 = a0_;
-  a0.resize(num_vertices, num_vertices);
-  a0.setFromTriplets(triplets.begin(), triplets.end());
+  a0_.resize(num_vertices, num_vertices);
+  a0_.setFromTriplets(triplets.begin(), triplets.end());
+}
+
+void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                                 const Context& context) {
+  if (setup.handle_edits) {
+    throw ConfigError("the ADMM level solvers eliminate their constrained vertices once; they "
+                      "do not support handle edits (interactive sessions): use local_global");
+  }
+  const Mesh& mesh = *setup.mesh;
+  const int level = setup.level;
+  // Only the input level needs the factory's energy (final energy and measures); coarse levels
+  // drop their inverted elements (Section 7: "filtering all inverted elements").
+  const bool with_energy = setup.input_mesh == nullptr;
+  const bool drop_misoriented = setup.input_mesh != nullptr;
+  const double beta = options_.beta;
+  mesh_ = &mesh;
+  level_ = level;
+  planar_ = mesh.planar;
+  simplex_size_ = mesh.simplex_size();
+  elements_ = mesh.elements;
+  Stopwatch clock;
+  context.ReportPhase(fmt::format("precomputing level {}", level));
+  const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
+  if (!tetrahedra && !mesh.planar) {
+    throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
+                     "`elements`); this mesh is a surface");
+  }
+  const Index num_elements = mesh.num_elements();
+  const Index num_vertices = mesh.num_vertices();
+  ElementOperators(mesh, drop_misoriented, context);
+  AssembleA0();
+  const SparseMatrix& a0 = a0_;
 
   if (with_energy) {
     energy_ = factory.MakeEnergy();

@@ -117,6 +117,11 @@ class AdmmLevelSolver final : public LevelSolver {
   Index dropped_elements() const { return dropped_; }
 
  private:
+  /// The P phase's per-element part: gradients of the barycentric coordinates, rest volumes and
+  /// weights (degenerate and, with `drop_misoriented`, misoriented elements get weight 0).
+  void ElementOperators(const Mesh& mesh, bool drop_misoriented, const Context& context);
+  /// The vertex → (element, corner) incidence and A₀ = Σ_t w_t² D_tᵀ D_t into a0_.
+  void AssembleA0();
   /// F_t(u) = Σ_a u_a ∇φ_aᵀ of element t (planar meshes: z row and column of the identity).
   Eigen::Matrix3d DeformationGradient(const Positions& u, Index t) const;
   /// F_t(u) for every element into f_.

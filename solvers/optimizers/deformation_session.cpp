@@ -340,6 +340,100 @@ double DeformationSession::CurrentEnergy() {
   return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
 }
 
+bool DeformationSession::StraightPreview(bool preview, int top) {
+  // A preview whose upsampler only copies each coarse vertex's rotation down: straight from the
+  // coarsest level to the finest along the composed map (the paper's Fig. 15), one parallel
+  // gather into the kept state instead of up-sampling positions and rotations through every
+  // level (fresh arrays per level). The finest level's rotations are the same; its positions
+  // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
+  // so with a direct solver the result is identical (an iterative one starts from the last
+  // frame's positions instead of the up-sampled ones).
+  const bool straight = preview && preview_straight_ && top > 0 &&
+                        upsampler_->output() == UpsampleOutput::kRotations &&
+                        upsampler_->RotationsFollowCoarseVertex(site_);
+  if (straight && preview_map_.empty()) {
+    preview_map_.resize(mesh_.num_vertices());
+    for (Index v = 0; v < mesh_.num_vertices(); ++v) {
+      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
+    }
+  }
+  return straight;
+}
+
+LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
+                                                   bool preview, bool out_of_time,
+                                                   bool start_with_global_step) const {
+  // The level solver places the handles (coarse levels: with the state's rotations, and again
+  // before every global step with update_constraints).
+  LevelSolveRequest request =
+      options_.optimizer.Request(l, num_levels(), start_with_global_step, diagonal_);
+  if (solve_options.tolerance >= 0.0 && request.tolerance < 0.0) {
+    request.tolerance = solve_options.tolerance;
+  }
+  if (solve_options.max_iterations > 0 && request.max_iterations <= 0) {
+    request.max_iterations = solve_options.max_iterations;
+  }
+  if (l == 0 && (preview || out_of_time)) request.max_iterations = 1;
+  // The paper's approximation: one global solve from the up-sampled rotations, no local step
+  // (the energy is left to CurrentEnergy()).
+  request.global_step_only = l == 0 && preview && start_with_global_step;
+  return request;
+}
+
+bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
+                                    const LevelState* cur, int coarse_before_level,
+                                    const Context& context) {
+  LevelState& work = work_[l];
+  if (straight && l == 0) {
+    const Rotations& coarse = cur->rotations;
+    if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
+    work.rotations.resize(preview_map_.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t v = range.begin(); v != range.end(); ++v) {
+                          const Index c = preview_map_[v];
+                          work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
+                        }
+                      });
+    return true;
+  } else if (l == top) {
+    Level* level = levels_[l].get();
+    if (level->has_solution) {
+      // Warm start: the previous solution's rotations drive the first global step, which
+      // places the (moved) handles' influence smoothly over the mesh.
+      work = level->state;
+      return true;
+    } else {
+      work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
+      work.rotations.clear();
+      return false;
+    }
+  } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
+             !preview) {
+    // Nothing changed since this level's last solution: it is the best start there is (an
+    // up-sampled one would start the level's iterations over).
+    work = levels_[l]->state;
+    return true;
+  } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
+             levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
+             work_[l + 1].rotations.size() == cur->rotations.size()) {
+    // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
+    // the coarser level's solution changed since then (the smooth motion), up-sampled.
+    LevelState& now = scratch_[l];
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
+                         context);
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
+                         work, context);
+    work.positions = levels_[l]->state.positions + now.positions - work.positions;
+    work.rotations = levels_[l]->state.rotations;
+    return false;
+  } else {
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
+                         context);
+    return upsampler_->output() == UpsampleOutput::kRotations;
+  }
+}
+
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -348,7 +442,6 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   Stopwatch total;
   OptimizeResult result;
   const int coarsest = num_levels() - 1;
-  const HierarchicalOptimizer::Options& o = options_.optimizer;
   // The cascade from the coarsest level, or the finest level alone from its previous solution.
   const bool cascade = preview || options_.frame_start != SessionOptions::FrameStart::kPrevious ||
                        !levels_[0]->has_solution;
@@ -385,74 +478,13 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   bool start_with_global_step = false;
   // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
   int coarse_before_level = -1;
-  // A preview whose upsampler only copies each coarse vertex's rotation down: straight from the
-  // coarsest level to the finest along the composed map (the paper's Fig. 15), one parallel
-  // gather into the kept state instead of up-sampling positions and rotations through every
-  // level (fresh arrays per level). The finest level's rotations are the same; its positions
-  // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
-  // so with a direct solver the result is identical (an iterative one starts from the last
-  // frame's positions instead of the up-sampled ones).
-  const bool straight = preview && preview_straight_ && top > 0 &&
-                        upsampler_->output() == UpsampleOutput::kRotations &&
-                        upsampler_->RotationsFollowCoarseVertex(site_);
-  if (straight && preview_map_.empty()) {
-    preview_map_.resize(mesh_.num_vertices());
-    for (Index v = 0; v < mesh_.num_vertices(); ++v) {
-      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
-    }
-  }
+  const bool straight = StraightPreview(preview, top);
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       LevelState& work = work_[l];
       if (straight && l != top && l != 0) continue;  // the levels in between: skipped
-      if (straight && l == 0) {
-        const Rotations& coarse = cur->rotations;
-        if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
-        work.rotations.resize(preview_map_.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                            for (size_t v = range.begin(); v != range.end(); ++v) {
-                              const Index c = preview_map_[v];
-                              work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
-                            }
-                          });
-        start_with_global_step = true;
-      } else if (l == top) {
-        Level* level = levels_[l].get();
-        if (level->has_solution) {
-          // Warm start: the previous solution's rotations drive the first global step, which
-          // places the (moved) handles' influence smoothly over the mesh.
-          work = level->state;
-          start_with_global_step = true;
-        } else {
-          work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
-          work.rotations.clear();
-          start_with_global_step = false;
-        }
-      } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
-                 !preview) {
-        // Nothing changed since this level's last solution: it is the best start there is (an
-        // up-sampled one would start the level's iterations over).
-        work = levels_[l]->state;
-        start_with_global_step = true;
-      } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
-                 levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
-                 work_[l + 1].rotations.size() == cur->rotations.size()) {
-        // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
-        // the coarser level's solution changed since then (the smooth motion), up-sampled.
-        LevelState& now = scratch_[l];
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
-                             context);
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
-                             work, context);
-        work.positions = levels_[l]->state.positions + now.positions - work.positions;
-        work.rotations = levels_[l]->state.rotations;
-        start_with_global_step = false;
-      } else {
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
-                             context);
-        start_with_global_step = upsampler_->output() == UpsampleOutput::kRotations;
-      }
+      start_with_global_step = StartLevel(l, top, preview, straight, cur, coarse_before_level,
+                                          context);
       cur = &work;
       LevelState& state = work;
       Level* level = levels_[l].get();
@@ -469,19 +501,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         break;
       }
       Stopwatch level_clock;
-      // The solver places the handles (coarse levels: with the state's rotations, and again
-      // before every global step with update_constraints).
-      LevelSolveRequest request = o.Request(l, num_levels(), start_with_global_step, diagonal_);
-      if (solve_options.tolerance >= 0.0 && request.tolerance < 0.0) {
-        request.tolerance = solve_options.tolerance;
-      }
-      if (solve_options.max_iterations > 0 && request.max_iterations <= 0) {
-        request.max_iterations = solve_options.max_iterations;
-      }
-      if (l == 0 && (preview || out_of_time)) request.max_iterations = 1;
-      // The paper's approximation: one global solve from the up-sampled rotations, no local
-      // step (the energy is left to CurrentEnergy()).
-      request.global_step_only = l == 0 && preview && start_with_global_step;
+      const LevelSolveRequest request =
+          LevelRequest(l, solve_options, preview, out_of_time, start_with_global_step);
       const bool was_out_of_time = out_of_time;
       const bool had_solution = level->has_solution;
       const LevelSolveResult run = solver.Solve(state, request, context);

@@ -165,6 +165,16 @@ class DeformationSession {
   /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
   /// FrameStart::kPrevious, the finest level alone).
   OptimizeResult Run(const SessionSolveOptions& options, bool preview);
+  /// Where level `l` starts this solve, into work_[l] (`cur`: the state of the level above, the
+  /// cascade's `top` level has none); returns whether it starts with a global step.
+  bool StartLevel(int l, int top, bool preview, bool straight, const LevelState* cur,
+                  int coarse_before_level, const Context& context);
+  /// Whether a preview goes straight from level `top` to the finest (see Run()); builds the
+  /// composed vertex map on first use.
+  bool StraightPreview(bool preview, int top);
+  /// The request for level `l`: the optimizer's, with the solve's limits.
+  LevelSolveRequest LevelRequest(int l, const SessionSolveOptions& solve_options, bool preview,
+                                 bool out_of_time, bool start_with_global_step) const;
 
   const Mesh& mesh_;
   const ComponentFactory& factory_;
