@@ -18,9 +18,9 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
     const ConfigNode& node, const Registry<LevelSolver>& level_solvers) {
   Options options;
   options.inner = node.GetChoice("inner", options.inner, level_solvers.Names(),
-                                 "level solver on each level: local_global (the paper's), "
-                                 "admm_pd or wrapd (energy `elements`; tolerance and "
-                                 "max_iterations then take their meaning)");
+                                 "level solver on each level (`harap list inner`): local_global "
+                                 "(the paper's), admm_pd or wrapd (energy `elements`; tolerance "
+                                 "and max_iterations then take their meaning)");
   options.level_solver = level_solvers.Create(options.inner, node);
   options.coarse_tolerance =
       node.Get("coarse_tolerance", options.coarse_tolerance,
