@@ -124,14 +124,17 @@ class LocalGlobalSolver final : public LevelSolver {
     SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
+  /// The iteration Solve() runs, with explicit options and no placement of the constrained
+  /// vertices (drivers call Solve(); this is for tests of the iteration itself).
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
   /// the first global step (rotation up-sampling, Eq. 7); otherwise the first step is a local step
   /// from state.positions. Fixed vertices keep their rows of state.positions. `diagonal` scales the
   /// convergence test. On return `state` holds the final positions and fitted rotations.
   ///
   /// `update_fixed`, if set, is called before every global step with the current rotations and
-  /// may move constrained vertices in the positions (coarse constraint targets that follow the
-  /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
+  /// may move constrained vertices in the positions (Solve(): coarse constraint targets that
+  /// follow the cluster rotations, Section 4); the reduced right-hand side then uses the new
+  /// positions.
   /// Both arrays are in the internal numbering of ordering(). Moving targets make the iteration
   /// non-monotone in principle: after the first iteration that increases the energy, the targets
   /// stay where they are and the run continues as a plain, monotone local/global iteration.
