@@ -39,15 +39,17 @@ inline Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m, bool planar) {
   return planar ? NearestPlanarRotation(m) : NearestRotation(m);
 }
 
-/// The paper's Eq. (11): the rotation of a vertex from the rotations of the elements around it
-/// (indices [first, last) into `rotations`), their sum projected to the nearest rotation (of the
-/// plane if `planar`); the identity without elements. One definition for the up-sampling and the
-/// coarse constraint targets, so both average in the same order and agree to the bit.
-inline Eigen::Matrix3d MeanElementRotation(const Rotations& rotations, const Index* first,
-                                           const Index* last, bool planar) {
-  if (first == last) return Eigen::Matrix3d::Identity();
+/// The paper's Eq. (11): the rotation of a vertex from the rotations of the `count` elements
+/// around it (`element(i)`, i < count, their indices into `rotations`), their sum projected to
+/// the nearest rotation (of the plane if `planar`); the identity without elements. One definition
+/// for the up-sampling and the coarse constraint targets, so both average in the same order and
+/// agree to the bit.
+template <class ElementAt>
+Eigen::Matrix3d MeanElementRotation(const Rotations& rotations, Index count, ElementAt&& element,
+                                    bool planar) {
+  if (count == 0) return Eigen::Matrix3d::Identity();
   Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  for (; first != last; ++first) sum += rotations[*first];
+  for (Index i = 0; i < count; ++i) sum += rotations[element(i)];
   return NearestRotation(sum, planar);
 }
 

@@ -50,8 +50,10 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
     tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_vertices(), 2048),
                       [&](const tbb::blocked_range<Index>& range) {
                         for (Index v = range.begin(); v != range.end(); ++v) {
-                          result[v] = MeanElementRotation(rotations, items.data() + offsets[v],
-                                                          items.data() + offsets[v + 1], planar);
+                          const Index first = offsets[v];
+                          result[v] = MeanElementRotation(
+                              rotations, offsets[v + 1] - first,
+                              [&](Index i) { return items[first + i]; }, planar);
                         }
                       });
   });

@@ -65,8 +65,8 @@ void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite 
       const Eigen::Matrix3d r =
           site == RotationSite::kVertex
               ? (*rotations)[constraints.vertices[k]]
-              : MeanElementRotation(*rotations, elements[k].data(),
-                                    elements[k].data() + elements[k].size(), constraints.planar);
+              : MeanElementRotation(*rotations, static_cast<Index>(elements[k].size()),
+                                    [&](Index i) { return elements[k][i]; }, constraints.planar);
       target -= (r * constraints.mean_offset.row(k).transpose()).transpose();
     }
     positions.row(constraints.vertices[k]) = target;
