@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <nlohmann/json.hpp>
+#include <cmath>
 #include <memory>
 #include <thread>
 
@@ -223,13 +224,10 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                                                  ? json(solves.last_relative_residual)
                                                  : json(nullptr)},
                   {"solve_seconds", solves.seconds}};
-    if (level.inverted_elements >= 0) entry["inverted_elements"] = level.inverted_elements;
-    if (level.accelerated_iterations >= 0) {
-      entry["accelerated_iterations"] = level.accelerated_iterations;
-    }
-    if (level.newton_steps >= 0) {
-      entry["newton_steps"] = level.newton_steps;
-      entry["hessian_products"] = level.hessian_products;
+    // The level solver's own measures (inverted_elements, newton_steps, ...); counts as integers.
+    for (const auto& [name, value] : level.measures) {
+      const bool count = value == std::floor(value) && std::abs(value) < 9.0e15;
+      entry[name] = count ? json(static_cast<long long>(value)) : json(value);
     }
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       auto describe = [](const ExtremeEigenvalues& e) {

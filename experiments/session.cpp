@@ -23,7 +23,7 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   if (mesh.kind() == ElementKind::kTetrahedron || mesh.planar) defaults.energy = "elements";
   const ConfigNode optimizer_node = config_.Child("optimizer");
   optimizer_ = optimizer_node.Get("type", defaults.optimizer, "which optimizer");
-  SessionOptions options = SessionOptions::FromConfig(optimizer_node);
+  SessionOptions options = SessionOptions::FromConfig(optimizer_node, registries_.level_solvers);
   if (frame_start) options.frame_start = *frame_start;
   factory_ = std::make_unique<RegistryComponentFactory>(registries_, config_, defaults);
   threads_ = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());

@@ -50,12 +50,10 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
     tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_vertices(), 2048),
                       [&](const tbb::blocked_range<Index>& range) {
                         for (Index v = range.begin(); v != range.end(); ++v) {
-                          if (offsets[v] == offsets[v + 1]) continue;
-                          Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-                          for (Index p = offsets[v]; p < offsets[v + 1]; ++p) {
-                            sum += rotations[items[p]];
-                          }
-                          result[v] = NearestRotation(sum, planar);
+                          const Index first = offsets[v];
+                          result[v] = MeanElementRotation(
+                              rotations, offsets[v + 1] - first,
+                              [&](Index i) { return items[first + i]; }, planar);
                         }
                       });
   });
