@@ -171,7 +171,7 @@ NewtonCgStep::Outcome NewtonCgStep::Step(const Energy& energy_function,
     dd += 2.0 * alpha * dp + alpha * alpha * pp;
     if (outcome.cg_iterations >= max_cg_iterations) break;
     const SolveSummary summary = solver.Solve(residual_, preconditioned_, context);
-    if (!summary.success) {
+    if (!summary.success()) {
       throw NumericalError(fmt::format("preconditioner solve failed: {}", summary.message));
     }
     const double next_rz = BlockDot(residual_, preconditioned_, context);
