@@ -18,9 +18,7 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   ValidateRunConfig(config_);
   const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config_.Child("mesh"));
   // The defaults of `harap deform` (RunDeform).
-  DefaultComponents defaults;
-  if (!registries_.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
-  if (mesh.kind() == ElementKind::kTetrahedron || mesh.planar) defaults.energy = "elements";
+  const DefaultComponents defaults = DefaultComponentsFor(registries_, mesh);
   const ConfigNode optimizer_node = config_.Child("optimizer");
   optimizer_ = optimizer_node.Get("type", defaults.optimizer, "which optimizer");
   SessionOptions options = SessionOptions::FromConfig(optimizer_node, registries_.level_solvers);

@@ -176,6 +176,50 @@ std::string ConfigNode::Get(std::string_view key, const char* default_value,
   return Get(key, std::string(default_value), help);
 }
 
+std::string Range::ToString() const {
+  const bool has_min = min > -kInfinity, has_max = max < kInfinity;
+  if (has_min && has_max) {
+    return fmt::format("in {}{}, {}{}", min_open ? '(' : '[', min, max, max_open ? ')' : ']');
+  }
+  if (has_min) return fmt::format("{} {}", min_open ? ">" : ">=", min);
+  if (has_max) return fmt::format("{} {}", max_open ? "<" : "<=", max);
+  return "any number";
+}
+
+std::vector<std::string> RangeProblems(std::initializer_list<RangeCheck> checks) {
+  std::vector<std::string> problems;
+  for (const auto& check : checks) {
+    if (!check.range.Contains(check.value)) {
+      problems.push_back(
+          fmt::format("{} is {}, which is not {}", check.key, check.value, check.range.ToString()));
+    }
+  }
+  return problems;
+}
+
+namespace {
+
+// "... which is not in [0, 1)" / "... which is not >= 1".
+template <class T>
+T CheckRange(const ConfigNode& node, std::string_view key, T value, const Range& range) {
+  if (range.Contains(static_cast<double>(value))) return value;
+  node.Fail(key, fmt::format("is {}, which is not {}", value, range.ToString()));
+}
+
+}  // namespace
+
+double ConfigNode::Get(std::string_view key, double default_value, std::string_view help,
+                       const Range& range) const {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
+}
+
+int ConfigNode::Get(std::string_view key, int default_value, std::string_view help,
+                    const Range& range) const {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
+}
+
 std::string ConfigNode::GetChoice(std::string_view key, std::string_view default_value,
                                   const std::vector<std::string>& choices,
                                   std::string_view help) const {

@@ -76,32 +76,26 @@ double FrobeniusDot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant) {
   AdmmOptions options;
   options.variant = variant;
-  options.beta = node.Get("beta", options.beta,
-                          "ADMM weights w_t² = beta·vol_t (in WRAPD's units, energy ½ vol ‖F − R‖²)");
+  options.beta =
+      node.Get("beta", options.beta,
+               "ADMM weights w_t² = beta·vol_t (in WRAPD's units, energy ½ vol ‖F − R‖²)",
+               Range::Above(0.0));
   options.tolerance = node.Get("tolerance", options.tolerance,
                                "stop when the relative energy change stays below this for "
-                               "`patience` iterations and no element is inverted (0: never)");
-  options.patience = node.Get("patience", options.patience,
-                              "consecutive iterations the tolerance test must hold");
+                               "`patience` iterations and no element is inverted (0: never)",
+                               Range::AtLeast(0.0));
+  options.patience =
+      node.Get("patience", options.patience, "consecutive iterations the tolerance test must hold",
+               Range::AtLeast(1));
   options.max_iterations = node.Get("max_iterations", options.max_iterations,
-                                    "cap on ADMM iterations (per level)");
+                                    "cap on ADMM iterations (per level)", Range::AtLeast(1));
   if (variant == AdmmVariant::kRotationAware) {
     options.lbfgs_iterations = node.Get("lbfgs_iterations", options.lbfgs_iterations,
-                                        "L-BFGS iterations per global step");
-    options.lbfgs_history = node.Get("lbfgs_history", options.lbfgs_history,
-                                     "L-BFGS (s, y) pairs kept within a global step");
+                                        "L-BFGS iterations per global step", Range::AtLeast(1));
+    options.lbfgs_history =
+        node.Get("lbfgs_history", options.lbfgs_history,
+                 "L-BFGS (s, y) pairs kept within a global step", Range::AtLeast(1));
   }
-  const auto require = [&](bool ok, std::string_view key, auto value, std::string_view what) {
-    if (!ok) throw ConfigError(fmt::format("{}: {} must be {}, got {}", node.Where(key), key, what,
-                                           value));
-  };
-  require(std::isfinite(options.beta) && options.beta > 0.0, "beta", options.beta, "> 0");
-  require(std::isfinite(options.tolerance) && options.tolerance >= 0.0, "tolerance",
-          options.tolerance, ">= 0");
-  require(options.patience >= 1, "patience", options.patience, ">= 1");
-  require(options.max_iterations >= 1, "max_iterations", options.max_iterations, ">= 1");
-  require(options.lbfgs_iterations >= 1, "lbfgs_iterations", options.lbfgs_iterations, ">= 1");
-  require(options.lbfgs_history >= 1, "lbfgs_history", options.lbfgs_history, ">= 1");
   return options;
 }
 
@@ -370,7 +364,7 @@ void AdmmLevelSolver::SolveA0(const Eigen::MatrixXd& rhs_f, Eigen::MatrixXd& x_f
                               SolveStatistics& statistics, const Context& context) {
   const SolveSummary summary = solver_->Solve(rhs_f, x_f, context);
   statistics.Add(summary);
-  if (!summary.success) {
+  if (!summary.success()) {
     throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                      summary.message));
   }

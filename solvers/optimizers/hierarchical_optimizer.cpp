@@ -26,7 +26,8 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
       node.Get("coarse_tolerance", options.coarse_tolerance,
                "convergence tolerance on the coarse levels (negative: same as tolerance)");
   options.level_step = node.Get("level_step", options.level_step,
-                                "solve every k-th level (1: all; the finest and coarsest always)");
+                                "solve every k-th level (1: all; the finest and coarsest always)",
+                                Range::AtLeast(1));
   options.coarsest_only = node.Get("coarsest_only", options.coarsest_only,
                                    "solve only the coarsest and the finest level (Fig. 14)");
   options.coarse_approximation =
@@ -43,17 +44,9 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
   options.freeze_targets_after = node.Get(
       "freeze_targets_after", options.freeze_targets_after,
       "with update_constraints: keep a level's coarse targets fixed after this many iterations "
-      "raised its energy (0: never; moving targets can make the energy cycle)");
+      "raised its energy (0: never; moving targets can make the energy cycle)",
+      Range::AtLeast(0));
   node.RejectUnknownKeys();
-  if (options.freeze_targets_after < 0) {
-    throw ConfigError(fmt::format("{}: freeze_targets_after must be >= 0, got {}",
-                                  node.Where("freeze_targets_after"),
-                                  options.freeze_targets_after));
-  }
-  if (options.level_step < 1) {
-    throw ConfigError(fmt::format("{}: level_step must be >= 1, got {}", node.Where("level_step"),
-                                  options.level_step));
-  }
   return options;
 }
 

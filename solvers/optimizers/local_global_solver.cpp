@@ -258,7 +258,7 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   system_->ReducedRhs(rhs_, reduced_rhs_);
   if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
   const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
-  if (!summary.success) {
+  if (!summary.success()) {
     throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                      summary.message));
   }
@@ -340,7 +340,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     if (!solver_->is_direct()) system_->GatherFree(state.positions, reduced_x_);
     const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
     result.linear_solves.Add(summary);
-    if (!summary.success) {
+    if (!summary.success()) {
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                        summary.message));
     }
@@ -490,36 +490,28 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
   LocalGlobalOptions options;
   options.tolerance = node.Get("tolerance", options.tolerance,
                                "stop when max squared vertex displacement of a global step / "
-                               "squared bounding-box diagonal falls below this (0: never)");
-  options.max_iterations = node.Get("max_iterations", options.max_iterations,
-                                    "cap on local/global iterations (per level)");
+                               "squared bounding-box diagonal falls below this (0: never)",
+                               Range::AtLeast(0.0));
+  options.max_iterations =
+      node.Get("max_iterations", options.max_iterations,
+               "cap on local/global iterations (per level)", Range::AtLeast(1));
   options.anderson = node.Get("anderson", options.anderson,
                               "Anderson acceleration with this many previous iterates, "
-                              "safeguarded by the energy (0: off; 5 is typical)");
+                              "safeguarded by the energy (0: off; 5 is typical)",
+                              Range::AtLeast(0));
   options.newton = node.Get("newton", options.newton,
                             "truncated Newton steps with at most this many preconditioned "
                             "conjugate-gradient iterations each, instead of local/global steps "
-                            "(0: off; 20 is typical)");
+                            "(0: off; 20 is typical)",
+                            Range::AtLeast(0));
   options.newton_exact_hessian =
       node.GetChoice("newton_hessian", "exact", {"exact", "projected"},
                      "Hessian model of the Newton steps: exact (indefinite, trust region) or "
                      "projected per rotation site (positive semi-definite, line search)") ==
       "exact";
-  if (options.anderson < 0) {
-    node.Fail("anderson", fmt::format("must be >= 0, got {}", options.anderson));
-  }
-  if (options.newton < 0) {
-    node.Fail("newton", fmt::format("must be >= 0, got {}", options.newton));
-  }
   if (options.newton > 0 && options.anderson > 0) {
     node.Fail("newton", "Newton steps and Anderson acceleration exclude each other: set one of "
                         "`newton` and `anderson` to 0");
-  }
-  if (options.tolerance < 0.0) {
-    node.Fail("tolerance", fmt::format("must be >= 0, got {}", options.tolerance));
-  }
-  if (options.max_iterations < 1) {
-    node.Fail("max_iterations", fmt::format("must be >= 1, got {}", options.max_iterations));
   }
   return options;
 }

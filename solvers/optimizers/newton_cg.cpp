@@ -136,7 +136,7 @@ NewtonCgStep::CgSearch NewtonCgStep::NewtonDirection(const Energy& energy_functi
     dd += 2.0 * alpha * dp + alpha * alpha * pp;
     if (cg_iterations >= max_cg_iterations) break;
     const SolveSummary summary = solver.Solve(residual_, preconditioned_, context);
-    if (!summary.success) {
+    if (!summary.success()) {
       throw NumericalError(fmt::format("preconditioner solve failed: {}", summary.message));
     }
     const double next_rz = BlockDot(residual_, preconditioned_, context);
