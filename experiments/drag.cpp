@@ -13,7 +13,7 @@
 #include "experiments/component_factory.h"
 #include "experiments/session.h"
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 
 namespace harap {
 
@@ -215,16 +215,10 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   };
 
   if (options.from_scratch) {
-    DefaultComponents defaults;
-    if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
-    if (scenario.mesh.kind() == ElementKind::kTetrahedron || scenario.mesh.planar) {
-      defaults.energy = "elements";
-    }
-    ValidateRunConfig(config);
-    auto optimizer = MakeOptimizer(registries, config, defaults);
-    RegistryComponentFactory factory(registries, config, defaults);
-    outcome.optimizer =
-        config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
+    const ResolvedRunConfig run(registries, config, scenario.mesh);
+    const auto& optimizer = run.optimizer;
+    const RegistryComponentFactory& factory = run.factory;
+    outcome.optimizer = run.optimizer_name;
     for (int frame = 1; frame <= options.frames; ++frame) {
       DeformationProblem problem;
       problem.mesh = &scenario.mesh;

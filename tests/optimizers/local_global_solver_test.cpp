@@ -60,8 +60,12 @@ TEST_CASE("local/global: the gathered global step equals the global step on gath
   for (const std::string energy : {"spokes_and_rims", "spokes", "smooth_arap"}) {
     DYNAMIC_SECTION(energy) {
       const TestSetup setup("[energy]\ntype = \"" + energy + "\"\n");
-      LocalGlobalSolver solver(tube.mesh, setup.factory, 0, context);
-      solver.ConstrainMasked(handles.indices, setup.factory, context);
+      // As a session's finest level: handle edits (masked system), exact targets.
+      LocalGlobalSolver solver;
+      solver.Precompute(LevelSetup{&tube.mesh, nullptr, 0, /*handle_edits=*/true}, setup.factory,
+                        context);
+      solver.Constrain(LevelConstraints::Exact(handles, false), setup.factory, context);
+      REQUIRE(solver.accepts_gathered_rotations());
       REQUIRE(solver.energy().rotation_site() == RotationSite::kVertex);
       const Index n = tube.mesh.num_vertices();
       // Seven coarse clusters in bands along the tube, a few vertices without one (identity).
@@ -93,6 +97,24 @@ TEST_CASE("local/global: the gathered global step equals the global step on gath
         INFO("round " << round);
         CHECK((gathered - reference.positions).cwiseAbs().maxCoeff() <=
               1e-12 * reference.positions.cwiseAbs().maxCoeff());
+        // The same through the LevelSolver interface (the session's preview request): the map
+        // in the mesh's numbering, the targets the level's own (moved by MoveTargets).
+        std::vector<Index> mesh_source(n);
+        for (Index v = 0; v < n; ++v) mesh_source[v] = cluster(v);
+        solver.MoveTargets(targets);
+        LevelState state;
+        state.positions = tube.mesh.vertices;
+        LevelSolveRequest request;
+        request.global_step_only = true;
+        request.start_from_rotations = true;
+        request.rotation_source = &mesh_source;
+        request.gathered_rotations = &coarse;
+        const LevelSolveResult result = solver.Solve(state, request, context);
+        CHECK(result.iterations == 1);
+        CHECK(state.rotations.empty());  // never written out
+        CHECK((state.positions - reference.positions).cwiseAbs().maxCoeff() <=
+              1e-12 * reference.positions.cwiseAbs().maxCoeff());
+        solver.MoveTargets(handles.targets);
       }
     }
   }
