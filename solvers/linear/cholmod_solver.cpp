@@ -473,8 +473,8 @@ struct CholmodSolver::Impl {
     FreeFactor();
     factor = cholmod_copy_factor(super, &common);
     ThrowOnFailure("copy of the factor", a);
-    if (!cholmod_change_factor(CHOLMOD_REAL, common.final_ll, common.final_super,
-                               common.final_pack, common.final_monotonic, factor, &common)) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, common.final_ll, common.final_super, common.final_pack,
+                               common.final_monotonic, factor, &common)) {
       ThrowOnFailure("conversion of the factor", a);
     }
     if (common.final_resymbol && !factor->is_super &&

@@ -90,10 +90,10 @@ class CholmodSolver final : public LinearSolver {
     /// keep a copy of the analysis (the symbolic factor, a few MB) and of the factored matrix (12
     /// bytes per nonzero of A) between calls, to reuse the one and to check the pattern and find
     /// the changed rows' old values with the other; in mode auto kPartial, and every route but
-    /// kFull after PrepareForRefactor(), also keep the numeric supernodal factor (8 bytes per entry of its dense blocks: 66 MB on
-    /// armadillo-bend's finest level) that kPartial refactors in part. kAuto without
-    /// PrepareForRefactor() (one-shot runs) keeps none, and its Refactor() factors from scratch.
-    /// kUpdate needs a simplicial factor (modes auto and simplicial).
+    /// kFull after PrepareForRefactor(), also keep the numeric supernodal factor (8 bytes per entry
+    /// of its dense blocks: 66 MB on armadillo-bend's finest level) that kPartial refactors in
+    /// part. kAuto without PrepareForRefactor() (one-shot runs) keeps none, and its Refactor()
+    /// factors from scratch. kUpdate needs a simplicial factor (modes auto and simplicial).
     RefactorChoice refactor = RefactorChoice::kAuto;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
@@ -139,16 +139,16 @@ class CholmodSolver final : public LinearSolver {
   /// Rule of kAuto: the route with the lowest estimated time among kPartial (when its supernodal
   /// factor is current), kUpdate (simplicial factors) and kNumeric. kPartial's estimate is the
   /// flops of the supernodes it would recompute times the seconds per flop measured by the last
-  /// partial refactorization of at least 10⁷ flops (before any: kDefaultPartialSecondsPerFlop); kNumeric's is the measured time of the last numeric factorization; kUpdate's
-  /// counts the factor entries the modification touches — for each
-  /// deletion the column counts summed along the elimination-tree path to the root from its
-  /// column's first row that is not deleted too (where its column of the update starts), for
-  /// each addition the path from its own column plus the longest path from the row's entries
-  /// up to that column (the forward solve) — times the seconds per touched entry this solver
-  /// measured in its last deletions and additions of at least 10⁶ entries (before any:
-  /// kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry), plus, if there are additions,
-  /// the last measured set-up of the parallel solve's plan. All are measured on the machine the
-  /// solver runs on; only the first update estimate uses the defaults.
+  /// partial refactorization of at least 10⁷ flops (before any: kDefaultPartialSecondsPerFlop);
+  /// kNumeric's is the measured time of the last numeric factorization; kUpdate's counts the factor
+  /// entries the modification touches — for each deletion the column counts summed along the
+  /// elimination-tree path to the root from its column's first row that is not deleted too (where
+  /// its column of the update starts), for each addition the path from its own column plus the
+  /// longest path from the row's entries up to that column (the forward solve) — times the seconds
+  /// per touched entry this solver measured in its last deletions and additions of at least 10⁶
+  /// entries (before any: kDefaultDeleteSecondsPerEntry, kDefaultAddSecondsPerEntry), plus, if
+  /// there are additions, the last measured set-up of the parallel solve's plan. All are measured
+  /// on the machine the solver runs on; only the first update estimate uses the defaults.
 
   /// With refactor = "auto": keep the copies Refactor() reuses from the next Factorize() on.
   void PrepareForRefactor() override;

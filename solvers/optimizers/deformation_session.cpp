@@ -342,8 +342,8 @@ void DeformationSession::MaterializePreviewRotations() {
                       [&](const tbb::blocked_range<size_t>& range) {
                         for (size_t v = range.begin(); v != range.end(); ++v) {
                           const Index c = preview_map_[v];
-                          rotations[v] = c == kNoVertex ? Rotation::Identity()
-                                                        : preview_coarse_rotations_[c];
+                          rotations[v] =
+                              c == kNoVertex ? Rotation::Identity() : preview_coarse_rotations_[c];
                         }
                       });
   });

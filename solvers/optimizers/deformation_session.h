@@ -184,8 +184,7 @@ class DeformationSession {
   /// The request for level `l`: the optimizer's, with the solve's limits.
   /// `gather`: the straight preview's finest level takes the coarsest rotations gathered.
   LevelSolveRequest LevelRequest(int l, const SessionSolveOptions& solve_options, bool preview,
-                                 bool out_of_time, bool start_with_global_step,
-                                 bool gather) const;
+                                 bool out_of_time, bool start_with_global_step, bool gather) const;
   /// Run()'s result from the final state: measures, constraint report, notes, positions
   /// (`out_of_time_level`: -1 when the time budget did not run out).
   void FinishResult(const LevelState& final_state, bool preview, double time_budget_seconds,

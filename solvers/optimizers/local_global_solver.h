@@ -234,8 +234,7 @@ class LocalGlobalSolver final : public LevelSolver {
     std::vector<Eigen::Vector3d> weight;
     Rotations coarse;  ///< per call: the coarse rotations and the identity
   };
-  void BuildGatheredRhs(const std::vector<Index>& source, Index num_coarse,
-                        const Context& context);
+  void BuildGatheredRhs(const std::vector<Index>& source, Index num_coarse, const Context& context);
   GatheredRhs gathered_rhs_;
   // Solve()'s request.rotation_source (the mesh's numbering) and the same per internal site.
   const std::vector<Index>& GatheredSource(const std::vector<Index>& source);
