@@ -159,6 +159,33 @@ Scenario LoadScenario(const std::filesystem::path& file) {
   return scenario;
 }
 
+std::vector<HandleEdit> LoadHandleEdits(const std::filesystem::path& file,
+                                        const Scenario& scenario) {
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) {
+    throw InputError(fmt::format("{}: handle-edit file not found", file.string()));
+  }
+  const std::vector<io_internal::HandleEditSpec> specs = io_internal::ReadHandleEditsText(
+      ReadFileMaybeXz(file), file.string(), file.parent_path());
+  // The selections run on a scenario with the same mesh and no handles, so they see the same
+  // selection box and rules as the scenario's own handles.
+  Scenario selecting;
+  selecting.mesh = scenario.mesh;
+  selecting.initial = scenario.initial;
+  std::vector<HandleEdit> edits;
+  for (const io_internal::HandleEditSpec& spec : specs) {
+    HandleEdit edit{spec.frame, spec.name, spec.add, {}, {}};
+    if (spec.add) {
+      selecting.handles.clear();
+      io_internal::AddHandles(std::nullopt, {spec.handle}, selecting);
+      edit.vertices = std::move(selecting.handles.back().vertices);
+      edit.selection = std::move(selecting.handles.back().selection);
+    }
+    edits.push_back(std::move(edit));
+  }
+  return edits;
+}
+
 Scenario ScenarioFromArrays(Mesh mesh, const std::vector<Index>& handle_vertices,
                             const Positions& targets, std::optional<Positions> initial,
                             std::optional<bool> planar, const std::string& source) {

@@ -16,6 +16,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -102,6 +103,55 @@ class ScenarioTextReader {
       }
     }
     return description;
+  }
+
+  // A handle-edit file: [[edit]] frame = N with add = { a [[handle]] table } or remove = "name".
+  std::vector<HandleEditSpec> ReadEdits(std::string_view toml_text) const {
+    const toml::table root = toml_.Parse(toml_text);
+    toml_.CheckKeys(root, {"edit"}, "a handle-edit file (expected [[edit]] entries)");
+    const toml::node* node = root.get("edit");
+    const toml::array* entries = node ? node->as_array() : nullptr;
+    if (!entries || entries->empty()) {
+      toml_.Fail(node ? toml_.Where(*node) : toml_.source(),
+                 "no [[edit]] entries (each: frame = N and add = { name = ..., select... } or "
+                 "remove = \"name\")");
+    }
+    std::vector<HandleEditSpec> edits;
+    int number = 0;
+    for (const toml::node& entry : *entries) {
+      ++number;
+      const TomlReader toml = toml_.In(fmt::format("edit {}", number));
+      const toml::table* table = entry.as_table();
+      if (!table) toml.Fail(entry, "must be a table");
+      toml.CheckKeys(*table, {"frame", "add", "remove"}, "an [[edit]]");
+      HandleEditSpec edit;
+      const toml::node* frame = table->get("frame");
+      const auto* integer = frame ? frame->as_integer() : nullptr;
+      if (!integer || integer->get() < 1 || integer->get() > std::numeric_limits<int>::max()) {
+        toml.Fail(frame ? toml.Where(*frame) : toml.Where(*table),
+                  "needs frame = N, an integer >= 1 (the frame the edit comes before)");
+      }
+      edit.frame = static_cast<int>(integer->get());
+      const toml::node* add = table->get("add");
+      const toml::node* remove = table->get("remove");
+      if ((add != nullptr) == (remove != nullptr)) {
+        toml.Fail(*table, "needs exactly one of add = { name = ..., select... } and remove = "
+                          "\"name\"");
+      }
+      if (remove) {
+        if (!remove->is_string()) toml.Fail(*remove, "'remove' must be the name of a handle");
+        edit.add = false;
+        edit.name = remove->as_string()->get();
+      } else {
+        if (!add->is_table()) {
+          toml.Fail(*add, "'add' must be a table written like a scenario's [[handle]]");
+        }
+        edit.handle = ParseHandle(*add->as_table(), number, Units::kFractions);
+        edit.name = edit.handle.name;
+      }
+      edits.push_back(std::move(edit));
+    }
+    return edits;
   }
 
  private:
@@ -362,6 +412,12 @@ ScenarioDescription ReadScenarioText(std::string_view toml_text, const std::stri
                                      const std::filesystem::path& base_directory,
                                      const ScenarioLimits& limits) {
   return ScenarioTextReader(source, base_directory, limits).Read(toml_text);
+}
+
+std::vector<HandleEditSpec> ReadHandleEditsText(std::string_view toml_text,
+                                                const std::string& source,
+                                                const std::filesystem::path& base_directory) {
+  return ScenarioTextReader(source, base_directory, {}).ReadEdits(toml_text);
 }
 
 }  // namespace harap::io_internal

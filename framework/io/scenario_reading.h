@@ -32,4 +32,19 @@ ScenarioDescription ReadScenarioText(std::string_view toml_text, const std::stri
                                      const std::filesystem::path& base_directory,
                                      const ScenarioLimits& limits);
 
+/// One [[edit]] of a handle-edit file as written (scenario.h's LoadHandleEdits selects it).
+struct HandleEditSpec {
+  int frame = 0;
+  bool add = true;
+  std::string name;   ///< The added handle's name, or the one to remove.
+  HandleSpec handle;  ///< add: written like a scenario's [[handle]] (no motion needed)
+};
+
+/// Reads a handle-edit file's text (docs/session.md): [[edit]] entries with frame = N and
+/// add = { a [[handle]] table } or remove = "name". ConfigError naming file:line:column and the
+/// edit for anything wrong.
+std::vector<HandleEditSpec> ReadHandleEditsText(std::string_view toml_text,
+                                                const std::string& source,
+                                                const std::filesystem::path& base_directory);
+
 }  // namespace harap::io_internal
