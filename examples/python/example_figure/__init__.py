@@ -1,4 +1,6 @@
 # SPDX-License-Identifier: MIT
+# A package, not a script beside the examples, so that the examples glob (python/CMakeLists.txt)
+# does not run it as an example.
 """What the plotting examples share: matplotlib without a display (or exit code 77, "skipped",
 when it is missing), their common command line (--out, --small) and writing the figure."""
 import argparse
