@@ -1,15 +1,38 @@
 // SPDX-License-Identifier: MIT
+// What the session and handle-edit benchmarks share: their scenario, registration and the ball
+// of vertices an edit adds.
 #pragma once
+
+#include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include "framework/mesh.h"
 
 namespace harap {
+
+/// The scenario the session and handle-edit benchmarks run on (armadillo-bend, 173K vertices,
+/// from the shared data folder beside the repository; the benchmarks register nothing without it).
+inline const std::filesystem::path& ArmadilloBendScenario() {
+  static const std::filesystem::path path =
+      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/armadillo-bend.toml";
+  return path;
+}
+
+/// Registers `function(state, args...)` as "<name>/armadillo-bend", timed in milliseconds of
+/// wall-clock time (the solves use more than one thread).
+template <class Function, class... Args>
+void RegisterArmadilloBendBenchmark(const std::string& name, Function function, Args... args) {
+  benchmark::RegisterBenchmark((name + "/armadillo-bend").c_str(), function, args...)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
 
 /// The handle-edit benchmarks' ball: the `fraction` of the mesh's vertices nearest to a free
 /// vertex on the surface halfway up the mesh (largest x at mid height), without the vertices in

@@ -50,12 +50,6 @@ namespace {
 
 using namespace harap;
 
-const std::filesystem::path& ScenarioPath() {
-  static const std::filesystem::path path =
-      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/armadillo-bend.toml";
-  return path;
-}
-
 // `a` with the rows and columns of `handles` replaced by the identity's, every entry kept.
 SparseMatrix Masked(const SparseMatrix& a, const std::vector<char>& handle) {
   SparseMatrix masked = a;
@@ -79,7 +73,7 @@ struct EditFixture {
 
   /// `fraction`: the ball's share of the vertices.
   explicit EditFixture(double fraction) {
-    Scenario scenario = LoadScenario(ScenarioPath());
+    Scenario scenario = LoadScenario(ArmadilloBendScenario());
     // The optimizers renumber each level for locality; so do the other benchmarks.
     const MeshOrdering ordering = LocalityOrdering(scenario.mesh);
     scenario.mesh = ordering.mesh;
@@ -208,11 +202,9 @@ void Edit(benchmark::State& state, std::string refactor, bool small, int native_
 }
 
 [[maybe_unused]] const bool registered = [] {
-  if (!std::filesystem::exists(ScenarioPath())) return false;
-  const auto add = [](const std::string& name, auto&&... args) {
-    benchmark::RegisterBenchmark((name + "/armadillo-bend").c_str(), args...)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
+  if (!std::filesystem::exists(ArmadilloBendScenario())) return false;
+  const auto add = [](const std::string& name, auto... args) {
+    RegisterArmadilloBendBenchmark(name, args...);
   };
   add("HandleEdit_factorize", Factorize, 1);
   for (const std::string route : {"full", "numeric", "update", "partial", "auto"}) {

@@ -39,17 +39,11 @@ namespace {
 
 using namespace harap;
 
-const std::filesystem::path& ScenarioPath() {
-  static const std::filesystem::path path =
-      std::filesystem::path(HARAP_SHARED_DIR) / "scenarios/armadillo-bend.toml";
-  return path;
-}
-
 constexpr int kFrames = 30;
 constexpr int kThreads = 2;
 
 const Scenario& LoadedScenario() {
-  static const Scenario scenario = LoadScenario(ScenarioPath());
+  static const Scenario scenario = LoadScenario(ArmadilloBendScenario());
   return scenario;
 }
 
@@ -112,11 +106,9 @@ void Edit(benchmark::State& state, const std::string& refactor) {
 }
 
 [[maybe_unused]] const bool registered = [] {
-  if (!std::filesystem::exists(ScenarioPath())) return false;
-  const auto add = [](const std::string& name, auto&&... args) {
-    benchmark::RegisterBenchmark((name + "/armadillo-bend").c_str(), args...)
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
+  if (!std::filesystem::exists(ArmadilloBendScenario())) return false;
+  const auto add = [](const std::string& name, auto... args) {
+    RegisterArmadilloBendBenchmark(name, args...);
   };
   add("SessionFrame", Frame, false);
   add("SessionPreview", Frame, true);

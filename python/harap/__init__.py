@@ -174,6 +174,11 @@ def _limit(name, value, *, integer=False, positive=False):
     return value
 
 
+def _session_property(name, doc):
+    """A read-only property returning self._session.<name>()."""
+    return property(lambda self: getattr(self._session, name)(), doc=doc)
+
+
 class Session:
     """An interactive deformation session (docs/session.md): the hierarchy and every level's
     precomputation are built once here; set_handles() constrains (factors every level);
@@ -273,32 +278,17 @@ class Session:
         """The energy of the current positions, rotations fitted to them."""
         return self._session.energy()
 
-    @property
-    def positions(self):
-        """(n, 3) float64: the last solution (or the start), a copy."""
-        return self._session.positions()
-
-    @property
-    def handles(self):
-        """(k,) int64: the handle vertices, in the order targets use."""
-        return self._session.handles()
-
-    @property
-    def targets(self):
-        """(k, 3) float64: the handles' targets."""
-        return self._session.targets()
-
-    @property
-    def num_levels(self):
-        """The hierarchy's levels (1 for classic)."""
-        return self._session.num_levels()
-
-    @property
-    def info(self):
-        """What the session resolved: optimizer, energy, solver, hierarchy, upsampler,
-        solved_levels (coarsest first), threads, planar, setup_timings {hierarchy, precompute}
-        (seconds), mesh_summary, config (TOML)."""
-        return self._session.info()
+    # Read-only views of the C++ session's state, each a fresh copy.
+    positions = _session_property(
+        "positions", "(n, 3) float64: the last solution (or the start), a copy.")
+    handles = _session_property(
+        "handles", "(k,) int64: the handle vertices, in the order targets use.")
+    targets = _session_property("targets", "(k, 3) float64: the handles' targets.")
+    num_levels = _session_property("num_levels", "The hierarchy's levels (1 for classic).")
+    info = _session_property(
+        "info", "What the session resolved: optimizer, energy, solver, hierarchy, upsampler, "
+        "solved_levels (coarsest first), threads, planar, setup_timings {hierarchy, precompute} "
+        "(seconds), mesh_summary, config (TOML).")
 
     def __repr__(self):
         info = self.info
