@@ -83,6 +83,11 @@ struct LevelSolveRequest {
   double diagonal = 1.0;  ///< bounding-box diagonal of the input mesh: scales convergence tests
 };
 
+/// Writes out the rotations a gathered request stands for (LevelSolveRequest::rotation_source):
+/// out[v] = gathered[source[v]], the identity where source[v] is kNoVertex; in parallel.
+void GatherRotations(const std::vector<Index>& source, const Rotations& gathered, Rotations& out,
+                     const Context& context);
+
 /// What one level solve did: the measures every solver has, plus named solver-specific ones.
 struct LevelSolveResult {
   int iterations = 0;

@@ -335,18 +335,8 @@ void DeformationSession::UpdateCoarseTargets(int l) {
 
 void DeformationSession::MaterializePreviewRotations() {
   if (!preview_rotations_pending_) return;
-  Rotations& rotations = levels_[0]->state.rotations;
-  rotations.resize(preview_map_.size());
-  context_.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t v = range.begin(); v != range.end(); ++v) {
-                          const Index c = preview_map_[v];
-                          rotations[v] =
-                              c == kNoVertex ? Rotation::Identity() : preview_coarse_rotations_[c];
-                        }
-                      });
-  });
+  GatherRotations(preview_map_, preview_coarse_rotations_, levels_[0]->state.rotations,
+                  context_);
   preview_rotations_pending_ = false;
 }
 

@@ -338,16 +338,7 @@ SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& sou
     BuildGatheredRhs(source, static_cast<Index>(coarse.size()), context);
   }
   if (!map.linear) {
-    rotations.resize(source.size());
-    context.Run([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, source.size(), 4096),
-                        [&](const tbb::blocked_range<size_t>& range) {
-                          for (size_t s = range.begin(); s != range.end(); ++s) {
-                            const Index c = source[s];
-                            rotations[s] = c == kNoVertex ? Rotation::Identity() : coarse[c];
-                          }
-                        });
-    });
+    GatherRotations(source, coarse, rotations, context);
   }
   system_->SetFixedPositions(u);
   SolveSummary summary;
