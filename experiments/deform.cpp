@@ -87,10 +87,9 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
       context.Run([&] { return optimizer->Optimize(prepared.problem(), factory, context); });
   outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
   for (const LevelResult& level : outcome.result.levels) {
-    outcome.level_solvers.push_back(factory.solver_name_for(level.unknowns));
-    // Creating a solver is cheap (no factorization); it knows whether it is direct.
-    outcome.level_solver_direct.push_back(factory.MakeLinearSolver(level.level, level.unknowns)
-                                              ->is_direct());
+    // What the level's solver was, and for "adaptive" what it chose.
+    outcome.level_solvers.push_back(factory.solver_used(level.level, level.unknowns));
+    outcome.level_solver_direct.push_back(factory.solver_direct(level.level, level.unknowns));
   }
   // The pieces the optimizer asked for, whether or not their tables were written.
   if (factory.made_hierarchy()) outcome.hierarchy = factory.hierarchy_name();

@@ -408,6 +408,7 @@ struct CholmodSolver::Impl {
   ~Impl() {
     FreeFactor();
     FreeSymbolic();
+    FreeAnalysis();
     cholmod_free_dense(&x, &common);
     cholmod_free_dense(&y, &common);
     cholmod_free_dense(&e, &common);
@@ -421,6 +422,32 @@ struct CholmodSolver::Impl {
   void FreeSymbolic() {
     if (symbolic) cholmod_free_factor(&symbolic, &common);
     symbolic = nullptr;
+  }
+  void FreeAnalysis() {
+    if (analysis) cholmod_free_factor(&analysis, &common);
+    analysis = nullptr;
+  }
+
+  // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
+  // for this very matrix (same arrays and size), else a new one.
+  cholmod_factor* TakeOrMakeAnalysis(cholmod_sparse& view, const SparseMatrix& a) {
+    if (analysis != nullptr && analysis_of.p == a.outerIndexPtr() &&
+        analysis_of.i == a.innerIndexPtr() && analysis_of.rows == a.rows() &&
+        analysis_of.nnz == a.nonZeros()) {
+      cholmod_factor* kept = analysis;
+      analysis = nullptr;
+      common.lnz = analysis_of.lnz;  // restored: other CHOLMOD calls may have changed them
+      common.fl = analysis_of.fl;
+      info.analysis_seconds = analysis_of.seconds;
+      return kept;
+    }
+    FreeAnalysis();
+    const Stopwatch clock;
+    cholmod_factor* made = cholmod_analyze(&view, &common);
+    ThrowOnFailure("analysis (ordering)", a);
+    HARAP_CHECK(made != nullptr, "cholmod_analyze returned no factor (status {})", common.status);
+    info.analysis_seconds = clock.Seconds();
+    return made;
   }
 
   // Keeps copies for Refactor() (the matrix also for check_residual): with an explicit
@@ -624,6 +651,15 @@ struct CholmodSolver::Impl {
   // With keeps_copies(): the analysis of the last Factorize() (a symbolic factor), which
   // Refactor() factors anew.
   cholmod_factor* symbolic = nullptr;
+  // Analyze()'s analysis, until the Factorize() of the same matrix takes it.
+  cholmod_factor* analysis = nullptr;
+  struct {
+    const int* p = nullptr;
+    const int* i = nullptr;
+    Eigen::Index rows = 0;
+    Eigen::Index nnz = 0;
+    double lnz = 0.0, fl = 0.0, seconds = 0.0;
+  } analysis_of;
   // Seconds per factor entry touched by the deletions (cholmod_updown) and the additions
   // (cholmod_rowadd), as the last update measured them (see Refactor()).
   double delete_seconds_per_entry = kDefaultDeleteSecondsPerEntry;
@@ -761,11 +797,9 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
-  const Stopwatch analysis_clock;
-  impl.factor = cholmod_analyze(&view, &impl.common);
-  impl.ThrowOnFailure("analysis (ordering)", a);
-  HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
-              impl.common.status);
+  impl.factor = impl.TakeOrMakeAnalysis(view, a);
+  const double analysis_seconds = impl.info.analysis_seconds;
+  const Stopwatch analysis_clock;  // the copy for Refactor() counts as analysis too
   if (impl.keeps_copies()) {
     const size_t in_use = impl.common.memory_inuse;
     impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
@@ -774,9 +808,40 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
                                static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
                                static_cast<double>(a.cols() + 1) * sizeof(int);
   }
-  impl.info.analysis_seconds = analysis_clock.Seconds();
+  impl.info.analysis_seconds = analysis_seconds + analysis_clock.Seconds();
   impl.FactorNumeric(view, a);
   impl.FinishFactor(a, diagonal, context);
+}
+
+CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
+  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
+  Impl& impl = *impl_;
+  impl.FreeAnalysis();
+  Estimate estimate;
+  if (a.rows() == 0) return estimate;
+  const ScopedNativeThreads native_threads(impl.options.native_threads);
+  cholmod_sparse view = LowerTriangleView(a);
+  const Stopwatch clock;
+  impl.analysis = cholmod_analyze(&view, &impl.common);
+  impl.ThrowOnFailure("analysis (ordering)", a);
+  HARAP_CHECK(impl.analysis != nullptr, "cholmod_analyze returned no factor (status {})",
+              impl.common.status);
+  estimate.analysis_seconds = clock.Seconds();
+  estimate.nnz_l = impl.common.lnz;
+  estimate.flops = impl.common.fl;
+  // A simplicial factor stores a value and a row index per entry plus O(n) column data; the
+  // supernodal factor of modes auto and supernodal pads relaxed supernodes, which CHOLMOD's
+  // analysis sizes exactly (xsize entries, ssize row indices).
+  const cholmod_factor& f = *impl.analysis;
+  const double entries = f.is_super ? std::max(static_cast<double>(f.xsize), estimate.nnz_l)
+                                    : estimate.nnz_l;
+  estimate.factor_bytes = entries * sizeof(double) +
+                          (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) *
+                              sizeof(int) +
+                          static_cast<double>(a.rows()) * 4 * sizeof(int);
+  impl.analysis_of = {a.outerIndexPtr(), a.innerIndexPtr(), a.rows(), a.nonZeros(),
+                      impl.common.lnz,   impl.common.fl,    estimate.analysis_seconds};
+  return estimate;
 }
 
 LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,

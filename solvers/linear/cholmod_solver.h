@@ -102,6 +102,19 @@ class CholmodSolver final : public LinearSolver {
 
   static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
 
+  /// What the analysis (ordering and symbolic factorization, no numeric work) says a
+  /// factorization of a matrix will cost: the size of L and the flops, before any factoring.
+  struct Estimate {
+    double nnz_l = 0.0;         ///< Nonzeros of L (simplicial count).
+    double flops = 0.0;         ///< Flop count of the factorization.
+    double factor_bytes = 0.0;  ///< Memory of the numeric factor (values and row indices).
+    double analysis_seconds = 0.0;
+  };
+  /// Analyses `a` (same contract as Factorize()) and keeps the analysis: a Factorize() of the
+  /// same matrix right after reuses it instead of ordering `a` again. Lets a caller decide
+  /// whether to factor at all (AdaptiveSolver) for the price of the analysis alone.
+  Estimate Analyze(const SparseMatrix& a);
+
   void Factorize(const SparseMatrix& a, const Context& context) override;
   SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                      const Context& context) override;

@@ -8,6 +8,7 @@
 #include "solvers/linear/eigen_ldlt_solver.h"
 #include "solvers/linear/gauss_seidel_solver.h"
 #ifdef HARAP_HAVE_CHOLMOD
+#include "solvers/linear/adaptive_solver.h"
 #include "solvers/linear/cholmod_solver.h"
 #endif
 
@@ -18,6 +19,10 @@ void RegisterLinearSolvers(Registry<LinearSolver>& registry) {
   registry.Add(std::string(CholmodSolver::kName),
                "sparse Cholesky with CHOLMOD (SuiteSparse), simplicial LDLᵀ or supernodal LLᵀ",
                &CholmodSolver::Create);
+  registry.Add(std::string(AdaptiveSolver::kName),
+               "cholmod or cg per matrix, chosen from CHOLMOD's analysis (memory and arithmetic "
+               "of the factor vs. CG iterations) before factoring (paper Section 5.2)",
+               &AdaptiveSolver::Create);
 #endif
   registry.Add(std::string(EigenLdltSolver::kName),
                "sparse LDLᵀ with Eigen's SimplicialLDLT and AMD ordering (reference, always built)",

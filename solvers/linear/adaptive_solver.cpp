@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: MIT
+// Compiled into harap_solvers only when CHOLMOD was found (like cholmod_solver.cpp).
+#ifdef HARAP_HAVE_CHOLMOD
+
+#include "solvers/linear/adaptive_solver.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <string>
+#include <vector>
+
+#include "framework/error.h"
+
+namespace harap {
+namespace {
+
+constexpr std::string_view kAutoName = "auto";
+constexpr std::string_view kDirectName = "direct";
+constexpr std::string_view kIterativeName = "iterative";
+
+// Right-hand sides per solve: the global step's three coordinates.
+constexpr double kColumns = 3.0;
+
+}  // namespace
+
+AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& node) {
+  Options options;
+  const std::string choose = node.GetChoice(
+      "choose", kAutoName,
+      {std::string(kAutoName), std::string(kDirectName), std::string(kIterativeName)},
+      "auto = factor unless CHOLMOD's analysis says the factor exceeds max_factor_megabytes or "
+      "costs more arithmetic than expected_solves CG solves; direct = always cholmod; "
+      "iterative = always cg");
+  options.choose = choose == kAutoName     ? Choice::kAuto
+                   : choose == kDirectName ? Choice::kDirect
+                                           : Choice::kIterative;
+  options.max_factor_megabytes =
+      node.Get("max_factor_megabytes", options.max_factor_megabytes,
+               "memory budget of the Cholesky factor in MB (0: half the physical memory)");
+  options.expected_solves = node.Get(
+      "expected_solves", options.expected_solves,
+      "global steps the matrix is expected to serve (weighs the factorization against solves)");
+  options.direct = CholmodSolver::Options::FromConfig(node.Child("direct"));
+  options.iterative = ConjugateGradientSolver::Options::FromConfig(node.Child("iterative"));
+  node.RejectUnknownKeys();
+  if (options.max_factor_megabytes < 0.0) {
+    throw ConfigError(fmt::format("{}: max_factor_megabytes must be >= 0, got {}",
+                                  node.Where("max_factor_megabytes"),
+                                  options.max_factor_megabytes));
+  }
+  if (!(options.expected_solves > 0.0)) {
+    throw ConfigError(fmt::format("{}: expected_solves must be > 0, got {}",
+                                  node.Where("expected_solves"), options.expected_solves));
+  }
+  return options;
+}
+
+AdaptiveSolver::AdaptiveSolver(const Options& options) : options_(options) {}
+
+AdaptiveSolver::~AdaptiveSolver() = default;
+
+std::unique_ptr<LinearSolver> AdaptiveSolver::Create(const ConfigNode& node) {
+  return std::make_unique<AdaptiveSolver>(Options::FromConfig(node));
+}
+
+double AdaptiveSolver::DefaultBudgetBytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page_size = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_size <= 0) return 4e9;  // unknown: a budget any 8 GB machine meets
+  return 0.5 * static_cast<double>(pages) * static_cast<double>(page_size);
+}
+
+void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
+  chosen_ = nullptr;
+  decision_ = Decision{};
+  decision_.direct = options_.choose != Choice::kIterative;
+  if (options_.choose == Choice::kAuto && a.rows() > 0) {
+    direct_ = std::make_unique<CholmodSolver>(options_.direct);
+    if (prepared_for_refactor_) direct_->PrepareForRefactor();
+    const CholmodSolver::Estimate estimate = direct_->Analyze(a);
+    const double n = static_cast<double>(a.rows());
+    const double s = options_.expected_solves;
+    const double m = options_.iterative.limits.max_iterations;
+    decision_.estimated = true;
+    decision_.estimate = estimate;
+    decision_.budget_bytes = options_.max_factor_megabytes > 0.0
+                                 ? options_.max_factor_megabytes * 1e6
+                                 : DefaultBudgetBytes();
+    decision_.direct_flops = estimate.flops + s * 4.0 * kColumns * estimate.nnz_l;
+    decision_.iterative_flops =
+        s * m * kColumns * (2.0 * static_cast<double>(a.nonZeros()) + 12.0 * n);
+    decision_.direct = estimate.factor_bytes <= decision_.budget_bytes &&
+                       decision_.direct_flops <= decision_.iterative_flops;
+  }
+  if (decision_.direct) {
+    if (!direct_ || options_.choose != Choice::kAuto) {
+      direct_ = std::make_unique<CholmodSolver>(options_.direct);
+      if (prepared_for_refactor_) direct_->PrepareForRefactor();
+    }
+    iterative_.reset();
+    chosen_ = direct_.get();
+  } else {
+    direct_.reset();  // frees the analysis
+    if (!iterative_) iterative_ = std::make_unique<ConjugateGradientSolver>(options_.iterative);
+    chosen_ = iterative_.get();
+  }
+  try {
+    chosen_->Factorize(a, context);
+  } catch (...) {
+    chosen_ = nullptr;
+    throw;
+  }
+  if (on_choice_) on_choice_(chosen(), chosen_->is_direct());
+}
+
+SolveSummary AdaptiveSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                   Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
+  HARAP_CHECK(chosen_ != nullptr, "Solve() needs a successful Factorize() first");
+  return chosen_->Solve(b, x, context);
+}
+
+bool AdaptiveSolver::is_direct() const { return chosen_ != nullptr && chosen_->is_direct(); }
+
+void AdaptiveSolver::PrepareForRefactor() {
+  prepared_for_refactor_ = true;
+  if (direct_) direct_->PrepareForRefactor();
+}
+
+LinearSolver::RefactorSummary AdaptiveSolver::Refactor(const SparseMatrix& a,
+                                                       const std::vector<Index>& changed_rows,
+                                                       const Context& context) {
+  // A direct choice stays (the pattern, and so the factor's size, did not change); the
+  // iterative one only copies the matrix anew.
+  if (chosen_ == direct_.get() && direct_ != nullptr) {
+    try {
+      return direct_->Refactor(a, changed_rows, context);
+    } catch (...) {
+      chosen_ = nullptr;
+      throw;
+    }
+  }
+  return LinearSolver::Refactor(a, changed_rows, context);
+}
+
+std::string_view AdaptiveSolver::chosen() const {
+  if (chosen_ == nullptr) return {};
+  return chosen_ == direct_.get() ? CholmodSolver::kName : ConjugateGradientSolver::kName;
+}
+
+}  // namespace harap
+
+#endif  // HARAP_HAVE_CHOLMOD
