@@ -41,8 +41,14 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& no
   options.expected_solves = node.Get(
       "expected_solves", options.expected_solves,
       "global steps the matrix is expected to serve (weighs the factorization against solves)");
-  options.direct = CholmodSolver::Options::FromConfig(node.Child("direct"));
-  options.iterative = ConjugateGradientSolver::Options::FromConfig(node.Child("iterative"));
+  options.direct = CholmodSolver::Options::FromConfig(
+      node.Child("direct", "table: the cholmod options used when it factors"));
+  options.iterative = ConjugateGradientSolver::Options::FromConfig(
+      node.Child("iterative", "table: the cg options used when it iterates (default 20 "
+                              "Jacobi-preconditioned iterations per solve)"));
+  options.direct.check_residual =
+      node.Get("check_residual", options.direct.check_residual,
+               "measure ‖b − A x‖ / ‖b‖ in every solve also when it factors (cg always does)");
   node.RejectUnknownKeys();
   if (options.max_factor_megabytes < 0.0) {
     throw ConfigError(fmt::format("{}: max_factor_megabytes must be >= 0, got {}",

@@ -798,17 +798,16 @@ void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
   impl.factor = impl.TakeOrMakeAnalysis(view, a);
-  const double analysis_seconds = impl.info.analysis_seconds;
-  const Stopwatch analysis_clock;  // the copy for Refactor() counts as analysis too
   if (impl.keeps_copies()) {
+    const Stopwatch copy_clock;  // the copy for Refactor() counts as analysis too
     const size_t in_use = impl.common.memory_inuse;
     impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
     impl.ThrowOnFailure("copy of the analysis", a);
     impl.info.refactor_bytes = static_cast<double>(impl.common.memory_inuse - in_use) +
                                static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
                                static_cast<double>(a.cols() + 1) * sizeof(int);
+    impl.info.analysis_seconds += copy_clock.Seconds();
   }
-  impl.info.analysis_seconds = analysis_seconds + analysis_clock.Seconds();
   impl.FactorNumeric(view, a);
   impl.FinishFactor(a, diagonal, context);
 }
