@@ -29,12 +29,11 @@ const std::vector<Preset>& Presets() {
   static const std::vector<Preset> presets = {
       {"fast",
        "the fastest configuration measured at tolerance 1e-6: the hierarchical optimizer with "
-       "fixed coarse targets, looser coarse levels, and CG instead of a factorization on the "
-       "input mesh's level (docs/results.md, issue 23)",
+       "the adaptive solver expecting 4 global steps per level (from the up-sampled start), so "
+       "that CHOLMOD's analysis picks warm-started CG where factoring costs more than that and "
+       "Cholesky elsewhere (paper Section 5.2; docs/results.md, issue 23)",
        {{"optimizer.type", "\"hierarchical\""}},
-       {{"optimizer.update_constraints", "false"},
-        {"optimizer.coarse_tolerance", "1e-5"},
-        {"solver.level_0.type", "\"cg\""}}},
+       {{"solver.type", "\"adaptive\""}, {"solver.expected_solves", "4"}}},
       {"hierarchical",
        "the paper's plain hierarchical method (Algorithm 2 with the default options)",
        {{"optimizer.type", "\"hierarchical\""}},
@@ -59,15 +58,35 @@ std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
     throw ConfigError(fmt::format("unknown preset '{}'; valid presets: {}", name,
                                   fmt::join(names, ", ")));
   }
-  for (const auto& [key, value] : preset->settings) {
-    if (!Sets(config, key)) config.Set(key, value);
-  }
+  // The type the preset gives table `table` ("" if none), as a TOML literal.
+  const auto preset_type = [&](std::string_view table) {
+    for (const auto* list : {&preset->settings, &preset->hierarchical_settings}) {
+      for (const auto& [key, value] : *list) {
+        if (key == fmt::format("{}.type", table)) return value;
+      }
+    }
+    return std::string();
+  };
+  const auto apply = [&](const std::vector<std::pair<std::string, std::string>>& settings) {
+    for (const auto& [key, value] : settings) {
+      if (Sets(config, key)) continue;
+      // An option of a table whose type the preset chose applies only to that type: another
+      // type chosen by the user would reject it.
+      const std::string table = key.substr(0, key.rfind('.'));
+      const std::string type = preset_type(table);
+      if (!type.empty() && key != table + ".type" &&
+          fmt::format("\"{}\"", config.Child(table).Get("type", std::string(), "which "
+                                                          "piece to use")) != type) {
+        continue;
+      }
+      config.Set(key, value);
+    }
+  };
+  apply(preset->settings);
   const ConfigNode optimizer = config.Child("optimizer");
   if (optimizer.Has("type") &&
       optimizer.Get("type", std::string(), "which optimizer to use") == "hierarchical") {
-    for (const auto& [key, value] : preset->hierarchical_settings) {
-      if (!Sets(config, key)) config.Set(key, value);
-    }
+    apply(preset->hierarchical_settings);
   }
   return name;
 }

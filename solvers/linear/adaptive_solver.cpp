@@ -79,6 +79,7 @@ double AdaptiveSolver::DefaultBudgetBytes() {
 
 void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
   chosen_ = nullptr;
+  switched_ = false;
   decision_ = Decision{};
   decision_.direct = options_.choose != Choice::kIterative;
   if (options_.choose == Choice::kAuto && a.rows() > 0) {
@@ -99,6 +100,12 @@ void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
     decision_.direct = estimate.factor_bytes <= decision_.budget_bytes &&
                        decision_.direct_flops <= decision_.iterative_flops;
   }
+  iterated_flops_ = 0.0;
+  // Iterating because it looked cheaper (not because the factor does not fit): if the matrix
+  // then serves more solves than expected, factor once the iterations have cost as much as the
+  // factorization (below, in Solve()).
+  may_switch_ = decision_.estimated && !decision_.direct &&
+                decision_.estimate.factor_bytes <= decision_.budget_bytes;
   if (decision_.direct) {
     if (!direct_ || options_.choose != Choice::kAuto) {
       direct_ = std::make_unique<CholmodSolver>(options_.direct);
@@ -107,7 +114,7 @@ void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
     iterative_.reset();
     chosen_ = direct_.get();
   } else {
-    direct_.reset();  // frees the analysis
+    if (!may_switch_) direct_.reset();  // frees the analysis; else kept for the switch
     if (!iterative_) iterative_ = std::make_unique<ConjugateGradientSolver>(options_.iterative);
     chosen_ = iterative_.get();
   }
@@ -123,7 +130,25 @@ void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
 SolveSummary AdaptiveSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
                                    Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   HARAP_CHECK(chosen_ != nullptr, "Solve() needs a successful Factorize() first");
-  return chosen_->Solve(b, x, context);
+  if (may_switch_ && iterated_flops_ >= decision_.estimate.flops) {
+    // The iterations have now cost as much arithmetic as the factorization: the matrix serves
+    // more solves than expected_solves said, so factor (with the kept analysis) and solve
+    // directly from here on. Like renting until the rent paid equals the price, this costs at
+    // most about twice what the better choice made in hindsight would have (ski rental).
+    may_switch_ = false;
+    direct_->Factorize(iterative_->matrix(), context);
+    chosen_ = direct_.get();
+    iterative_.reset();
+    switched_ = true;
+    if (on_choice_) on_choice_(chosen(), false);  // the level's solves were not all direct
+  }
+  const SolveSummary summary = chosen_->Solve(b, x, context);
+  if (chosen_ == iterative_.get()) {
+    const double n = static_cast<double>(b.rows());
+    const double nnz = static_cast<double>(iterative_->matrix().nonZeros());
+    iterated_flops_ += summary.iterations * static_cast<double>(b.cols()) * (2.0 * nnz + 12.0 * n);
+  }
+  return summary;
 }
 
 bool AdaptiveSolver::is_direct() const { return chosen_ != nullptr && chosen_->is_direct(); }
@@ -151,7 +176,8 @@ LinearSolver::RefactorSummary AdaptiveSolver::Refactor(const SparseMatrix& a,
 
 std::string_view AdaptiveSolver::chosen() const {
   if (chosen_ == nullptr) return {};
-  return chosen_ == direct_.get() ? CholmodSolver::kName : ConjugateGradientSolver::kName;
+  if (chosen_ != direct_.get()) return ConjugateGradientSolver::kName;
+  return switched_ ? "cg>cholmod" : CholmodSolver::kName;
 }
 
 }  // namespace harap

@@ -33,8 +33,14 @@ namespace harap {
 /// the choice is the same on every machine. choose = "direct" or "iterative" fixes the choice
 /// (per level through the factory's `[solver.level_<l>]` tables).
 ///
+/// When it iterates by the arithmetic rule (not for memory) and the matrix then serves more
+/// solves than expected, it factors after all — before the solve at which the CG iterations
+/// so far have cost flops(L) — and solves directly from then on (chosen() = "cg>cholmod"): at
+/// most about twice the arithmetic of the better choice in hindsight (the ski-rental argument),
+/// however wrong expected_solves was.
+///
 /// The direct solver is "cholmod" with the options of the `direct` table, the iterative one
-/// "cg" with those of the `iterative` table. chosen() names the one the last Factorize() used.
+/// "cg" with those of the `iterative` table. chosen() names the one in use.
 /// Compiled only with CHOLMOD (HARAP_HAVE_CHOLMOD).
 class AdaptiveSolver final : public LinearSolver {
  public:
@@ -79,7 +85,7 @@ class AdaptiveSolver final : public LinearSolver {
   RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                            const Context& context) override;
 
-  /// "cholmod" or "cg" after a Factorize(), "" before.
+  /// "cholmod", "cg" or "cg>cholmod" (switched) after a Factorize(), "" before.
   std::string_view chosen() const;
   const Decision& decision() const { return decision_; }
   const Options& options() const { return options_; }
@@ -100,6 +106,9 @@ class AdaptiveSolver final : public LinearSolver {
   std::unique_ptr<ConjugateGradientSolver> iterative_;
   LinearSolver* chosen_ = nullptr;
   Decision decision_;
+  bool may_switch_ = false;
+  bool switched_ = false;
+  double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
   std::function<void(std::string_view, bool)> on_choice_;
 };
 

@@ -426,16 +426,17 @@ struct CholmodSolver::Impl {
   void FreeAnalysis() {
     if (analysis) cholmod_free_factor(&analysis, &common);
     analysis = nullptr;
+    analysis_matrix = SparseMatrix();
   }
 
   // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
   // for this very matrix (same arrays and size), else a new one.
   cholmod_factor* TakeOrMakeAnalysis(cholmod_sparse& view, const SparseMatrix& a) {
-    if (analysis != nullptr && analysis_of.p == a.outerIndexPtr() &&
-        analysis_of.i == a.innerIndexPtr() && analysis_of.rows == a.rows() &&
-        analysis_of.nnz == a.nonZeros()) {
+    if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
+        a.isCompressed() && SamePattern(analysis_matrix, a)) {
       cholmod_factor* kept = analysis;
       analysis = nullptr;
+      analysis_matrix = SparseMatrix();
       common.lnz = analysis_of.lnz;  // restored: other CHOLMOD calls may have changed them
       common.fl = analysis_of.fl;
       info.analysis_seconds = analysis_of.seconds;
@@ -653,9 +654,8 @@ struct CholmodSolver::Impl {
   cholmod_factor* symbolic = nullptr;
   // Analyze()'s analysis, until the Factorize() of the same matrix takes it.
   cholmod_factor* analysis = nullptr;
+  SparseMatrix analysis_matrix;  // its pattern (values not kept)
   struct {
-    const int* p = nullptr;
-    const int* i = nullptr;
     Eigen::Index rows = 0;
     Eigen::Index nnz = 0;
     double lnz = 0.0, fl = 0.0, seconds = 0.0;
@@ -838,8 +838,11 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
                           (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) *
                               sizeof(int) +
                           static_cast<double>(a.rows()) * 4 * sizeof(int);
-  impl.analysis_of = {a.outerIndexPtr(), a.innerIndexPtr(), a.rows(), a.nonZeros(),
-                      impl.common.lnz,   impl.common.fl,    estimate.analysis_seconds};
+  impl.analysis_of = {a.rows(), a.nonZeros(), impl.common.lnz, impl.common.fl,
+                      estimate.analysis_seconds};
+  // The pattern, to recognize the matrix (or a copy of it) in Factorize().
+  impl.analysis_matrix = a;
+  impl.analysis_matrix.makeCompressed();
   return estimate;
 }
 

@@ -110,8 +110,9 @@ class CholmodSolver final : public LinearSolver {
     double factor_bytes = 0.0;  ///< Memory of the numeric factor (values and row indices).
     double analysis_seconds = 0.0;
   };
-  /// Analyses `a` (same contract as Factorize()) and keeps the analysis: a Factorize() of the
-  /// same matrix right after reuses it instead of ordering `a` again. Lets a caller decide
+  /// Analyses `a` (same contract as Factorize()) and keeps the analysis (and a copy of the
+  /// pattern): the next Factorize() of a matrix with the same pattern reuses it instead of
+  /// ordering again. Lets a caller decide
   /// whether to factor at all (AdaptiveSolver) for the price of the analysis alone.
   Estimate Analyze(const SparseMatrix& a);
 

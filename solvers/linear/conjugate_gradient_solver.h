@@ -56,6 +56,8 @@ class ConjugateGradientSolver final : public LinearSolver {
   bool is_direct() const override { return false; }
 
   const Options& options() const { return options_; }
+  /// The matrix of the last Factorize() (a compressed copy).
+  const SparseMatrix& matrix() const { return a_; }
 
  private:
   template <int K>

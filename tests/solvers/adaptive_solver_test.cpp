@@ -2,6 +2,9 @@
 // AdaptiveSolver: factor or iterate, chosen from CHOLMOD's analysis before factoring.
 #include <catch2/catch.hpp>
 
+#include <string>
+#include <vector>
+
 #include "framework/context.h"
 #include "framework/error.h"
 #include "tests/solvers/solver_test_matrices.h"
@@ -94,6 +97,35 @@ TEST_CASE("adaptive: iterates when the factor exceeds the memory budget or costs
   direct.Factorize(a, context);
   CHECK(direct.chosen() == "cholmod");
   CHECK_FALSE(direct.decision().estimated);
+}
+
+TEST_CASE("adaptive: factors after all once the iterations cost as much as the factorization",
+          "[solvers][adaptive]") {
+  const Context context;
+  const SparseMatrix a = PinnedGridLaplacian(40, 40, 8);
+  const Eigen::MatrixXd b = RightHandSide(a.rows());
+  // Expecting almost no solves, it iterates; 20 CG iterations on 1600 unknowns cost more than
+  // the factorization of a 40×40 grid, so the second solve is direct.
+  AdaptiveSolver adaptive(Parse("expected_solves = 1e-3"));
+  std::vector<std::string> reported;
+  adaptive.set_on_choice([&](std::string_view name, bool) { reported.emplace_back(name); });
+  adaptive.Factorize(a, context);
+  REQUIRE(adaptive.chosen() == "cg");
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+  const SolveSummary first = adaptive.Solve(b, x, context);
+  CHECK(first.iterations == 20);
+  CHECK(20.0 * 3 * (2.0 * a.nonZeros() + 12.0 * a.rows()) >= adaptive.decision().estimate.flops);
+  const SolveSummary second = adaptive.Solve(b, x, context);
+  CHECK(second.iterations == 0);
+  CHECK(adaptive.chosen() == "cg>cholmod");
+  CHECK(adaptive.is_direct());
+  CHECK(reported == std::vector<std::string>{"cg", "cg>cholmod"});
+  CHECK((Eigen::MatrixXd(a) * x - b).norm() <= 1e-10 * b.norm());
+  // Iterating because the factor does not fit never switches.
+  AdaptiveSolver no_room(Parse("max_factor_megabytes = 1e-3"));
+  no_room.Factorize(a, context);
+  for (int k = 0; k < 3; ++k) CHECK(no_room.Solve(b, x, context).iterations > 0);
+  CHECK(no_room.chosen() == "cg");
 }
 
 TEST_CASE("adaptive: a refactorization keeps the direct choice", "[solvers][adaptive]") {
