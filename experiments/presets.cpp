@@ -22,6 +22,18 @@ bool Sets(const ConfigNode& config, std::string_view dotted_key) {
   }
 }
 
+// The table at a dotted path (empty if absent).
+ConfigNode TableAt(const ConfigNode& config, std::string_view dotted_path) {
+  ConfigNode node = config;
+  while (!dotted_path.empty()) {
+    const size_t dot = dotted_path.find('.');
+    node = node.Child(dotted_path.substr(0, dot));
+    if (dot == std::string_view::npos) break;
+    dotted_path.remove_prefix(dot + 1);
+  }
+  return node;
+}
+
 }  // namespace
 
 const std::vector<Preset>& Presets() {
@@ -29,11 +41,12 @@ const std::vector<Preset>& Presets() {
   static const std::vector<Preset> presets = {
       {"fast",
        "the fastest configuration measured at tolerance 1e-6: the hierarchical optimizer with "
-       "the adaptive solver expecting 4 global steps per level (from the up-sampled start), so "
-       "that CHOLMOD's analysis picks warm-started CG where factoring costs more than that and "
-       "Cholesky elsewhere (paper Section 5.2; docs/results.md, issue 23)",
+       "the adaptive solver on the input mesh's level, expecting 4 global steps there (from the "
+       "up-sampled start), so that CHOLMOD's analysis picks warm-started CG where factoring "
+       "costs more than that; Cholesky on the coarse levels, whose solutions must be accurate "
+       "(paper Section 5.2; docs/results.md, issue 23)",
        {{"optimizer.type", "\"hierarchical\""}},
-       {{"solver.type", "\"adaptive\""}, {"solver.expected_solves", "4"}}},
+       {{"solver.level_0.type", "\"adaptive\""}, {"solver.level_0.expected_solves", "4"}}},
       {"hierarchical",
        "the paper's plain hierarchical method (Algorithm 2 with the default options)",
        {{"optimizer.type", "\"hierarchical\""}},
@@ -75,8 +88,8 @@ std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
       const std::string table = key.substr(0, key.rfind('.'));
       const std::string type = preset_type(table);
       if (!type.empty() && key != table + ".type" &&
-          fmt::format("\"{}\"", config.Child(table).Get("type", std::string(), "which "
-                                                          "piece to use")) != type) {
+          fmt::format("\"{}\"", TableAt(config, table).Get("type", std::string(),
+                                                             "which piece to use")) != type) {
         continue;
       }
       config.Set(key, value);
