@@ -36,7 +36,9 @@ foreach(module framework energies solvers hierarchies experiments)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${module} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/harap
           FILES_MATCHING PATTERN "*.h"
           PATTERN "benchmarks" EXCLUDE PATTERN "configs" EXCLUDE PATTERN "scripts" EXCLUDE
-          PATTERN "scenarios" EXCLUDE)
+          PATTERN "scenarios" EXCLUDE
+          # Internal: exposes toml++, which the installed interface does not.
+          PATTERN "toml_reading.h" EXCLUDE)
 endforeach()
 
 set(harap_config_dir ${CMAKE_INSTALL_LIBDIR}/cmake/harap)

@@ -76,15 +76,6 @@ void RequireSupportedMesh(const Mesh& mesh) {
 
 }  // namespace
 
-ElementArapEnergy::Options ElementArapEnergy::Options::FromConfig(const ConfigNode& node) {
-  node.RejectUnknownKeys();
-  return Options{};
-}
-
-std::unique_ptr<Energy> ElementArapEnergy::Create(const ConfigNode& node) {
-  return std::make_unique<ElementArapEnergy>(Options::FromConfig(node));
-}
-
 void ElementArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context& context) {
   RequireSupportedMesh(rest);
   context.Run([&] {

@@ -33,15 +33,11 @@ class ElementArapEnergy final : public CoupledQuadraticEnergy {
  public:
   static constexpr std::string_view kName = "elements";
 
-  struct Options {
-    // No options: the weights are fixed by the definition (the struct keeps the shape every
-    // implementation shares; FromConfig rejects unknown keys).
-    static Options FromConfig(const ConfigNode& node);
-  };
+  /// No options: the weights are fixed by the definition.
+  using Options = NoOptions;
 
-  explicit ElementArapEnergy(const Options& options)
-      : CoupledQuadraticEnergy(RotationSite::kElement), options_(options) {}
-  static std::unique_ptr<Energy> Create(const ConfigNode& node);
+  explicit ElementArapEnergy(const Options& /*options*/)
+      : CoupledQuadraticEnergy(RotationSite::kElement) {}
 
   void PrecomputeCoupledForm(const Mesh& rest, const Context& context) override;
 
@@ -59,7 +55,6 @@ class ElementArapEnergy final : public CoupledQuadraticEnergy {
   template <int K>
   void Assemble(const Mesh& rest, const Eigen::MatrixXd& edge_weights);
 
-  Options options_;
   Index num_degenerate_ = 0;
   Positions rest_vertices_;      ///< for the deformation gradients of AuxiliaryMeasures()
   std::vector<double> measure_;  ///< rest volume (area) per element, 0 if degenerate

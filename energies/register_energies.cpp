@@ -9,23 +9,19 @@
 namespace harap {
 
 void RegisterEnergies(Registry<Energy>& registry) {
-  registry.Add(std::string(SpokesAndRimsEnergy::kName),
-               "spokes-and-rims ARAP, one rotation per vertex over all edges of its incident "
-               "faces [Chao et al. 2010] (the paper's Eq. 1)",
-               &SpokesAndRimsEnergy::Create);
-  registry.Add(std::string(SpokesEnergy::kName),
-               "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
-               "½(cot α + cot β) [Sorkine & Alexa 2007]",
-               &SpokesEnergy::Create);
-  registry.Add(std::string(ElementArapEnergy::kName),
-               "per-element ARAP, one rotation per tetrahedron or per triangle of a planar mesh, "
-               "cotangent weights (the paper's Eqs. 8, 9); reports energy_wrapd = E/2",
-               &ElementArapEnergy::Create);
-  registry.Add(std::string(SmoothArapEnergy::kName),
-               "smooth ARAP: (1−λ)·spokes_and_rims + rigidly rotated Laplacian vectors (weight "
-               "λ), a bi-Laplacian blend without spikes at handles [Oehri et al. 2025] (the "
-               "paper's Fig. 10)",
-               &SmoothArapEnergy::Create);
+  registry.Add<SpokesAndRimsEnergy>(
+      "spokes-and-rims ARAP, one rotation per vertex over all edges of its incident "
+      "faces [Chao et al. 2010] (the paper's Eq. 1)");
+  registry.Add<SpokesEnergy>(
+      "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
+      "½(cot α + cot β) [Sorkine & Alexa 2007]");
+  registry.Add<ElementArapEnergy>(
+      "per-element ARAP, one rotation per tetrahedron or per triangle of a planar mesh, "
+      "cotangent weights (the paper's Eqs. 8, 9); reports energy_wrapd = E/2");
+  registry.Add<SmoothArapEnergy>(
+      "smooth ARAP: (1−λ)·spokes_and_rims + rigidly rotated Laplacian vectors (weight "
+      "λ), a bi-Laplacian blend without spikes at handles [Oehri et al. 2025] (the "
+      "paper's Fig. 10)");
 }
 
 }  // namespace harap

@@ -115,33 +115,32 @@ double MeanVertexArea(const Eigen::VectorXd& areas) {
   return with_area > 0 ? total / with_area : 0.0;
 }
 
+constexpr EnumNames<SmoothArapEnergy::RotationFit, 2> kRotationFitNames = {{
+    {SmoothArapEnergy::RotationFit::kWholeEnergy, "energy"},
+    {SmoothArapEnergy::RotationFit::kSpokesAndRims, "spokes_and_rims"},
+}};
+// normalize_mass_on_input: true = "input", false = "level".
+constexpr EnumNames<bool, 2> kMassNormalizationNames = {{{true, "input"}, {false, "level"}}};
+
 }  // namespace
 
 SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode& node) {
   Options options;
   options.lambda = node.Get("lambda", options.lambda,
-                            "weight of the Laplacian (smoothness) term, in [0, 1); 0 is "
-                            "spokes_and_rims exactly");
-  const std::string fit = node.GetChoice(
-      "rotation_fit", "energy", {"energy", "spokes_and_rims"},
+                            "weight of the Laplacian (smoothness) term; 0 is spokes_and_rims "
+                            "exactly",
+                            Range::HalfOpen(0.0, 1.0));
+  options.rotation_fit = node.GetEnum(
+      "rotation_fit", options.rotation_fit, kRotationFitNames,
       "local step: energy = minimize the whole energy per rotation (monotone); spokes_and_rims "
       "= fit to the spokes-and-rims part only, as the published code (may increase the energy)");
-  options.rotation_fit = fit == "energy" ? RotationFit::kWholeEnergy : RotationFit::kSpokesAndRims;
   options.normalize_mass_on_input =
-      node.GetChoice("mass_normalization", "input", {"input", "level"},
-                     "rescale the mass matrix to mean 1 over the input mesh (input: every "
-                     "hierarchy level approximates the same energy) or over each level's own mesh "
-                     "(level)") == "input";
+      node.GetEnum("mass_normalization", options.normalize_mass_on_input, kMassNormalizationNames,
+                   "rescale the mass matrix to mean 1 over the input mesh (input: every "
+                   "hierarchy level approximates the same energy) or over each level's own mesh "
+                   "(level)");
   node.RejectUnknownKeys();
-  if (!(options.lambda >= 0.0 && options.lambda < 1.0)) {
-    throw ConfigError(
-        fmt::format("{}: lambda must be in [0, 1), got {}", node.Where("lambda"), options.lambda));
-  }
   return options;
-}
-
-std::unique_ptr<Energy> SmoothArapEnergy::Create(const ConfigNode& node) {
-  return std::make_unique<SmoothArapEnergy>(Options::FromConfig(node));
 }
 
 void SmoothArapEnergy::SetInputMesh(const Mesh& input, const Context& context) {

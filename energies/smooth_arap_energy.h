@@ -60,7 +60,6 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
 
   explicit SmoothArapEnergy(const Options& options)
       : CotangentArapEnergy(kName), options_(options) {}
-  static std::unique_ptr<Energy> Create(const ConfigNode& node);
 
   void SetInputMesh(const Mesh& input, const Context& context) override;
 

@@ -21,20 +21,14 @@ class SpokesAndRimsEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes_and_rims";
 
-  struct Options {
-    // No options yet: the weights are fixed by the definition. The struct keeps the shape every
-    // implementation shares (FromConfig rejects unknown keys).
-    static Options FromConfig(const ConfigNode& node);
-  };
+  /// No options: the weights are fixed by the definition.
+  using Options = NoOptions;
 
-  explicit SpokesAndRimsEnergy(const Options& options) : CotangentArapEnergy(kName), options_(options) {}
-  static std::unique_ptr<Energy> Create(const ConfigNode& node);
+  explicit SpokesAndRimsEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                double& constant) const override;
-
-  Options options_;
 };
 
 }  // namespace harap

@@ -3,15 +3,6 @@
 
 namespace harap {
 
-SpokesEnergy::Options SpokesEnergy::Options::FromConfig(const ConfigNode& node) {
-  node.RejectUnknownKeys();
-  return Options{};
-}
-
-std::unique_ptr<Energy> SpokesEnergy::Create(const ConfigNode& node) {
-  return std::make_unique<SpokesEnergy>(Options::FromConfig(node));
-}
-
 void SpokesEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                            double& constant) const {
   // Each face contributes ½cot of each corner to the weight w_bc of the opposite edge; the edge

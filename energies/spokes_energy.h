@@ -20,18 +20,13 @@ class SpokesEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes";
 
-  struct Options {
-    static Options FromConfig(const ConfigNode& node);
-  };
+  using Options = NoOptions;
 
-  explicit SpokesEnergy(const Options& options) : CotangentArapEnergy(kName), options_(options) {}
-  static std::unique_ptr<Energy> Create(const ConfigNode& node);
+  explicit SpokesEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                double& constant) const override;
-
-  Options options_;
 };
 
 }  // namespace harap

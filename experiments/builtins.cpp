@@ -11,7 +11,8 @@ namespace harap {
 
 Registries MakeBuiltinRegistries() {
   Registries registries;
-  RegisterOptimizers(registries.optimizers);
+  RegisterLevelSolvers(registries.level_solvers);
+  RegisterOptimizers(registries.optimizers, registries.level_solvers);
   RegisterEnergies(registries.energies);
   RegisterLinearSolvers(registries.linear_solvers);
   RegisterHierarchies(registries.hierarchies);

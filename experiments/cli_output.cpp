@@ -137,6 +137,20 @@ void ListRegistry(const Registry<Interface>& registry) {
   fmt::print("\n");
 }
 
+// Level solvers are chosen by `optimizer.inner` and read their options from the [optimizer] table.
+void ListLevelSolvers(const Registry<LevelSolver>& registry) {
+  fmt::print("inner:\n  (level solvers, chosen by optimizer.inner of hierarchical; their options go in "
+             "the [optimizer] table)\n");
+  for (const auto& name : registry.Names()) {
+    fmt::print("  {:<20} {}\n", name, registry.Description(name));
+    for (const auto& option : registry.DescribeOptions(name)) {
+      fmt::print("      optimizer.{} = {}\n          {}\n", option.key, option.default_value,
+                 option.help);
+    }
+  }
+  fmt::print("\n");
+}
+
 void ListSmallSystems() {
   fmt::print("solver.small_systems (optional table: a second solver for small reduced systems):\n");
   for (const auto& option : DescribeSmallSystemsOptions()) {
@@ -183,6 +197,8 @@ int ListPieces(const std::string& requested) {
        }},
       {{"hierarchies", "hierarchy"}, [&] { ListRegistry(registries.hierarchies); }},
       {{"upsamplers", "upsampler"}, [&] { ListRegistry(registries.upsamplers); }},
+      {{"level_solvers", "level_solver", "inner"},
+       [&] { ListLevelSolvers(registries.level_solvers); }},
       {{"mesh"}, ListMeshOptions},
       {{"builtins", "builtin", "meshes"}, ListBuiltinMeshes},
   };

@@ -24,11 +24,8 @@ constexpr std::string_view kSmallSystems = "small_systems";
 Index SmallSystemsLimit(const ConfigNode& table) {
   const int limit = table.Get("max_unknowns", 0,
                               "reduced systems with at most this many unknowns (free vertices) "
-                              "use this table's solver, larger ones [solver]'s; 0: none");
-  if (limit < 0) {
-    throw ConfigError(fmt::format("{}: max_unknowns must be >= 0, got {}",
-                                  table.Where("max_unknowns"), limit));
-  }
+                              "use this table's solver, larger ones [solver]'s; 0: none",
+                              Range::AtLeast(0));
   return limit;
 }
 
@@ -176,6 +173,31 @@ std::vector<OptionInfo> DescribeSmallSystemsOptions() {
            "the solver for the small systems (its own options go in the same table)");
   return node.Options();
 }
+
+DefaultComponents DefaultComponentsFor(const Registries& registries, const Mesh& mesh) {
+  DefaultComponents defaults;
+  if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
+  if (mesh.kind() == ElementKind::kTetrahedron || mesh.planar) defaults.energy = "elements";
+  return defaults;
+}
+
+namespace {
+
+// Validates `config` before anything reads it (the first member initializer).
+DefaultComponents ValidatedDefaults(const Registries& registries, const ConfigNode& config,
+                                    const Mesh& mesh) {
+  ValidateRunConfig(config);
+  return DefaultComponentsFor(registries, mesh);
+}
+
+}  // namespace
+
+ResolvedRunConfig::ResolvedRunConfig(const Registries& registries, const ConfigNode& config,
+                                     const Mesh& mesh)
+    : defaults(ValidatedDefaults(registries, config, mesh)),
+      optimizer_name(TypeOf(config.Child("optimizer"), defaults.optimizer, "optimizer")),
+      optimizer(registries.optimizers.Create(optimizer_name, config.Child("optimizer"))),
+      factory(registries, config, defaults) {}
 
 void ValidateRunConfig(const ConfigNode& root) {
   for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler", "mesh"}) {

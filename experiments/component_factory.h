@@ -88,6 +88,23 @@ class RegistryComponentFactory final : public ComponentFactory {
   mutable std::atomic<bool> made_upsampler_{false};
 };
 
+/// The defaults of a run on `mesh`: eigen_ldlt when CHOLMOD is not built; the per-element
+/// energy for tetrahedral and planar meshes (FORMAT.md: "Its energy is the per-tetrahedron ARAP
+/// energy"), which the surface energies would refuse.
+DefaultComponents DefaultComponentsFor(const Registries& registries, const Mesh& mesh);
+
+/// A run config resolved once for one mesh: validated (ValidateRunConfig), the defaults that
+/// suit the mesh, the optimizer created and named, and the factory of the other pieces (whose
+/// constructor validates their tables). Every error in the config surfaces here, before work.
+struct ResolvedRunConfig {
+  ResolvedRunConfig(const Registries& registries, const ConfigNode& config, const Mesh& mesh);
+
+  DefaultComponents defaults;
+  std::string optimizer_name;  ///< `[optimizer] type`, or the default.
+  std::unique_ptr<Optimizer> optimizer;
+  RegistryComponentFactory factory;
+};
+
 /// Creates the optimizer named by the `[optimizer]` table.
 std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const ConfigNode& root,
                                          const DefaultComponents& defaults = {});

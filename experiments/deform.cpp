@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <nlohmann/json.hpp>
+#include <cmath>
 #include <memory>
 #include <thread>
 
@@ -22,20 +23,12 @@ long long PeakMemoryBytes() {
 
 DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
                         const ConfigNode& config, const DeformOptions& options) {
-  ValidateRunConfig(config);
+  const ResolvedRunConfig run(registries, config, scenario.mesh);
   const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config.Child("mesh"));
-  DefaultComponents defaults;
-  if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
-  // Tetrahedral and planar meshes have the per-element energy (FORMAT.md: "Its energy is the
-  // per-tetrahedron ARAP energy"); the surface energies would refuse them.
-  if (scenario.mesh.kind() == ElementKind::kTetrahedron || scenario.mesh.planar) {
-    defaults.energy = "elements";
-  }
-  auto optimizer = MakeOptimizer(registries, config, defaults);
-  RegistryComponentFactory factory(registries, config, defaults);
+  const RegistryComponentFactory& factory = run.factory;
 
   DeformOutcome outcome;
-  outcome.optimizer = config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
+  outcome.optimizer = run.optimizer_name;
   outcome.energy_type = factory.energy_name();
   outcome.solver = factory.solver_name();
   outcome.threads = options.threads > 0 ? options.threads
@@ -84,7 +77,7 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
 
   context.run_clock.Restart();
   outcome.result =
-      context.Run([&] { return optimizer->Optimize(prepared.problem(), factory, context); });
+      context.Run([&] { return run.optimizer->Optimize(prepared.problem(), factory, context); });
   outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
   for (const LevelResult& level : outcome.result.levels) {
     // What the level's solver was, and for "adaptive" what it chose.
@@ -222,13 +215,10 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                                                  ? json(solves.last_relative_residual)
                                                  : json(nullptr)},
                   {"solve_seconds", solves.seconds}};
-    if (level.inverted_elements >= 0) entry["inverted_elements"] = level.inverted_elements;
-    if (level.accelerated_iterations >= 0) {
-      entry["accelerated_iterations"] = level.accelerated_iterations;
-    }
-    if (level.newton_steps >= 0) {
-      entry["newton_steps"] = level.newton_steps;
-      entry["hessian_products"] = level.hessian_products;
+    // The level solver's own measures (inverted_elements, newton_steps, ...); counts as integers.
+    for (const auto& [name, value] : level.measures) {
+      const bool count = value == std::floor(value) && std::abs(value) < 9.0e15;
+      entry[name] = count ? json(static_cast<long long>(value)) : json(value);
     }
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       auto describe = [](const ExtremeEigenvalues& e) {

@@ -2,7 +2,6 @@
 #include "experiments/drag.h"
 
 #include <fmt/format.h>
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -13,7 +12,7 @@
 #include "experiments/component_factory.h"
 #include "experiments/session.h"
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 
 namespace harap {
 
@@ -53,119 +52,6 @@ HandleMotion FitMotion(const Mesh& mesh, const ScenarioHandle& handle) {
 }
 
 }  // namespace
-
-std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh) {
-  toml::table root;
-  try {
-    root = toml::parse_file(file);
-  } catch (const toml::parse_error& error) {
-    throw ConfigError(fmt::format("{}: {}", file, error.description()));
-  }
-  const auto fail = [&](size_t entry, const std::string& message) {
-    throw ConfigError(fmt::format("{}: edit {}: {}", file, entry + 1, message));
-  };
-  for (const auto& [key, value] : root) {
-    if (key.str() != "edit") {
-      throw ConfigError(
-          fmt::format("{}: unknown key '{}' (expected [[edit]] entries)", file, key.str()));
-    }
-  }
-  const toml::array* entries = root["edit"].as_array();
-  if (!entries) throw ConfigError(fmt::format("{}: no [[edit]] entries", file));
-  // As scenarios select: vertices some element references, in their box.
-  std::vector<bool> referenced(mesh.num_vertices(), false);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < mesh.simplex_size(); ++a) referenced[mesh.elements(e, a)] = true;
-  }
-  const auto [box_min, box_max] = SelectionBox(mesh);
-  const Eigen::Vector3d lo = box_min, hi = box_max;  // used in lambdas below
-  const Eigen::Vector3d extent = hi - lo;
-  const double diagonal = BoundingBoxDiagonal(mesh);
-  const auto vector3 = [&](size_t entry, const toml::node* node, const char* what) {
-    const toml::array* array = node ? node->as_array() : nullptr;
-    if (!array || array->size() != 3) fail(entry, fmt::format("{} must be [x, y, z]", what));
-    Eigen::Vector3d v;
-    for (int d = 0; d < 3; ++d) {
-      const auto value = (*array)[d].value<double>();
-      if (!value) fail(entry, fmt::format("{} must hold numbers", what));
-      v[d] = *value;
-    }
-    return v;
-  };
-  std::vector<DragEdit> edits;
-  for (size_t k = 0; k < entries->size(); ++k) {
-    const toml::table* table = (*entries)[k].as_table();
-    if (!table) fail(k, "must be a table");
-    DragEdit edit;
-    const auto frame = (*table)["frame"].value<int64_t>();
-    if (!frame || *frame < 1) fail(k, "needs frame = N (>= 1)");
-    edit.frame = static_cast<int>(*frame);
-    for (const auto& [key, value] : *table) {
-      if (key.str() != "frame" && key.str() != "add" && key.str() != "remove") {
-        fail(k, fmt::format("unknown key '{}' (frame, add, remove)", key.str()));
-      }
-    }
-    if (table->contains("add") == table->contains("remove")) {
-      fail(k, "needs exactly one of add = {...} and remove = \"name\"");
-    }
-    if (const auto removed = (*table)["remove"].value<std::string>()) {
-      edit.add = false;
-      edit.name = *removed;
-      edits.push_back(edit);
-      continue;
-    }
-    const toml::table* add = (*table)["add"].as_table();
-    if (!add) fail(k, "add must be a table {name, select}");
-    const auto name = (*add)["name"].value<std::string>();
-    if (!name) fail(k, "add needs a name");
-    edit.name = *name;
-    const toml::table* select = (*add)["select"].as_table();
-    if (!select || select->size() != 1) {
-      fail(k, "add needs exactly one selection: select.ball, select.slab or select.indices");
-    }
-    if (const toml::table* ball = (*select)["ball"].as_table()) {
-      const Eigen::Vector3d center =
-          lo + vector3(k, ball->get("center"), "select.ball center").cwiseProduct(extent);
-      const auto radius = (*ball)["radius"].value<double>();
-      if (!radius || *radius <= 0.0) fail(k, "select.ball needs radius > 0");
-      for (Index v = 0; v < mesh.num_vertices(); ++v) {
-        if (referenced[v] &&
-            (mesh.vertices.row(v).transpose() - center).norm() <= *radius * diagonal) {
-          edit.vertices.push_back(v);
-        }
-      }
-    } else if (const toml::table* slab = (*select)["slab"].as_table()) {
-      const auto axis = (*slab)["axis"].value<std::string>();
-      const auto from = (*slab)["from"].value<double>();
-      const auto to = (*slab)["to"].value<double>();
-      if (!axis || (*axis != "x" && *axis != "y" && *axis != "z") || !from || !to) {
-        fail(k, "select.slab needs axis (\"x\", \"y\" or \"z\"), from and to");
-      }
-      const int d = (*axis)[0] - 'x';
-      for (Index v = 0; v < mesh.num_vertices(); ++v) {
-        const double f = extent[d] > 0.0 ? (mesh.vertices(v, d) - lo[d]) / extent[d] : 0.0;
-        if (referenced[v] && f >= *from && f <= *to) edit.vertices.push_back(v);
-      }
-    } else if (const toml::array* indices = (*select)["indices"].as_array()) {
-      for (const toml::node& index : *indices) {
-        const auto value = index.value<int64_t>();
-        if (!value || *value < 0 || *value >= mesh.num_vertices()) {
-          fail(k, fmt::format("select.indices must hold vertex indices 0..{}",
-                              mesh.num_vertices() - 1));
-        }
-        edit.vertices.push_back(static_cast<Index>(*value));
-      }
-      std::sort(edit.vertices.begin(), edit.vertices.end());
-      edit.vertices.erase(std::unique(edit.vertices.begin(), edit.vertices.end()),
-                          edit.vertices.end());
-    } else {
-      fail(k, "add needs select.ball, select.slab or select.indices");
-    }
-    if (edit.vertices.empty()) fail(k, "the selection matches no vertex");
-    edits.push_back(edit);
-  }
-  return edits;
-}
 
 Constraints FrameConstraints(const Scenario& scenario, double t) {
   std::vector<ScenarioHandle> handles = scenario.handles;
@@ -215,16 +101,10 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   };
 
   if (options.from_scratch) {
-    DefaultComponents defaults;
-    if (!registries.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
-    if (scenario.mesh.kind() == ElementKind::kTetrahedron || scenario.mesh.planar) {
-      defaults.energy = "elements";
-    }
-    ValidateRunConfig(config);
-    auto optimizer = MakeOptimizer(registries, config, defaults);
-    RegistryComponentFactory factory(registries, config, defaults);
-    outcome.optimizer =
-        config.Child("optimizer").Get("type", defaults.optimizer, "which optimizer");
+    const ResolvedRunConfig run(registries, config, scenario.mesh);
+    const auto& optimizer = run.optimizer;
+    const RegistryComponentFactory& factory = run.factory;
+    outcome.optimizer = run.optimizer_name;
     for (int frame = 1; frame <= options.frames; ++frame) {
       DeformationProblem problem;
       problem.mesh = &scenario.mesh;

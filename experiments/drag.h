@@ -25,15 +25,8 @@ namespace harap {
 ///
 /// Selections as in scenarios (select.ball, select.slab, select.indices; box fractions of the
 /// mesh's referenced vertices, ball radius in units of the box diagonal).
-struct DragEdit {
-  int frame = 0;
-  std::string name;
-  bool add = true;
-  std::vector<Index> vertices;  ///< add: the selected vertices (ascending)
-};
-
-/// Reads an edits file for `mesh`; ConfigError naming the file and entry for anything wrong.
-std::vector<DragEdit> LoadDragEdits(const std::string& file, const Mesh& mesh);
+/// A handle edit of `harap drag --edits FILE` (read by LoadHandleEdits, framework/io/scenario.h).
+using DragEdit = HandleEdit;
 
 /// `harap drag`: replays an interaction with a scenario's handles.
 struct DragOptions {

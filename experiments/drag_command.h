@@ -82,7 +82,7 @@ inline int RunDragCommand(const DragCommandArguments& a) {
   options.frame_start = SessionOptions::ParseFrameStart(a.frame_start);
   const Registries registries = MakeBuiltinRegistries();
   const Scenario scenario = LoadScenario(a.scenario);
-  if (!a.edits.empty()) options.edits = LoadDragEdits(a.edits, scenario.mesh);
+  if (!a.edits.empty()) options.edits = LoadHandleEdits(a.edits, scenario);
   const DragOutcome outcome = RunDrag(registries, scenario, config, options);
   if (!a.report.empty()) {
     std::ofstream file(a.report);

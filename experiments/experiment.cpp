@@ -31,6 +31,7 @@
 #include "framework/config.h"
 #include "framework/error.h"
 #include "framework/io/scenario.h"
+#include "framework/toml_reading.h"
 
 namespace harap {
 
@@ -40,59 +41,17 @@ namespace fs = std::filesystem;
 
 constexpr const char* kRunTables[] = {"optimizer", "energy", "solver", "hierarchy", "upsampler"};
 
-std::string Where(const std::string& source, const toml::source_region& region) {
-  if (region.begin.line == 0) return source;
-  return fmt::format("{}:{}:{}", source, region.begin.line, region.begin.column);
-}
-
 class ExperimentParser {
  public:
   ExperimentParser(std::string source, fs::path base)
-      : source_(std::move(source)), base_(std::move(base)) {}
+      : source_(source), toml_(std::move(source)), base_(std::move(base)) {}
 
-  [[noreturn]] void Fail(const toml::node& node, std::string_view problem) const {
-    throw ConfigError(fmt::format("{}: {}", Where(source_, node.source()), problem));
+  // The toolkit's errors, positioned in this config.
+  template <class Where>
+  [[noreturn]] void Fail(const Where& where, std::string_view problem) const {
+    toml_.Fail(where, problem);
   }
-  [[noreturn]] void Fail(std::string_view problem) const {
-    throw ConfigError(fmt::format("{}: {}", source_, problem));
-  }
-
-  void CheckKeys(const toml::table& table, std::initializer_list<std::string_view> valid,
-                 std::string_view what) const {
-    for (const auto& [key, value] : table) {
-      if (std::find(valid.begin(), valid.end(), key.str()) != valid.end()) continue;
-      throw ConfigError(fmt::format("{}: unknown key '{}' in {}; valid keys: {}",
-                                    Where(source_, key.source()), key.str(), what,
-                                    fmt::join(valid, ", ")));
-    }
-  }
-
-  std::string String(const toml::table& table, std::string_view key, std::string fallback) const {
-    const toml::node* node = table.get(key);
-    if (!node) return fallback;
-    if (!node->is_string()) Fail(*node, fmt::format("'{}' must be a string", key));
-    return node->as_string()->get();
-  }
-
-  double Number(const toml::node& node, std::string_view what) const {
-    if (const auto* integer = node.as_integer()) return static_cast<double>(integer->get());
-    if (const auto* floating = node.as_floating_point()) return floating->get();
-    Fail(node, fmt::format("{} must be a number", what));
-  }
-
-  std::vector<std::string> Strings(const toml::table& table, std::string_view key) const {
-    std::vector<std::string> values;
-    const toml::node* node = table.get(key);
-    if (!node) return values;
-    if (node->is_string()) return {node->as_string()->get()};
-    const toml::array* array = node->as_array();
-    if (!array) Fail(*node, fmt::format("'{}' must be a string or an array of strings", key));
-    for (const toml::node& entry : *array) {
-      if (!entry.is_string()) Fail(entry, fmt::format("'{}' must hold strings", key));
-      values.push_back(entry.as_string()->get());
-    }
-    return values;
-  }
+  [[noreturn]] void Fail(std::string_view problem) const { toml_.Fail(source_, problem); }
 
   fs::path Resolve(const std::string& path) const {
     fs::path p(path);
@@ -114,7 +73,7 @@ class ExperimentParser {
 
   void ParseScenarioFiles(const toml::table& scenarios) {
     const toml::node* files_node = scenarios.get("files");
-    for (const std::string& pattern : Strings(scenarios, "files")) {
+    for (const std::string& pattern : toml_.Strings(scenarios, "files")) {
       const fs::path resolved = Resolve(pattern);
       std::vector<fs::path> matches;
       if (pattern.find_first_of("*?[") == std::string::npos) {
@@ -150,10 +109,10 @@ class ExperimentParser {
     if (!node) return handles;
     const toml::table* table = node->as_table();
     if (!table) Fail(*node, "'template' must be a table");
-    CheckKeys(*table, {"axis", "fixed", "moved", "degrees", "bend_axis", "translate"},
+    toml_.CheckKeys(*table, {"axis", "fixed", "moved", "degrees", "bend_axis", "translate"},
               "a handle template");
     auto axis = [&](std::string_view key, std::string fallback, const char* extra) {
-      const std::string value = String(*table, key, fallback);
+      const std::string value = toml_.String(*table, key, fallback);
       if (value != "x" && value != "y" && value != "z" && value != extra) {
         Fail(*table->get(key), fmt::format("'{}' must be \"x\", \"y\", \"z\" or \"{}\"", key,
                                            extra));
@@ -165,7 +124,7 @@ class ExperimentParser {
     auto fraction = [&](std::string_view key, double fallback) {
       const toml::node* value = table->get(key);
       if (!value) return fallback;
-      const double f = Number(*value, key);
+      const double f = toml_.Number(*value, key);
       if (f <= 0.0 || f >= 1.0) Fail(*value, fmt::format("'{}' must lie in (0, 1)", key));
       return f;
     };
@@ -174,11 +133,10 @@ class ExperimentParser {
     if (handles.fixed + handles.moved >= 1.0) {
       Fail(*node, "fixed + moved must be below 1 (the handles would overlap)");
     }
-    if (const toml::node* degrees = table->get("degrees")) handles.degrees = Number(*degrees, "degrees");
+    if (const toml::node* degrees = table->get("degrees")) handles.degrees = toml_.Number(*degrees, "degrees");
     if (const toml::node* translate = table->get("translate")) {
-      const toml::array* array = translate->as_array();
-      if (!array || array->size() != 3) Fail(*translate, "'translate' must be [x, y, z]");
-      for (int d = 0; d < 3; ++d) handles.translate[d] = Number(*array->get(d), "translate");
+      const std::array<double, 3> shift = toml_.Vector3(*translate, "'translate'");
+      std::copy(shift.begin(), shift.end(), handles.translate);
     }
     return handles;
   }
@@ -191,21 +149,21 @@ class ExperimentParser {
     for (const toml::node& entry : *array) {
       const toml::table* folder = entry.as_table();
       if (!folder) Fail(entry, "[[scenarios.folder]] must be a table");
-      CheckKeys(*folder, {"path", "include", "exclude", "template"}, "[[scenarios.folder]]");
-      const std::string path = String(*folder, "path", "");
+      toml_.CheckKeys(*folder, {"path", "include", "exclude", "template"}, "[[scenarios.folder]]");
+      const std::string path = toml_.String(*folder, "path", "");
       if (path.empty()) Fail(entry, "[[scenarios.folder]] needs 'path'");
       const fs::path directory = Resolve(path);
       if (!fs::is_directory(directory)) {
         Fail(*folder->get("path"), fmt::format("{} is not a folder", directory.string()));
       }
-      std::vector<std::string> include = Strings(*folder, "include");
+      std::vector<std::string> include = toml_.Strings(*folder, "include");
       if (include.empty()) {
         for (const char* ext : {"obj", "ply", "off", "stl"}) {
           include.push_back(fmt::format("*.{}", ext));
           include.push_back(fmt::format("*.{}.xz", ext));
         }
       }
-      const std::vector<std::string> exclude = Strings(*folder, "exclude");
+      const std::vector<std::string> exclude = toml_.Strings(*folder, "exclude");
       const HandleTemplate handles = ParseTemplate(folder->get("template"));
       std::vector<fs::path> meshes;
       for (const auto& item : fs::directory_iterator(directory)) {
@@ -289,14 +247,8 @@ class ExperimentParser {
   }
 
   Experiment Parse(std::string_view text) {
-    toml::table root;
-    try {
-      root = toml::parse(text, source_);
-    } catch (const toml::parse_error& error) {
-      throw ConfigError(fmt::format("{}: TOML syntax error: {}", Where(source_, error.source()),
-                                    error.description()));
-    }
-    CheckKeys(root,
+    const toml::table root = toml_.Parse(text);
+    toml_.CheckKeys(root,
               {"experiment", "scenarios", "run", "grid", "variant", "report", "optimizer",
                "energy", "solver", "hierarchy", "upsampler"},
               "the top level");
@@ -305,10 +257,10 @@ class ExperimentParser {
     // [experiment] and [report] go to the report script as they are.
     nlohmann::json report_json = nlohmann::json::object();
     if (const toml::table* meta = root["experiment"].as_table()) {
-      CheckKeys(*meta, {"name", "title", "description"}, "[experiment]");
-      experiment_.name = String(*meta, "name", "");
-      experiment_.title = String(*meta, "title", "");
-      report_json["description"] = String(*meta, "description", "");
+      toml_.CheckKeys(*meta, {"name", "title", "description"}, "[experiment]");
+      experiment_.name = toml_.String(*meta, "name", "");
+      experiment_.title = toml_.String(*meta, "title", "");
+      report_json["description"] = toml_.String(*meta, "description", "");
     }
     if (experiment_.name.empty()) experiment_.name = fs::path(source_).stem().string();
     if (experiment_.title.empty()) experiment_.title = experiment_.name;
@@ -328,15 +280,15 @@ class ExperimentParser {
     // [scenarios]
     const toml::table* scenarios = root["scenarios"].as_table();
     if (!scenarios) Fail("no [scenarios] table (files = [...] or [[scenarios.folder]])");
-    CheckKeys(*scenarios, {"relative_to", "files", "folder"}, "[scenarios]");
-    paths_base_ = (base_ / String(*scenarios, "relative_to", ".")).lexically_normal();
+    toml_.CheckKeys(*scenarios, {"relative_to", "files", "folder"}, "[scenarios]");
+    paths_base_ = (base_ / toml_.String(*scenarios, "relative_to", ".")).lexically_normal();
     ParseScenarioFiles(*scenarios);
     ParseFolders(*scenarios);
     if (experiment_.scenarios.empty()) Fail("[scenarios] names no scenario");
 
     // [run]
     if (const toml::table* run = root["run"].as_table()) {
-      CheckKeys(*run, {"threads", "save_mesh", "timeout"}, "[run]");
+      toml_.CheckKeys(*run, {"threads", "save_mesh", "timeout"}, "[run]");
       if (const toml::node* threads = run->get("threads")) {
         if (!threads->is_integer() || threads->as_integer()->get() < 0) {
           Fail(*threads, "'threads' must be an integer >= 0 (0: cores / --jobs)");
@@ -348,7 +300,7 @@ class ExperimentParser {
         experiment_.settings.save_mesh = save->as_boolean()->get();
       }
       if (const toml::node* timeout = run->get("timeout")) {
-        experiment_.settings.timeout = Number(*timeout, "timeout");
+        experiment_.settings.timeout = toml_.Number(*timeout, "timeout");
         if (experiment_.settings.timeout < 0) Fail(*timeout, "'timeout' must be >= 0 seconds");
       }
     }
@@ -378,7 +330,7 @@ class ExperimentParser {
         const toml::table* table = entry.as_table();
         if (!table) Fail(entry, "[[variant]] must be a table");
         Variant variant;
-        variant.name = String(*table, "name", "");
+        variant.name = toml_.String(*table, "name", "");
         if (variant.name.empty()) Fail(entry, "[[variant]] needs a 'name'");
         if (!names.insert(variant.name).second) {
           Fail(entry, fmt::format("two variants are named '{}'", variant.name));
@@ -475,14 +427,8 @@ class ExperimentParser {
   // [grid] key (or "variant"), value types.
   void ValidateReport(const toml::table& report, bool no_variants) const {
     const ReportKeys known = LoadReportKeys();
-    for (const auto& [key, value] : report) {
-      if (std::find(known.keys.begin(), known.keys.end(), key.str()) == known.keys.end()) {
-        throw ConfigError(fmt::format("{}: unknown key '{}' in [report]; valid keys: {}",
-                                      Where(source_, key.source()), key.str(),
-                                      fmt::join(known.keys, ", ")));
-      }
-    }
-    for (const std::string& figure : Strings(report, "figures")) {
+    toml_.CheckKeys(report, known.keys, "[report]");
+    for (const std::string& figure : toml_.Strings(report, "figures")) {
       if (std::find(known.figures.begin(), known.figures.end(), figure) == known.figures.end()) {
         Fail(*report.get("figures"),
              fmt::format("[report] figures: unknown figure '{}'; valid figures: {}", figure,
@@ -515,7 +461,7 @@ class ExperimentParser {
     }
     if (const toml::node* render = report.get("render")) {
       if (!render->is_boolean()) {
-        const std::vector<std::string> names = Strings(report, "render");
+        const std::vector<std::string> names = toml_.Strings(report, "render");
         for (const std::string& name : names) {
           const bool known_scenario = std::any_of(
               experiment_.scenarios.begin(), experiment_.scenarios.end(),
@@ -592,6 +538,7 @@ class ExperimentParser {
   }
 
   std::string source_;
+  TomlReader toml_;
   fs::path base_;
   fs::path paths_base_;
   Experiment experiment_;

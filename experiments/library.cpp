@@ -34,6 +34,7 @@ void RejectOtherTables(const ConfigNode& config, std::initializer_list<const cha
 ComponentCatalog DescribeComponents(const Registries& registries) {
   ComponentCatalog catalog;
   Describe(registries.optimizers, catalog.components);
+  Describe(registries.level_solvers, catalog.components);
   Describe(registries.energies, catalog.components);
   Describe(registries.linear_solvers, catalog.components);
   Describe(registries.hierarchies, catalog.components);

@@ -260,7 +260,7 @@ int main(int argc, char** argv) {
   std::string list_kind;
   list->add_option("kind", list_kind,
                    "only this kind: optimizers, energies, solvers, hierarchies, upsamplers, "
-                   "mesh, builtins");
+                   "level_solvers, mesh, builtins");
 
   DeformArguments args;
   auto* deform = app.add_subcommand("deform", "deform a mesh as a scenario file describes");

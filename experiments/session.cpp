@@ -18,12 +18,10 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   ValidateRunConfig(config_);
   const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config_.Child("mesh"));
   // The defaults of `harap deform` (RunDeform).
-  DefaultComponents defaults;
-  if (!registries_.linear_solvers.Contains(defaults.solver)) defaults.solver = "eigen_ldlt";
-  if (mesh.kind() == ElementKind::kTetrahedron || mesh.planar) defaults.energy = "elements";
+  const DefaultComponents defaults = DefaultComponentsFor(registries_, mesh);
   const ConfigNode optimizer_node = config_.Child("optimizer");
   optimizer_ = optimizer_node.Get("type", defaults.optimizer, "which optimizer");
-  SessionOptions options = SessionOptions::FromConfig(optimizer_node);
+  SessionOptions options = SessionOptions::FromConfig(optimizer_node, registries_.level_solvers);
   if (frame_start) options.frame_start = *frame_start;
   factory_ = std::make_unique<RegistryComponentFactory>(registries_, config_, defaults);
   threads_ = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());

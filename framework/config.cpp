@@ -11,6 +11,7 @@
 #include <toml++/toml.h>
 
 #include "framework/error.h"
+#include "framework/toml_reading.h"
 
 namespace harap {
 
@@ -36,10 +37,8 @@ const toml::table* FindTable(const toml::table& root, const std::string& path) {
   return node ? node->as_table() : nullptr;
 }
 
-std::string DescribeSource(const toml::source_region& region, const std::string& fallback) {
-  std::string file = region.path ? std::string(*region.path) : fallback;
-  if (region.begin.line == 0) return file;
-  return fmt::format("{}:{}:{}", file, region.begin.line, region.begin.column);
+std::string DescribeSource(const toml::source_region& region, const std::string& source) {
+  return TomlReader(source).Where(region);
 }
 
 void RecordOption(ConfigNode::State& state, const std::string& path, std::string_view key,
@@ -63,13 +62,8 @@ ConfigNode::ConfigNode(std::shared_ptr<State> state, std::string path)
 
 ConfigNode ConfigNode::Parse(std::string_view toml_text, std::string source) {
   ConfigNode node;
-  node.state_->source = source;
-  try {
-    node.state_->root = toml::parse(toml_text, std::string_view(source));
-  } catch (const toml::parse_error& error) {
-    throw ConfigError(fmt::format("{}: TOML syntax error: {}",
-                                  DescribeSource(error.source(), source), error.description()));
-  }
+  node.state_->root = TomlReader(source).Parse(toml_text);
+  node.state_->source = std::move(source);
   return node;
 }
 
@@ -180,6 +174,50 @@ std::string ConfigNode::Get(std::string_view key, const std::string& default_val
 std::string ConfigNode::Get(std::string_view key, const char* default_value,
                             std::string_view help) const {
   return Get(key, std::string(default_value), help);
+}
+
+std::string Range::ToString() const {
+  const bool has_min = min > -kInfinity, has_max = max < kInfinity;
+  if (has_min && has_max) {
+    return fmt::format("in {}{}, {}{}", min_open ? '(' : '[', min, max, max_open ? ')' : ']');
+  }
+  if (has_min) return fmt::format("{} {}", min_open ? ">" : ">=", min);
+  if (has_max) return fmt::format("{} {}", max_open ? "<" : "<=", max);
+  return "any number";
+}
+
+std::vector<std::string> RangeProblems(std::initializer_list<RangeCheck> checks) {
+  std::vector<std::string> problems;
+  for (const auto& check : checks) {
+    if (!check.range.Contains(check.value)) {
+      problems.push_back(
+          fmt::format("{} is {}, which is not {}", check.key, check.value, check.range.ToString()));
+    }
+  }
+  return problems;
+}
+
+namespace {
+
+// "... which is not in [0, 1)" / "... which is not >= 1".
+template <class T>
+T CheckRange(const ConfigNode& node, std::string_view key, T value, const Range& range) {
+  if (range.Contains(static_cast<double>(value))) return value;
+  node.Fail(key, fmt::format("is {}, which is not {}", value, range.ToString()));
+}
+
+}  // namespace
+
+double ConfigNode::Get(std::string_view key, double default_value, std::string_view help,
+                       const Range& range) const {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
+}
+
+int ConfigNode::Get(std::string_view key, int default_value, std::string_view help,
+                    const Range& range) const {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
 }
 
 std::string ConfigNode::GetChoice(std::string_view key, std::string_view default_value,

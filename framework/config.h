@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <filesystem>
+#include <initializer_list>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -16,6 +20,69 @@ struct OptionInfo {
   std::string default_value;
   std::string help;
 };
+
+/// The values a numeric option may take: an interval whose ends may be open or infinite. Read
+/// with ConfigNode::Get(key, default, help, range), which rejects other values naming the range.
+///
+///   node.Get("lambda", 0.99, "weight of the smoothness term", Range::HalfOpen(0, 1));  // [0, 1)
+///   node.Get("max_iterations", 10, "iterations per solve", Range::AtLeast(1));         // >= 1
+struct Range {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_open = false;  ///< min itself excluded
+  bool max_open = false;  ///< max itself excluded
+
+  static constexpr Range AtLeast(double min) { return {min, kInfinity, false, false}; }
+  static constexpr Range Above(double min) { return {min, kInfinity, true, false}; }
+  static constexpr Range Closed(double min, double max) { return {min, max, false, false}; }
+  /// [min, max)
+  static constexpr Range HalfOpen(double min, double max) { return {min, max, false, true}; }
+  /// (min, max]
+  static constexpr Range LeftOpen(double min, double max) { return {min, max, true, false}; }
+  static constexpr Range Open(double min, double max) { return {min, max, true, true}; }
+
+  /// False for NaN.
+  bool Contains(double value) const {
+    return (min_open ? value > min : value >= min) && (max_open ? value < max : value <= max);
+  }
+  /// "in [0, 1)", ">= 1", "> 0", "<= 5".
+  std::string ToString() const;
+
+  static constexpr double kInfinity = std::numeric_limits<double>::infinity();
+};
+
+/// One numeric field of an options struct built in code (not read from a configuration), checked
+/// against the range its configuration key is read with.
+struct RangeCheck {
+  std::string_view key;
+  double value;
+  Range range;
+};
+/// "ratio is 1, which is not in [0, 1)" for every check whose value lies outside its range (the
+/// wording ConfigNode::Get uses), for an options struct's Validate().
+std::vector<std::string> RangeProblems(std::initializer_list<RangeCheck> checks);
+
+/// One value of an enum option and its name in configurations: an implementation keeps one
+/// table per enum, and both ConfigNode::GetEnum and its own name lookups (reports) use it.
+///
+///   constexpr EnumNames<Sweep, 2> kSweepNames = {{{Sweep::kForward, "forward"},
+///                                                 {Sweep::kSymmetric, "symmetric"}}};
+template <class Enum>
+struct EnumName {
+  Enum value;
+  std::string_view name;
+};
+template <class Enum, std::size_t N>
+using EnumNames = std::array<EnumName<Enum>, N>;
+
+/// The name of `value` in `names` ("?" if it has none).
+template <class Enum, std::size_t N>
+constexpr std::string_view NameOf(const EnumNames<Enum, N>& names, Enum value) {
+  for (const auto& entry : names) {
+    if (entry.value == value) return entry.name;
+  }
+  return "?";
+}
 
 /// A view of one table of a configuration (a TOML document), e.g. the `[energy]` table.
 ///
@@ -51,9 +118,30 @@ class ConfigNode {
   std::string Get(std::string_view key, const std::string& default_value,
                   std::string_view help) const;
 
-  /// A string option restricted to `choices` (the error lists them).
+  /// A numeric option restricted to `range`: a value outside it is a ConfigError "<where>:
+  /// option '<key>' is <value>, which is not in [0, 1)" (or "... which is not >= 1"). The help
+  /// shown by `harap list` gets the range appended, e.g. "(in [0, 1))".
+  double Get(std::string_view key, double default_value, std::string_view help,
+             const Range& range) const;
+  int Get(std::string_view key, int default_value, std::string_view help, const Range& range) const;
+
+  /// A string option restricted to `choices` (the error lists them; so does the help).
   std::string GetChoice(std::string_view key, std::string_view default_value,
                         const std::vector<std::string>& choices, std::string_view help) const;
+
+  /// An enum option named by `names` (GetChoice with the names as choices):
+  ///   options.sweep = node.GetEnum("sweep", options.sweep, kSweepNames, "...");
+  template <class Enum, std::size_t N>
+  Enum GetEnum(std::string_view key, Enum default_value, const EnumNames<Enum, N>& names,
+               std::string_view help) const {
+    std::vector<std::string> choices;
+    for (const auto& entry : names) choices.emplace_back(entry.name);
+    const std::string chosen = GetChoice(key, NameOf(names, default_value), choices, help);
+    for (const auto& entry : names) {
+      if (entry.name == chosen) return entry.value;
+    }
+    return default_value;  // unreachable: GetChoice accepts only the names
+  }
 
   /// The sub-table `key` (an empty table if absent). Its keys count as read.
   ConfigNode Child(std::string_view key) const;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "framework/context.h"
@@ -9,20 +10,35 @@
 
 namespace harap {
 
+/// How one Solve() ended: one outcome instead of flags.
+enum class SolveOutcome {
+  kSolved,          ///< Solved by a factorization (or nothing to solve); residual not measured.
+  kSolvedChecked,   ///< Solved by a factorization and the residual measured (check_residual).
+  kConverged,       ///< Iterative: every column reached the tolerance.
+  kIterationLimit,  ///< Iterative: the iteration budget ran out first (normal with tolerance 0);
+                    ///< the answer is usable, relative_residual says how far it got.
+  kFailed,          ///< Unusable (breakdown, divergence, NaN); `message` says why.
+};
+
 /// What one Solve() did.
 ///
-/// `success` is false only when the answer is unusable (breakdown, divergence, NaN); an iterative
-/// solver that spends its iteration budget before reaching its tolerance succeeds and says how
-/// far it got through `relative_residual` (a fixed budget per global step is normal use).
+/// Only kFailed means the answer is unusable; an iterative solver that spends its iteration
+/// budget before reaching its tolerance succeeds (kIterationLimit) and says how far it got
+/// through `relative_residual` (a fixed budget per global step is normal use).
 struct SolveSummary {
-  bool success = true;
+  SolveOutcome outcome = SolveOutcome::kSolved;
   int iterations = 0;              ///< 0 for direct solvers.
-  double relative_residual = 0.0;  ///< max over columns of ‖b − A x‖ / ‖b‖ (if computed, else 0).
+  double relative_residual = 0.0;  ///< max over columns of ‖b − A x‖ / ‖b‖ (if measured, else 0).
+  double seconds = 0.0;            ///< Wall time of the Solve() call (set by LinearSolver).
+  std::string message;             ///< Why it failed, if it did.
+
+  bool success() const { return outcome != SolveOutcome::kFailed; }
   /// Whether relative_residual was measured (iterative solvers always; direct solvers only when
   /// asked to check it), so that reports never show an unmeasured 0 as a residual.
-  bool residual_computed = false;
-  double seconds = 0.0;            ///< Wall time of the Solve() call.
-  std::string message;             ///< Why it failed, if it did.
+  bool residual_computed() const {
+    return outcome == SolveOutcome::kSolvedChecked || outcome == SolveOutcome::kConverged ||
+           outcome == SolveOutcome::kIterationLimit;
+  }
 };
 
 /// Totals over a sequence of Solve() calls (one hierarchy level's global steps).
@@ -37,7 +53,7 @@ struct SolveStatistics {
 
   void Add(const SolveSummary& summary) {
     ++solves;
-    if (summary.residual_computed) ++residuals_computed;
+    if (summary.residual_computed()) ++residuals_computed;
     iterations += summary.iterations;
     if (summary.relative_residual > max_relative_residual) {
       max_relative_residual = summary.relative_residual;
@@ -59,15 +75,20 @@ struct SolveStatistics {
 ///   auto solver = registries.linear_solvers.Create(config.Child("solver"), "cholmod");
 ///   solver->Factorize(a_ff, context);
 ///   solver->Solve(b, x, context);
+///
+/// The public calls are written once here (Ceres' TypedLinearSolver pattern): they check their
+/// arguments (a square matrix; a Factorize() before Solve(); b and x of the matrix's size), time
+/// the call, turn a solution with NaN or infinite entries into a kFailed outcome and record the
+/// outcome. Implementations only do the work, in the private virtual *Impl methods.
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
 
   /// `a` is symmetric in full storage (both triangles).
-  virtual void Factorize(const SparseMatrix& a, const Context& context) = 0;
+  void Factorize(const SparseMatrix& a, const Context& context);
 
-  virtual SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                             Eigen::Ref<Eigen::MatrixXd> x, const Context& context) = 0;
+  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                     const Context& context);
 
   /// True for factorization-based solvers (their result does not depend on the warm start).
   virtual bool is_direct() const = 0;
@@ -95,17 +116,40 @@ class LinearSolver {
   /// only in the rows and columns `changed_rows` (sorted, unique). Interactive sessions change
   /// which vertices are handles this way: a handle's row and column become the identity's.
   /// Solvers choose the cheapest route that gives the same factorization up to rounding; the
-  /// default factors from scratch. Throws like Factorize(); on a throw the solver must be
-  /// factored again before the next Solve().
-  virtual RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
-                                   const Context& context) {
-    Stopwatch clock;
-    Factorize(a, context);
-    return {RefactorRoute::kFull, static_cast<Index>(changed_rows.size()), clock.Seconds()};
-  }
+  /// default factors from scratch. Throws like Factorize(); invalid arguments keep the factor,
+  /// after other throws the solver must be factored again before the next Solve().
+  RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                           const Context& context);
+
+  /// Whether the last Factorize() (or Refactor()) succeeded, so that Solve() may be called.
+  bool factorized() const { return factorized_; }
+  /// Rows of the factorized matrix.
+  Index rows() const { return rows_; }
+  /// Wall time of the last Factorize() or Refactor() call.
+  double factorize_seconds() const { return factorize_seconds_; }
+  /// The solves since the last Factorize() or Refactor() (outcomes, iterations, time).
+  const SolveStatistics& statistics() const { return statistics_; }
 
  protected:
-  LinearSolver() = default;
+  /// `name`: the registry name, for the messages of the checks written here.
+  explicit LinearSolver(std::string_view name) : name_(name) {}
+
+ private:
+  /// Factors `a` (square; Factorize() checked that and resets the state). Throws on failure.
+  virtual void FactorizeImpl(const SparseMatrix& a, const Context& context) = 0;
+  /// Solves for b and x of rows() rows and at least one column, after a successful
+  /// FactorizeImpl(); sets outcome, iterations, residual and message (not seconds).
+  virtual SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                 Eigen::Ref<Eigen::MatrixXd> x, const Context& context) = 0;
+  /// Refactor()'s work; the default factors from scratch (FactorizeImpl).
+  virtual RefactorSummary RefactorImpl(const SparseMatrix& a,
+                                       const std::vector<Index>& changed_rows,
+                                       const Context& context);
+  std::string_view name_;
+  bool factorized_ = false;
+  Index rows_ = 0;
+  double factorize_seconds_ = 0.0;
+  SolveStatistics statistics_;
 };
 
 }  // namespace harap

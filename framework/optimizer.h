@@ -63,15 +63,16 @@ struct LevelResult {
   bool converged = false;
   Index unknowns = 0;              ///< Rows of the level's reduced global-step matrix A_ff.
   SolveStatistics linear_solves;   ///< The level's global-step solves.
-  /// ADMM optimizers: elements with det F_t < 0 at the end of the level; −1 where not counted.
-  Index inverted_elements = -1;
-  /// Local/global with Anderson acceleration: iterations whose accelerated iterate was kept;
-  /// −1 without acceleration.
-  int accelerated_iterations = -1;
-  /// Local/global with Newton steps (`optimizer.newton > 0`): iterations that took a Newton step,
-  /// and the Hessian-vector products (conjugate-gradient iterations) of all of them; −1 without.
-  int newton_steps = -1;
-  long long hessian_products = -1;
+  /// What the level's solver counted besides the above, by name (LevelSolveResult::measures):
+  /// "inverted_elements" (ADMM: det F_t < 0 at the end), "accelerated_iterations" (Anderson:
+  /// accelerated iterates kept), "newton_steps" and "hessian_products" (Newton steps). Absent
+  /// where not counted.
+  std::map<std::string, double> measures;
+  /// measures[name], or `absent` if the level solver did not count it.
+  double Measure(const std::string& name, double absent = -1.0) const {
+    const auto it = measures.find(name);
+    return it == measures.end() ? absent : it->second;
+  }
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -3,6 +3,7 @@
 
 #include "framework/energy.h"
 #include "framework/hierarchy.h"
+#include "framework/level_solver.h"
 #include "framework/linear_solver.h"
 #include "framework/optimizer.h"
 #include "framework/registry.h"
@@ -14,6 +15,9 @@ namespace harap {
 /// composition root (experiments/builtins.cpp); tests may build their own.
 struct Registries {
   Registry<Optimizer> optimizers{"optimizer"};
+  /// Per-level solvers of the optimizers (`optimizer.inner`). The optimizers keep a copy of it
+  /// as it was when they were registered (RegisterOptimizers), so register level solvers first.
+  Registry<LevelSolver> level_solvers{"level solver"};
   Registry<Energy> energies{"energy"};
   Registry<LinearSolver> linear_solvers{"solver"};
   Registry<Hierarchy> hierarchies{"hierarchy"};

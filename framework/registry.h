@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "framework/config.h"
@@ -20,7 +21,7 @@ namespace harap {
 /// per-module registration functions (register_energies(...)) — no static initialization tricks.
 ///
 ///   Registry<Energy> energies("energy");
-///   energies.Add("spokes", "Spokes ARAP [Sorkine & Alexa 2007]", &SpokesEnergy::Create);
+///   energies.Add<SpokesEnergy>("Spokes ARAP [Sorkine & Alexa 2007]");
 ///   auto energy = energies.Create(config.Child("energy"), "spokes_and_rims");
 template <class Interface>
 class Registry {
@@ -40,6 +41,18 @@ class Registry {
   void Add(std::string name, std::string description, Factory factory) {
     HARAP_CHECK(!entries_.count(name), "{} '{}' registered twice", kind_, name);
     entries_.emplace(std::move(name), Entry{std::move(description), std::move(factory)});
+  }
+
+  /// Registers the implementation T under T::kName: its factory reads T::Options with
+  /// T::Options::FromConfig(node) (which reads every option and rejects unknown keys) and
+  /// constructs T from them. The shape every implementation shares, written once.
+  template <class T>
+  void Add(std::string description) {
+    static_assert(std::is_base_of_v<Interface, T>, "T must implement the registry's interface");
+    Add(std::string(T::kName), std::move(description),
+        [](const ConfigNode& node) -> std::unique_ptr<Interface> {
+          return std::make_unique<T>(T::Options::FromConfig(node));
+        });
   }
 
   bool Contains(std::string_view name) const { return entries_.count(std::string(name)) > 0; }

@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "framework/types.h"
+
 namespace harap {
 
 /// The rotation (det = +1) closest to `m` in the Frobenius norm, by the SVD m = U Σ Vᵀ:
@@ -35,6 +37,20 @@ inline Eigen::Matrix3d NearestPlanarRotation(const Eigen::Matrix3d& m) {
 /// NearestPlanarRotation for planar meshes, NearestRotation otherwise.
 inline Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m, bool planar) {
   return planar ? NearestPlanarRotation(m) : NearestRotation(m);
+}
+
+/// The paper's Eq. (11): the rotation of a vertex from the rotations of the `count` elements
+/// around it (`element(i)`, i < count, their indices into `rotations`), their sum projected to
+/// the nearest rotation (of the plane if `planar`); the identity without elements. One definition
+/// for the up-sampling and the coarse constraint targets, so both average in the same order and
+/// agree to the bit.
+template <class ElementAt>
+Eigen::Matrix3d MeanElementRotation(const Rotations& rotations, Index count, ElementAt&& element,
+                                    bool planar) {
+  if (count == 0) return Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (Index i = 0; i < count; ++i) sum += rotations[element(i)];
+  return NearestRotation(sum, planar);
 }
 
 }  // namespace harap

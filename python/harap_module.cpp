@@ -29,6 +29,7 @@
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 #include "framework/io/scenario.h"
 
 namespace py = pybind11;

@@ -7,55 +7,18 @@
 #include <algorithm>
 
 #include "framework/error.h"
+#include "framework/mesh_topology.h"
 
 namespace harap {
 
 SparseMatrix AdjacencyPattern(Index num_vertices, const Elements& elements) {
-  const int size = static_cast<int>(elements.cols());
-  const Index num_elements = static_cast<Index>(elements.rows());
-  // Counting sort of the (row, col) pairs by column: 1 + size·(size−1) entries per element at
-  // most per column, then sort/unique each short column. Much faster than triplets for
-  // million-vertex meshes.
-  std::vector<Index> count(num_vertices + 1, 0);
-  for (Index e = 0; e < num_elements; ++e) {
-    for (int a = 0; a < size; ++a) count[elements(e, a) + 1] += size - 1;
-  }
-  for (Index v = 0; v < num_vertices; ++v) count[v + 1] += count[v] + 1;  // +1: the diagonal
-  std::vector<Index> rows(count[num_vertices]);
-  std::vector<Index> fill(count.begin(), count.end() - 1);
-  for (Index v = 0; v < num_vertices; ++v) rows[fill[v]++] = v;
-  for (Index e = 0; e < num_elements; ++e) {
-    for (int a = 0; a < size; ++a) {
-      const Index col = elements(e, a);
-      for (int b = 0; b < size; ++b) {
-        if (b != a) rows[fill[col]++] = elements(e, b);
-      }
-    }
-  }
-  std::vector<Index> unique_count(num_vertices);
-  tbb::parallel_for(tbb::blocked_range<Index>(0, num_vertices, 1024),
-                    [&](const tbb::blocked_range<Index>& range) {
-                      for (Index v = range.begin(); v != range.end(); ++v) {
-                        auto begin = rows.begin() + count[v], end = rows.begin() + count[v + 1];
-                        std::sort(begin, end);
-                        unique_count[v] = static_cast<Index>(std::unique(begin, end) - begin);
-                      }
-                    });
+  const VertexAdjacency adjacency =
+      VertexAdjacency::Build(num_vertices, elements, /*include_self=*/true);
   SparseMatrix pattern(num_vertices, num_vertices);
-  Index nnz = 0;
-  for (Index v = 0; v < num_vertices; ++v) nnz += unique_count[v];
-  pattern.resizeNonZeros(nnz);
-  Index* outer = pattern.outerIndexPtr();
-  outer[0] = 0;
-  for (Index v = 0; v < num_vertices; ++v) outer[v + 1] = outer[v] + unique_count[v];
-  tbb::parallel_for(tbb::blocked_range<Index>(0, num_vertices, 1024),
-                    [&](const tbb::blocked_range<Index>& range) {
-                      for (Index v = range.begin(); v != range.end(); ++v) {
-                        std::copy_n(rows.begin() + count[v], unique_count[v],
-                                    pattern.innerIndexPtr() + outer[v]);
-                        std::fill_n(pattern.valuePtr() + outer[v], unique_count[v], 0.0);
-                      }
-                    });
+  pattern.resizeNonZeros(static_cast<Index>(adjacency.neighbors.size()));
+  std::copy(adjacency.offsets.begin(), adjacency.offsets.end(), pattern.outerIndexPtr());
+  std::copy(adjacency.neighbors.begin(), adjacency.neighbors.end(), pattern.innerIndexPtr());
+  std::fill_n(pattern.valuePtr(), adjacency.neighbors.size(), 0.0);
   return pattern;
 }
 

@@ -10,6 +10,7 @@
 #include "energies/kernels/mesh_adjacency.h"
 #include "energies/kernels/polar_decomposition.h"
 #include "framework/error.h"
+#include "framework/mesh_topology.h"
 
 namespace harap {
 
@@ -102,20 +103,15 @@ RotationCoupling MakeElementSiteCoupling(Index num_vertices, const Elements& ele
   coupling.site_offsets.resize(num_elements + 1);
   for (Index t = 0; t <= num_elements; ++t) coupling.site_offsets[t] = t * size;
   coupling.site_vertices.assign(elements.data(), elements.data() + elements.size());
-  // By vertex: a counting sort of the corners, in element order within each vertex.
-  coupling.vertex_offsets.assign(num_vertices + 1, 0);
-  for (Index v : coupling.site_vertices) ++coupling.vertex_offsets[v + 1];
-  for (Index v = 0; v < num_vertices; ++v) {
-    coupling.vertex_offsets[v + 1] += coupling.vertex_offsets[v];
+  // By vertex: the corners in element order within each vertex (the mesh's incidence).
+  VertexIncidence incidence = VertexIncidence::Build(num_vertices, elements);
+  coupling.vertex_sites.resize(incidence.corners.size());
+  coupling.vertex_coefficients.resize(incidence.corners.size());
+  for (size_t p = 0; p < incidence.corners.size(); ++p) {
+    coupling.vertex_sites[p] = incidence.element(static_cast<Index>(p));
+    coupling.vertex_coefficients[p] = coefficient_by_corner[incidence.corners[p]];
   }
-  coupling.vertex_sites.resize(coupling.site_vertices.size());
-  coupling.vertex_coefficients.resize(coupling.site_vertices.size());
-  std::vector<Index> fill(coupling.vertex_offsets.begin(), coupling.vertex_offsets.end() - 1);
-  for (size_t p = 0; p < coupling.site_vertices.size(); ++p) {
-    const Index slot = fill[coupling.site_vertices[p]]++;
-    coupling.vertex_sites[slot] = static_cast<Index>(p) / size;
-    coupling.vertex_coefficients[slot] = coefficient_by_corner[p];
-  }
+  coupling.vertex_offsets = std::move(incidence.offsets);
   coupling.site_coefficients = std::move(coefficient_by_corner);
   return coupling;
 }

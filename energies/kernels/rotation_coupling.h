@@ -4,6 +4,7 @@
 #include <mutex>
 #include <vector>
 
+#include "framework/config.h"
 #include "framework/context.h"
 #include "framework/energy.h"
 #include "framework/types.h"
@@ -118,6 +119,15 @@ void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions
 /// Shared implementation of the Energy interface for energies that are fully described by
 /// (A, RotationCoupling): concrete energies only build `a_` and `coupling_` in
 /// PrecomputeCoupledForm().
+/// The Options of an energy that has none: the shape Registry::Add<T>() builds from
+/// (T::Options::FromConfig), which still rejects every key, so a typo fails loudly.
+struct NoOptions {
+  static NoOptions FromConfig(const ConfigNode& node) {
+    node.RejectUnknownKeys();
+    return {};
+  }
+};
+
 class CoupledQuadraticEnergy : public Energy {
  public:
   /// Keeps the rest positions (for the projected rotation derivative) and calls

@@ -11,7 +11,8 @@ DIR/runs/*.json (one `harap deform --report --trace` report per run, plus its `r
 [report] keys (all optional; docs/experiments.md):
     claim      what the paper claims (printed beside what we measured)
     notes      remarks, e.g. which shared scenarios stand in for the paper's meshes
-    figures    any of "phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars"
+    figures    any of "phases", "energy_vs_time", "relative_scatter", "levels", "energy_bars",
+               "scaling" (log-log T and peak memory against n, with fitted slopes)
     compare    what is compared: "variant" (default when [[variant]]s exist) or a [grid] key
     baseline   the value of `compare` the others are measured against (default: the first)
     panel      a [grid] key: one panel per value in "relative_scatter" (e.g. the tolerance)
@@ -349,6 +350,44 @@ def figure_levels(directory, runs):
     return save(fig, directory, "levels"), (
         "Seconds (precomputation, factorization and iterations) and iterations per hierarchy "
         "level (level 0 is the input mesh).")
+
+
+def figure_scaling(directory, runs, compare):
+    """Log-log total time and peak memory against the vertex count, one line per compared
+    value, with the least-squares slope of log T and log M over log n (issue 23's n^1.2)."""
+    done = [r for r in runs if ok(r) and r.get("mesh", {}).get("vertices")]
+    groups = OrderedDict()
+    for run in done:
+        groups.setdefault(str(compare_value(run, compare)), []).append(run)
+    groups = OrderedDict((k, v) for k, v in groups.items()
+                         if len({r["mesh"]["vertices"] for r in v}) >= 2)
+    if not groups:
+        return None
+    fig, (ax_time, ax_memory) = plt.subplots(1, 2, figsize=(11, 4.2))
+    slopes = []
+    for name, group in groups.items():
+        group = sorted(group, key=lambda r: r["mesh"]["vertices"])
+        n = np.array([r["mesh"]["vertices"] for r in group], dtype=float)
+        seconds = np.array([r["timings"]["total"] for r in group], dtype=float)
+        memory = np.array([r["peak_memory_bytes"] for r in group], dtype=float)
+        time_slope = np.polyfit(np.log(n), np.log(seconds), 1)[0]
+        memory_slope = np.polyfit(np.log(n), np.log(memory), 1)[0]
+        per_vertex = memory[-1] / n[-1] / 1024
+        ax_time.loglog(n, seconds, "o-", label=f"{name} (slope {time_slope:.2f})")
+        ax_memory.loglog(n, memory / 2**20, "o-", label=f"{name} (slope {memory_slope:.2f})")
+        slopes.append(f"{name}: T ∝ n^{time_slope:.2f}, M ∝ n^{memory_slope:.2f}, "
+                      f"{per_vertex:.2f} KB per vertex at n = {int(n[-1]):,}")
+    ax_time.set_xlabel("vertices n")
+    ax_time.set_ylabel("total seconds T")
+    ax_memory.set_xlabel("vertices n")
+    ax_memory.set_ylabel("peak memory M (MiB)")
+    for ax in (ax_time, ax_memory):
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return save(fig, directory, "scaling"), (
+        "Total time and peak memory against the vertex count (log-log); the slopes are least-"
+        "squares fits of log T and log M over log n. " + "; ".join(slopes) + ".")
 
 
 def figure_energy_bars(directory, runs):
@@ -800,6 +839,8 @@ def main():
                                            report.get("panel", ""))
         elif figure == "levels":
             made = figure_levels(directory, runs)
+        elif figure == "scaling":
+            made = figure_scaling(directory, runs, compare)
         else:
             made = figure_energy_bars(directory, runs)
         if made is None:

@@ -12,7 +12,7 @@
 #include <string_view>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "framework/io/tetrahedra.h"
 
 namespace harap {
 
@@ -88,6 +88,25 @@ void PutLittleEndian(std::string& out, T value) {
   out.append(bytes, sizeof(T));
 }
 
+// Binary little-endian PLY, double coordinates, int indices (see WritePly).
+std::string PlyBinary(const Positions& vertices, const Elements& triangles) {
+  std::string out = fmt::format(
+      "ply\nformat binary_little_endian 1.0\ncomment written by harap\n"
+      "element vertex {}\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+      vertices.rows(), triangles.rows());
+  out.reserve(out.size() + static_cast<size_t>(vertices.rows()) * 24 +
+              static_cast<size_t>(triangles.rows()) * 13);
+  for (Index v = 0; v < vertices.rows(); ++v) {
+    for (int d = 0; d < 3; ++d) PutLittleEndian(out, static_cast<double>(vertices(v, d)));
+  }
+  for (Index f = 0; f < triangles.rows(); ++f) {
+    PutLittleEndian(out, static_cast<uint8_t>(3));
+    for (int a = 0; a < 3; ++a) PutLittleEndian(out, static_cast<int32_t>(triangles(f, a)));
+  }
+  return out;
+}
+
 std::string StlBinary(const Positions& vertices, const Elements& triangles) {
   std::string out(80, '\0');
   const std::string_view header = "binary STL written by harap";
@@ -140,7 +159,42 @@ std::string TetGenEleText(const Elements& tetrahedra) {
   return out;
 }
 
+// Checks what every writer relies on: triangles or tetrahedra, indices in range. A failure is a
+// bug of the caller (InternalError), not bad input.
+void CheckElements(const Positions& vertices, const Elements& elements, std::string_view writer) {
+  HARAP_CHECK(elements.rows() == 0 || elements.cols() == 3 || elements.cols() == 4,
+              "{} writes triangles or tetrahedra, got elements with {} vertices", writer,
+              elements.cols());
+  for (Index e = 0; e < elements.rows(); ++e) {
+    for (Index a = 0; a < elements.cols(); ++a) {
+      HARAP_CHECK(elements(e, a) >= 0 && elements(e, a) < vertices.rows(),
+                  "element {} references vertex {} of {}", e, elements(e, a), vertices.rows());
+    }
+  }
+}
+
+// The text of a surface format (CheckMeshOutputFormat has ruled out the others).
+using SurfaceWriter = std::string (*)(const Positions&, const Elements&);
+SurfaceWriter SurfaceText(OutputFormat format) {
+  if (format == OutputFormat::kObj) return ObjText;
+  if (format == OutputFormat::kOff) return OffText;
+  if (format == OutputFormat::kStl) return StlBinary;
+  HARAP_CHECK(format == OutputFormat::kPly, "no surface writer for this format");
+  return PlyBinary;
+}
+
+// The triangles a surface format writes: tetrahedra give their boundary.
+Elements SurfaceTriangles(const Elements& elements) {
+  return elements.cols() == 4 ? BoundaryTriangles(elements) : elements;
+}
+
 }  // namespace
+
+void WritePly(const std::filesystem::path& file, const Positions& vertices,
+              const Elements& elements) {
+  CheckElements(vertices, elements, "WritePly");
+  WriteWholeFile(file, PlyBinary(vertices, SurfaceTriangles(elements)));
+}
 
 std::string MeshOutputFormats(ElementKind kind) {
   return kind == ElementKind::kTriangle
@@ -180,40 +234,19 @@ std::vector<std::filesystem::path> MeshOutputFiles(const std::filesystem::path& 
 
 void WriteMesh(const std::filesystem::path& file, const Positions& vertices,
                const Elements& elements) {
-  HARAP_CHECK(elements.rows() == 0 || elements.cols() == 3 || elements.cols() == 4,
-              "WriteMesh writes triangles or tetrahedra, got elements with {} vertices",
-              elements.cols());
-  const ElementKind kind =
-      elements.cols() == 4 ? ElementKind::kTetrahedron : ElementKind::kTriangle;
-  CheckMeshOutputFormat(file, kind);
-  for (Index e = 0; e < elements.rows(); ++e) {
-    for (Index a = 0; a < elements.cols(); ++a) {
-      HARAP_CHECK(elements(e, a) >= 0 && elements(e, a) < vertices.rows(),
-                  "element {} references vertex {} of {}", e, elements(e, a), vertices.rows());
-    }
-  }
+  CheckElements(vertices, elements, "WriteMesh");
+  CheckMeshOutputFormat(file,
+                        elements.cols() == 4 ? ElementKind::kTetrahedron : ElementKind::kTriangle);
   const OutputFormat format = FormatOf(file);
-  switch (format) {
-    case OutputFormat::kPly:
-      WritePly(file, vertices, elements);
-      return;
-    case OutputFormat::kMedit:
-      WriteWholeFile(file, MeditText(vertices, elements));
-      return;
-    case OutputFormat::kTetGen: {
-      const auto files = MeshOutputFiles(file);
-      WriteWholeFile(files[0], TetGenNodeText(vertices));
-      WriteWholeFile(files[1], TetGenEleText(elements));
-      return;
-    }
-    default:
-      break;
+  if (format == OutputFormat::kMedit) {
+    WriteWholeFile(file, MeditText(vertices, elements));
+  } else if (format == OutputFormat::kTetGen) {
+    const auto files = MeshOutputFiles(file);
+    WriteWholeFile(files[0], TetGenNodeText(vertices));
+    WriteWholeFile(files[1], TetGenEleText(elements));
+  } else {
+    WriteWholeFile(file, SurfaceText(format)(vertices, SurfaceTriangles(elements)));
   }
-  const Elements triangles =
-      kind == ElementKind::kTetrahedron ? BoundaryTriangles(elements) : elements;
-  if (format == OutputFormat::kObj) WriteWholeFile(file, ObjText(vertices, triangles));
-  if (format == OutputFormat::kOff) WriteWholeFile(file, OffText(vertices, triangles));
-  if (format == OutputFormat::kStl) WriteWholeFile(file, StlBinary(vertices, triangles));
 }
 
 }  // namespace harap

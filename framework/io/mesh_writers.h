@@ -10,6 +10,14 @@
 
 namespace harap {
 
+/// Writes binary little-endian PLY with double-precision coordinates (`property double x`) and
+/// int triangle indices, in the given vertex order, so results can be compared exactly.
+/// Tetrahedra (4 columns) are written as their boundary triangles, oriented outwards; every
+/// vertex is still written, so the file lines up with the input vertex by vertex. Throws Error
+/// when the file cannot be written.
+void WritePly(const std::filesystem::path& file, const Positions& vertices,
+              const Elements& elements);
+
 /// The extensions WriteMesh accepts for meshes of `kind`, with what each writes, for messages:
 /// triangle meshes .ply .obj .off .stl; tetrahedral meshes the same four (their boundary
 /// triangles, every vertex still written) plus .mesh (MEDIT) and .node/.ele (TetGen pair).

@@ -68,6 +68,23 @@ struct ScenarioLimits {
 /// InputError naming the file, the handle and the problem.
 Scenario LoadScenario(const std::filesystem::path& file);
 
+/// One edit of a session's handle set (`harap drag --edits`, docs/session.md): before frame
+/// `frame`, add the handle `name` (its vertices selected on the scenario's mesh exactly as a
+/// scenario's [[handle]] selects them: slab, ball, indices, index_file, units) or remove it.
+struct HandleEdit {
+  int frame = 0;  ///< 1-based
+  std::string name;
+  bool add = true;
+  std::vector<Index> vertices;  ///< add: the selected vertices (ascending)
+  std::string selection;        ///< add: what selected them, in words
+};
+
+/// Reads a handle-edit file (TOML: [[edit]] frame = N, add = { name = ..., select... } or
+/// remove = "name") for `scenario`'s mesh; paths in it are relative to the file. Throws
+/// ConfigError naming file:line:column and the edit for a bad entry or an empty selection.
+std::vector<HandleEdit> LoadHandleEdits(const std::filesystem::path& file,
+                                        const Scenario& scenario);
+
 /// Checks a scenario file's text (TOML syntax, keys, values, handles) without reading the mesh
 /// or any other file it names, for callers that want typos found before long work starts
 /// (`harap run` checks every scenario file of an experiment so). Throws like LoadScenario.

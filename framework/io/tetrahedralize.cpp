@@ -38,7 +38,7 @@
 #include <vector>
 
 #include "framework/error.h"
-#include "framework/io/tet_mesh_io.h"
+#include "framework/io/tetrahedra.h"
 #include "framework/io/text_scanning.h"
 
 namespace harap {

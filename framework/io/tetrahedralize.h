@@ -32,7 +32,7 @@ std::string CheckTetrahedralizeOptions(const TetrahedralizeOptions& options);
 /// vertices, bit-identical and in the same order (so handle indices stay valid; vertices no
 /// triangle uses stay in the result, unused), the boundary faces of the tetrahedra are exactly the
 /// surface's triangles (-Y: no Steiner points on the surface), and interior Steiner points follow
-/// as vertices #V, #V+1, ... Every tetrahedron is positively oriented (tet_mesh_io.h).
+/// as vertices #V, #V+1, ... Every tetrahedron is positively oriented (tetrahedra.h).
 ///
 /// TetGen runs in a forked child process: TetGen 1.5 crashes (segfaults, fails assertions) on
 /// some invalid inputs, self-intersecting surfaces among them, and a crash must not take harap

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "framework/disjoint_sets.h"
 #include "framework/error.h"
 #include "hierarchies/builders/octree_hierarchy.h"
 
@@ -51,29 +52,10 @@ class ModCollapseRecorderT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   std::vector<int>* collapsed_into = nullptr;
 };
 
-/// Union–find over triangle corners (corner 3t + k is corner k of triangle t) whose root is the
-/// smallest member, so the classes and their roots do not depend on the order of the unions.
-class CornerClasses {
- public:
-  explicit CornerClasses(std::size_t corners) : parent_(corners) {
-    std::iota(parent_.begin(), parent_.end(), Index(0));
-  }
-  Index Find(Index c) {
-    while (parent_[c] != c) {
-      parent_[c] = parent_[parent_[c]];
-      c = parent_[c];
-    }
-    return c;
-  }
-  void Join(Index a, Index b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<Index> parent_;
-};
+/// Classes of triangle corners (corner 3t + k is corner k of triangle t) that share a vertex
+/// and a fan; the root of a class is its smallest corner, so the classes and their roots do not
+/// depend on the order of the unions.
+using CornerClasses = DisjointSets<Index>;
 
 /// The input's triangles in OpenMesh, each non-manifold vertex split into one vertex per fan.
 struct Surface {
@@ -153,8 +135,8 @@ void JoinFans(const Mesh& input, CornerClasses& fans) {
           }
         } else {
           // a: x → y, b: y → x. Corner a and corner next(b) are both at x, next(a) and b at y.
-          fans.Join(a, next(b));
-          fans.Join(next(a), b);
+          fans.Unite(a, next(b));
+          fans.Unite(next(a), b);
         }
       }
       run = run_end;
@@ -184,7 +166,7 @@ Surface BuildSurface(const Mesh& input) {
   const Index n = input.num_vertices();
   const Index m = input.num_elements();
   const Index* e = input.elements.data();
-  CornerClasses fans(std::size_t(3) * m);
+  CornerClasses fans(3 * m);
   JoinFans(input, fans);
 
   // A vertex's first fan is the class of its lowest corner (its lowest triangle). The first fans
@@ -377,52 +359,54 @@ std::vector<Index> OctreeLevelCounts(const Mesh& mesh, const EdgeCollapseHierarc
   return counts;
 }
 
+// Read with these ranges and checked against them by Validate().
+constexpr Range kRatioRange = Range::HalfOpen(0.0, 1.0);
+constexpr Range kMinVerticesRange = Range::AtLeast(0);
+constexpr Range kMaxLevelsRange = Range::AtLeast(0);
+constexpr Range kNormalDeviationRange = Range::LeftOpen(0.0, 180.0);
+
+// max_aspect_ratio is 0 (no check) or at least 1: not one range.
+bool ValidAspectRatio(double ratio) { return ratio == 0.0 || ratio >= 1.0; }
+constexpr std::string_view kAspectRatioRule = "which is not 0 (no check) or >= 1";
+
 }  // namespace
 
 EdgeCollapseHierarchy::Options EdgeCollapseHierarchy::Options::FromConfig(const ConfigNode& node) {
   Options options;
   options.ratio = node.Get("ratio", options.ratio,
-                           "vertices kept per level, in [0, 1); 0 = the octree's level vertex "
-                           "counts for the same mesh");
+                           "vertices kept per level; 0 = the octree's level vertex counts for the "
+                           "same mesh",
+                           kRatioRange);
   options.min_vertices =
       node.Get("min_vertices", options.min_vertices,
-               "stop once the coarsest level has at most this many vertices (>= 0)");
-  options.max_levels = node.Get("max_levels", options.max_levels,
-                                "at most this many levels, the input included (>= 0; 0 = no "
-                                "limit)");
-  options.max_normal_deviation =
-      node.Get("max_normal_deviation", options.max_normal_deviation,
-               "largest turn of a face normal a collapse may cause, in degrees, in (0, 180]");
+               "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
+  options.max_levels =
+      node.Get("max_levels", options.max_levels,
+               "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
+  options.max_normal_deviation = node.Get(
+      "max_normal_deviation", options.max_normal_deviation,
+      "largest turn of a face normal a collapse may cause, in degrees", kNormalDeviationRange);
   options.max_aspect_ratio =
       node.Get("max_aspect_ratio", options.max_aspect_ratio,
                "largest aspect ratio (longest edge / its height) of a face a collapse may create "
                "unless it improves the worst one around it (>= 1; 0 = no check)");
-  node.RejectUnknownKeys();
-  try {
-    options.Validate();
-  } catch (const ConfigError& error) {
-    const std::string table = node.path().empty() ? std::string() : " [" + node.path() + "]";
-    throw ConfigError(fmt::format("{}{}: {}", node.source(), table, error.what()));
+  if (!ValidAspectRatio(options.max_aspect_ratio)) {
+    node.Fail("max_aspect_ratio",
+              fmt::format("is {}, {}", options.max_aspect_ratio, kAspectRatioRule));
   }
+  node.RejectUnknownKeys();
   return options;
 }
 
 void EdgeCollapseHierarchy::Options::Validate() const {
-  std::vector<std::string> problems;
-  if (!(ratio >= 0.0 && ratio < 1.0)) {
-    problems.push_back(fmt::format("ratio is {}, must be in [0, 1)", ratio));
-  }
-  if (min_vertices < 0) {
-    problems.push_back(fmt::format("min_vertices is {}, must be >= 0", min_vertices));
-  }
-  if (max_levels < 0) problems.push_back(fmt::format("max_levels is {}, must be >= 0", max_levels));
-  if (!(max_normal_deviation > 0.0 && max_normal_deviation <= 180.0)) {
+  std::vector<std::string> problems =
+      RangeProblems({{"ratio", ratio, kRatioRange},
+                     {"min_vertices", double(min_vertices), kMinVerticesRange},
+                     {"max_levels", double(max_levels), kMaxLevelsRange},
+                     {"max_normal_deviation", max_normal_deviation, kNormalDeviationRange}});
+  if (!ValidAspectRatio(max_aspect_ratio)) {
     problems.push_back(
-        fmt::format("max_normal_deviation is {}, must be in (0, 180]", max_normal_deviation));
-  }
-  if (!(max_aspect_ratio == 0.0 || max_aspect_ratio >= 1.0)) {
-    problems.push_back(
-        fmt::format("max_aspect_ratio is {}, must be 0 (no check) or >= 1", max_aspect_ratio));
+        fmt::format("max_aspect_ratio is {}, {}", max_aspect_ratio, kAspectRatioRule));
   }
   if (!problems.empty()) {
     throw ConfigError(
@@ -432,10 +416,6 @@ void EdgeCollapseHierarchy::Options::Validate() const {
 
 EdgeCollapseHierarchy::EdgeCollapseHierarchy(const Options& options) : options_(options) {
   options_.Validate();
-}
-
-std::unique_ptr<Hierarchy> EdgeCollapseHierarchy::Create(const ConfigNode& node) {
-  return std::make_unique<EdgeCollapseHierarchy>(Options::FromConfig(node));
 }
 
 MeshHierarchy EdgeCollapseHierarchy::Build(const Mesh& mesh, const Context& context) const {

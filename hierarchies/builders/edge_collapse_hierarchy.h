@@ -93,7 +93,6 @@ class EdgeCollapseHierarchy final : public Hierarchy {
   };
 
   explicit EdgeCollapseHierarchy(const Options& options);
-  static std::unique_ptr<Hierarchy> Create(const ConfigNode& node);
 
   MeshHierarchy Build(const Mesh& mesh, const Context& context) const override;
 

@@ -35,9 +35,13 @@ namespace {
 /// Bits per axis of the integer coordinates: three of them fit a 64-bit cell key.
 constexpr int kMaxBits = 21;
 
-constexpr std::array<std::pair<std::string_view, OctreeHierarchy::CoarsePositions>, 2>
-    kCoarsePositionNames = {{{"mean", OctreeHierarchy::CoarsePositions::kMean},
-                             {"quantized", OctreeHierarchy::CoarsePositions::kQuantized}}};
+constexpr EnumNames<OctreeHierarchy::CoarsePositions, 2> kCoarsePositionNames = {{
+    {OctreeHierarchy::CoarsePositions::kMean, "mean"},
+    {OctreeHierarchy::CoarsePositions::kQuantized, "quantized"},
+}};
+// Read with these ranges and checked against them by Validate().
+constexpr Range kMinVerticesRange = Range::AtLeast(0);
+constexpr Range kMaxLevelsRange = Range::AtLeast(0);
 
 /// Elements per TBB task in the parallel loops (they are cheap per element).
 constexpr std::size_t kGrain = 4096;
@@ -794,10 +798,7 @@ class Builder {
 }  // namespace
 
 std::string_view OctreeHierarchy::ToString(CoarsePositions positions) {
-  for (const auto& [name, value] : kCoarsePositionNames) {
-    if (value == positions) return name;
-  }
-  return "?";
+  return NameOf(kCoarsePositionNames, positions);
 }
 
 OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& node) {
@@ -806,37 +807,24 @@ OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& 
       node.Get("topology_aware", options.topology_aware,
                "merge the vertices of one cell only if element edges inside the cell connect "
                "them (the paper's topology check)");
-  std::vector<std::string> choices;
-  for (const auto& [name, value] : kCoarsePositionNames) choices.emplace_back(name);
-  const std::string positions =
-      node.GetChoice("coarse_positions", ToString(options.coarse_positions), choices,
-                     "rest positions of coarse vertices: mean of the finest cluster members, or "
-                     "the cell centre of the truncated integer coordinates (the paper)");
-  for (const auto& [name, value] : kCoarsePositionNames) {
-    if (name == positions) options.coarse_positions = value;
-  }
+  options.coarse_positions =
+      node.GetEnum("coarse_positions", options.coarse_positions, kCoarsePositionNames,
+                   "rest positions of coarse vertices: mean of the finest cluster members, or "
+                   "the cell centre of the truncated integer coordinates (the paper)");
   options.min_vertices =
       node.Get("min_vertices", options.min_vertices,
-               "stop once the coarsest level has at most this many vertices (>= 0)");
-  options.max_levels = node.Get("max_levels", options.max_levels,
-                                "at most this many levels, the input included (>= 0; 0 = no "
-                                "limit)");
+               "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
+  options.max_levels =
+      node.Get("max_levels", options.max_levels,
+               "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
   node.RejectUnknownKeys();
-  // The same conditions as Validate(), reported where each value was written.
-  if (options.min_vertices < 0) {
-    node.Fail("min_vertices", fmt::format("is {}, must be >= 0", options.min_vertices));
-  }
-  if (options.max_levels < 0) {
-    node.Fail("max_levels", fmt::format("is {}, must be >= 0", options.max_levels));
-  }
   return options;
 }
 
 void OctreeHierarchy::Options::Validate() const {
-  std::vector<std::string> problems;
-  if (min_vertices < 0)
-    problems.push_back(fmt::format("min_vertices is {}, must be >= 0", min_vertices));
-  if (max_levels < 0) problems.push_back(fmt::format("max_levels is {}, must be >= 0", max_levels));
+  const std::vector<std::string> problems =
+      RangeProblems({{"min_vertices", double(min_vertices), kMinVerticesRange},
+                     {"max_levels", double(max_levels), kMaxLevelsRange}});
   if (!problems.empty()) {
     throw ConfigError(
         fmt::format("invalid {} hierarchy options: {}", kName, fmt::join(problems, "; ")));
@@ -845,10 +833,6 @@ void OctreeHierarchy::Options::Validate() const {
 
 OctreeHierarchy::OctreeHierarchy(const Options& options) : options_(options) {
   options_.Validate();
-}
-
-std::unique_ptr<Hierarchy> OctreeHierarchy::Create(const ConfigNode& node) {
-  return std::make_unique<OctreeHierarchy>(Options::FromConfig(node));
 }
 
 MeshHierarchy OctreeHierarchy::Build(const Mesh& mesh, const Context& context) const {

@@ -98,7 +98,6 @@ class OctreeHierarchy final : public Hierarchy {
   };
 
   explicit OctreeHierarchy(const Options& options);
-  static std::unique_ptr<Hierarchy> Create(const ConfigNode& node);
 
   MeshHierarchy Build(const Mesh& mesh, const Context& context) const override;
 

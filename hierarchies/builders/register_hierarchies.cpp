@@ -7,15 +7,13 @@
 namespace harap {
 
 void RegisterHierarchies(Registry<Hierarchy>& registry) {
-  registry.Add(std::string(OctreeHierarchy::kName),
-               "vertex clustering on nested regular grids with the topology check, elements "
-               "kept while their vertices lie in different clusters [Meyer et al. 2025, Sec. 4]",
-               &OctreeHierarchy::Create);
-  registry.Add(std::string(EdgeCollapseHierarchy::kName),
-               "manifold-preserving levels by quadric-error edge collapse (OpenMesh's decimater), "
-               "by default with the octree's level vertex counts; the alternative of the "
-               "paper's Fig. 18",
-               &EdgeCollapseHierarchy::Create);
+  registry.Add<OctreeHierarchy>(
+      "vertex clustering on nested regular grids with the topology check, elements "
+      "kept while their vertices lie in different clusters [Meyer et al. 2025, Sec. 4]");
+  registry.Add<EdgeCollapseHierarchy>(
+      "manifold-preserving levels by quadric-error edge collapse (OpenMesh's decimater), "
+      "by default with the octree's level vertex counts; the alternative of the "
+      "paper's Fig. 18");
 }
 
 }  // namespace harap

@@ -11,10 +11,8 @@ CellUpsampler::Options CellUpsampler::Options::FromConfig(const ConfigNode& node
   options.mode = mode;
   if (mode == Mode::kSmoothedRotations) {
     options.passes = node.Get("passes", options.passes,
-                              "smoothing passes: average over the fine 1-ring, project to SO(3)");
-    if (options.passes < 1) {
-      node.Fail("passes", fmt::format("must be >= 1, got {}", options.passes));
-    }
+                              "smoothing passes: average over the fine 1-ring, project to SO(3)",
+                              Range::AtLeast(1));
   }
   node.RejectUnknownKeys();
   return options;

@@ -7,27 +7,10 @@
 #include <algorithm>
 
 #include "framework/error.h"
+#include "framework/mesh_topology.h"
 #include "framework/rotation.h"
 
 namespace harap {
-
-namespace {
-
-// CSR list of the elements incident to each vertex.
-void IncidentElements(const Mesh& mesh, std::vector<Index>& offsets, std::vector<Index>& items) {
-  offsets.assign(mesh.num_vertices() + 1, 0);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < mesh.simplex_size(); ++a) ++offsets[mesh.elements(e, a) + 1];
-  }
-  for (Index v = 0; v < mesh.num_vertices(); ++v) offsets[v + 1] += offsets[v];
-  items.resize(offsets.back());
-  std::vector<Index> fill(offsets.begin(), offsets.end() - 1);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < mesh.simplex_size(); ++a) items[fill[mesh.elements(e, a)]++] = e;
-  }
-}
-
-}  // namespace
 
 bool PlanarRotations(const Mesh& mesh, RotationSite site) {
   return mesh.planar && site == RotationSite::kElement;
@@ -42,20 +25,18 @@ Rotations VertexRotations(const Mesh& mesh, RotationSite site, const Rotations& 
   }
   HARAP_CHECK(static_cast<Index>(rotations.size()) == mesh.num_elements(),
               "{} rotations for {} elements", rotations.size(), mesh.num_elements());
-  std::vector<Index> offsets, items;
-  IncidentElements(mesh, offsets, items);
+  const VertexIncidence incidence = VertexIncidence::Build(mesh.num_vertices(), mesh.elements);
+  const std::vector<Index>& offsets = incidence.offsets;
   const bool planar = PlanarRotations(mesh, site);
   Rotations result(mesh.num_vertices(), Rotation::Identity());
   context.Run([&] {
     tbb::parallel_for(tbb::blocked_range<Index>(0, mesh.num_vertices(), 2048),
                       [&](const tbb::blocked_range<Index>& range) {
                         for (Index v = range.begin(); v != range.end(); ++v) {
-                          if (offsets[v] == offsets[v + 1]) continue;
-                          Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-                          for (Index p = offsets[v]; p < offsets[v + 1]; ++p) {
-                            sum += rotations[items[p]];
-                          }
-                          result[v] = NearestRotation(sum, planar);
+                          const Index first = offsets[v];
+                          result[v] = MeanElementRotation(
+                              rotations, offsets[v + 1] - first,
+                              [&](Index i) { return incidence.element(first + i); }, planar);
                         }
                       });
   });
@@ -114,20 +95,10 @@ Positions ProlongPositions(const HierarchyLevel& fine, const HierarchyLevel& coa
 void SmoothVertexRotations(const Mesh& mesh, RotationSite site, int passes,
                            Rotations& vertex_rotations, const Context& context) {
   const bool planar = PlanarRotations(mesh, site);
-  // 1-ring as a CSR neighbour list (both directions of every element edge, deduplicated).
+  // The 1-ring (sorted, distinct): the sums below add the neighbours in ascending order.
   const Index n = mesh.num_vertices();
-  std::vector<std::vector<Index>> ring(n);
-  for (Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < mesh.simplex_size(); ++a) {
-      for (int b = 0; b < mesh.simplex_size(); ++b) {
-        if (a != b) ring[mesh.elements(e, a)].push_back(mesh.elements(e, b));
-      }
-    }
-  }
-  for (auto& neighbours : ring) {
-    std::sort(neighbours.begin(), neighbours.end());
-    neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
-  }
+  const VertexAdjacency ring =
+      context.Run([&] { return VertexAdjacency::Build(n, mesh.elements, /*include_self=*/false); });
   Rotations next(n);
   for (int pass = 0; pass < passes; ++pass) {
     context.Run([&] {
@@ -135,9 +106,12 @@ void SmoothVertexRotations(const Mesh& mesh, RotationSite site, int passes,
                         [&](const tbb::blocked_range<Index>& range) {
                           for (Index v = range.begin(); v != range.end(); ++v) {
                             Eigen::Matrix3d sum = vertex_rotations[v];
-                            for (Index w : ring[v]) sum += vertex_rotations[w];
-                            next[v] = ring[v].empty() ? vertex_rotations[v]
-                                                      : NearestRotation(sum, planar);
+                            const Index begin = ring.offsets[v], end = ring.offsets[v + 1];
+                            for (Index p = begin; p < end; ++p) {
+                              sum += vertex_rotations[ring.neighbors[p]];
+                            }
+                            next[v] =
+                                begin == end ? vertex_rotations[v] : NearestRotation(sum, planar);
                           }
                         });
     });

@@ -433,6 +433,7 @@ def components():
         {"optimizer": {"classic": {"description": ..., "options": {"tolerance":
             {"default": 1e-06, "help": ...}, ...}}, ...},
          "energy": {...}, "solver": {...}, "hierarchy": {...}, "upsampler": {...},
+         "level solver": {...} (optimizer.inner; options in the optimizer table),
          "solver.small_systems": {option: {default, help}}, "mesh": {option: {default, help}},
          "builtin_meshes": [names]}
     """

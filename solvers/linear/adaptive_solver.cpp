@@ -4,7 +4,6 @@
 
 #include "solvers/linear/adaptive_solver.h"
 
-#include <fmt/format.h>
 #include <unistd.h>
 
 #include <string>
@@ -15,9 +14,11 @@
 namespace harap {
 namespace {
 
-constexpr std::string_view kAutoName = "auto";
-constexpr std::string_view kDirectName = "direct";
-constexpr std::string_view kIterativeName = "iterative";
+constexpr EnumNames<AdaptiveSolver::Choice, 3> kChoiceNames = {{
+    {AdaptiveSolver::Choice::kAuto, "auto"},
+    {AdaptiveSolver::Choice::kDirect, "direct"},
+    {AdaptiveSolver::Choice::kIterative, "iterative"},
+}};
 
 // Right-hand sides per solve: the global step's three coordinates.
 constexpr double kColumns = 3.0;
@@ -26,21 +27,19 @@ constexpr double kColumns = 3.0;
 
 AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;
-  const std::string choose = node.GetChoice(
-      "choose", kAutoName,
-      {std::string(kAutoName), std::string(kDirectName), std::string(kIterativeName)},
+  options.choose = node.GetEnum(
+      "choose", options.choose, kChoiceNames,
       "auto = factor unless CHOLMOD's analysis says the factor exceeds max_factor_megabytes or "
       "costs more arithmetic than expected_solves CG solves; direct = always cholmod; "
       "iterative = always cg");
-  options.choose = choose == kAutoName     ? Choice::kAuto
-                   : choose == kDirectName ? Choice::kDirect
-                                           : Choice::kIterative;
   options.max_factor_megabytes =
       node.Get("max_factor_megabytes", options.max_factor_megabytes,
-               "memory budget of the Cholesky factor in MB (0: half the physical memory)");
+               "memory budget of the Cholesky factor in MB (0: half the physical memory)",
+               Range::AtLeast(0.0));
   options.expected_solves = node.Get(
       "expected_solves", options.expected_solves,
-      "global steps the matrix is expected to serve (weighs the factorization against solves)");
+      "global steps the matrix is expected to serve (weighs the factorization against solves)",
+      Range::Above(0.0));
   options.direct = CholmodSolver::Options::FromConfig(
       node.Child("direct", "table: the cholmod options used when it factors"));
   options.iterative = ConjugateGradientSolver::Options::FromConfig(
@@ -50,25 +49,12 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& no
       node.Get("check_residual", options.direct.check_residual,
                "measure ‖b − A x‖ / ‖b‖ in every solve also when it factors (cg always does)");
   node.RejectUnknownKeys();
-  if (options.max_factor_megabytes < 0.0) {
-    throw ConfigError(fmt::format("{}: max_factor_megabytes must be >= 0, got {}",
-                                  node.Where("max_factor_megabytes"),
-                                  options.max_factor_megabytes));
-  }
-  if (!(options.expected_solves > 0.0)) {
-    throw ConfigError(fmt::format("{}: expected_solves must be > 0, got {}",
-                                  node.Where("expected_solves"), options.expected_solves));
-  }
   return options;
 }
 
-AdaptiveSolver::AdaptiveSolver(const Options& options) : options_(options) {}
+AdaptiveSolver::AdaptiveSolver(const Options& options) : LinearSolver(kName), options_(options) {}
 
 AdaptiveSolver::~AdaptiveSolver() = default;
-
-std::unique_ptr<LinearSolver> AdaptiveSolver::Create(const ConfigNode& node) {
-  return std::make_unique<AdaptiveSolver>(Options::FromConfig(node));
-}
 
 double AdaptiveSolver::DefaultBudgetBytes() {
   const long pages = sysconf(_SC_PHYS_PAGES);
@@ -77,7 +63,7 @@ double AdaptiveSolver::DefaultBudgetBytes() {
   return 0.5 * static_cast<double>(pages) * static_cast<double>(page_size);
 }
 
-void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
+void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context) {
   chosen_ = nullptr;
   switched_ = false;
   decision_ = Decision{};
@@ -127,9 +113,9 @@ void AdaptiveSolver::Factorize(const SparseMatrix& a, const Context& context) {
   if (on_choice_) on_choice_(chosen(), chosen_->is_direct());
 }
 
-SolveSummary AdaptiveSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                   Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
-  HARAP_CHECK(chosen_ != nullptr, "Solve() needs a successful Factorize() first");
+SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                       Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
+  HARAP_CHECK(chosen_ != nullptr, "adaptive: Solve() needs a successful Factorize() first");
   if (may_switch_ && iterated_flops_ >= decision_.estimate.flops) {
     // The iterations have now cost as much arithmetic as the factorization: the matrix serves
     // more solves than expected_solves said, so factor (with the kept analysis) and solve
@@ -158,11 +144,11 @@ void AdaptiveSolver::PrepareForRefactor() {
   if (direct_) direct_->PrepareForRefactor();
 }
 
-LinearSolver::RefactorSummary AdaptiveSolver::Refactor(const SparseMatrix& a,
-                                                       const std::vector<Index>& changed_rows,
-                                                       const Context& context) {
-  // A direct choice stays (the pattern, and so the factor's size, did not change); the
-  // iterative one only copies the matrix anew.
+LinearSolver::RefactorSummary AdaptiveSolver::RefactorImpl(const SparseMatrix& a,
+                                                           const std::vector<Index>& changed_rows,
+                                                           const Context& context) {
+  // A direct choice stays (the pattern, and so the factor's size, did not change); an
+  // iterative one decides anew, as a Factorize() would.
   if (chosen_ == direct_.get() && direct_ != nullptr) {
     try {
       return direct_->Refactor(a, changed_rows, context);
@@ -171,7 +157,8 @@ LinearSolver::RefactorSummary AdaptiveSolver::Refactor(const SparseMatrix& a,
       throw;
     }
   }
-  return LinearSolver::Refactor(a, changed_rows, context);
+  FactorizeImpl(a, context);
+  return {RefactorRoute::kFull, static_cast<Index>(changed_rows.size()), 0.0};
 }
 
 std::string_view AdaptiveSolver::chosen() const {

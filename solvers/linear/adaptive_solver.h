@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "framework/config.h"
 #include "framework/linear_solver.h"
@@ -74,16 +75,9 @@ class AdaptiveSolver final : public LinearSolver {
   explicit AdaptiveSolver(const Options& options);
   ~AdaptiveSolver() override;
 
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
   /// The chosen solver's; false before the first Factorize() (so callers warm-start).
   bool is_direct() const override;
   void PrepareForRefactor() override;
-  RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
-                           const Context& context) override;
 
   /// "cholmod", "cg" or "cg>cholmod" (switched) after a Factorize(), "" before.
   std::string_view chosen() const;
@@ -100,6 +94,14 @@ class AdaptiveSolver final : public LinearSolver {
   static double DefaultBudgetBytes();
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                         const Context& context) override;
+  /// A direct choice refactors with cholmod's routes (same pattern, so the factor's size is
+  /// unchanged); an iterative one decides anew (FactorizeImpl).
+  RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                               const Context& context) override;
+
   Options options_;
   bool prepared_for_refactor_ = false;
   std::unique_ptr<CholmodSolver> direct_;

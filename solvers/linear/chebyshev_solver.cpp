@@ -48,50 +48,37 @@ EigenSolverOptions BoundsEstimateOptions() {
   return options;
 }
 
+constexpr EnumNames<ChebyshevSolver::LowerBound, 3> kLowerBoundNames = {{
+    {ChebyshevSolver::LowerBound::kAuto, "auto"},
+    {ChebyshevSolver::LowerBound::kBudget, "budget"},
+    {ChebyshevSolver::LowerBound::kShiftInvert, "shift_invert"},
+}};
+
 }  // namespace
 
 ChebyshevSolver::Options ChebyshevSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;
   iterative::ReadIterationLimits(node, "Chebyshev step", options.limits);
-  const std::string lower_bound = node.GetChoice(
-      "lower_bound", "auto", {"auto", "budget", "shift_invert"},
+  options.lower_bound = node.GetEnum(
+      "lower_bound", options.lower_bound, kLowerBoundNames,
       "λ_lo: budget = λ_hi / max_iterations² (no factorization; damps what k steps can damp); "
       "shift_invert = smallest eigenvalue of D^-1/2 A D^-1/2 by Spectra's shift-invert mode "
       "(costs a Cholesky factorization); auto = budget if tolerance is 0, else shift_invert");
-  options.lower_bound = lower_bound == "budget"         ? LowerBound::kBudget
-                        : lower_bound == "shift_invert" ? LowerBound::kShiftInvert
-                                                        : LowerBound::kAuto;
   options.upper_margin =
       node.Get("upper_margin", options.upper_margin,
-               "safety margin on λ_max: λ_hi = min((1 + upper_margin) λ_max, Gershgorin bound); "
-               ">= 0");
-  options.lower_margin = node.Get("lower_margin", options.lower_margin,
-                                  "with shift_invert: λ_lo = (1 − lower_margin) λ_min; in [0, 1)");
+               "safety margin on λ_max: λ_hi = min((1 + upper_margin) λ_max, Gershgorin bound)",
+               Range::AtLeast(0.0));
+  options.lower_margin =
+      node.Get("lower_margin", options.lower_margin,
+               "with shift_invert: λ_lo = (1 − lower_margin) λ_min", Range::HalfOpen(0.0, 1.0));
   node.RejectUnknownKeys();
-  if (!(options.upper_margin >= 0.0)) {
-    throw ConfigError(fmt::format("{}: upper_margin must be >= 0, got {}",
-                                  node.Where("upper_margin"), options.upper_margin));
-  }
-  if (!(options.lower_margin >= 0.0 && options.lower_margin < 1.0)) {
-    throw ConfigError(fmt::format("{}: lower_margin must be in [0, 1), got {}",
-                                  node.Where("lower_margin"), options.lower_margin));
-  }
   return options;
 }
 
-std::unique_ptr<LinearSolver> ChebyshevSolver::Create(const ConfigNode& node) {
-  return std::make_unique<ChebyshevSolver>(Options::FromConfig(node));
-}
-
-void ChebyshevSolver::Factorize(const SparseMatrix& a, const Context& context) {
-  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
-  factorized_ = false;
+void ChebyshevSolver::FactorizeImpl(const SparseMatrix& a, const Context& context) {
   a_ = iterative::CompressedCopy(a);
   inverse_diagonal_ = solver_checks::PositiveDiagonal(a_, "chebyshev").cwiseInverse();
-  if (a_.rows() == 0) {
-    factorized_ = true;
-    return;
-  }
+  if (a_.rows() == 0) return;
   LowerBound lower_bound = options_.lower_bound;
   if (lower_bound == LowerBound::kAuto) {
     lower_bound = options_.limits.tolerance > 0.0 ? LowerBound::kShiftInvert : LowerBound::kBudget;
@@ -123,7 +110,6 @@ void ChebyshevSolver::Factorize(const SparseMatrix& a, const Context& context) {
     bounds_ = bounds;
     matrix_hash_ = hash;
   }
-  factorized_ = true;
 }
 
 template <int K>
@@ -183,7 +169,7 @@ SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>
     rho = rho_next;
     ++summary.iterations;
     if (!convergence.Update(rr)) {
-      summary.success = false;
+      summary.outcome = SolveOutcome::kFailed;
       summary.message = iterative::DivergenceMessage(
           "chebyshev", summary.iterations,
           fmt::format("the eigenvalue interval [{:.6g}, {:.6g}] does not contain the spectrum of "
@@ -192,17 +178,12 @@ SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>
       break;
     }
   }
+  if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = convergence.max_relative_residual();
   iterative::ScatterColumns<K>(x, first, x_out);
   return summary;
 }
 
-SolveSummary ChebyshevSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                    Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x,
-                                  [&](Eigen::Index first, auto width) {
-                                    return SolveBlock<decltype(width)::value>(b, x, first);
-                                  });
-}
+template class iterative::BlockIterativeSolver<ChebyshevSolver>;
 
 }  // namespace harap

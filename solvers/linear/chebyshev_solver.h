@@ -54,7 +54,7 @@ namespace harap {
 /// reuses them).
 ///
 /// Solve() allocates nothing after its first call with a given column count. Not thread-safe.
-class ChebyshevSolver final : public LinearSolver {
+class ChebyshevSolver final : public iterative::BlockIterativeSolver<ChebyshevSolver> {
  public:
   static constexpr std::string_view kName = "chebyshev";
 
@@ -75,14 +75,8 @@ class ChebyshevSolver final : public LinearSolver {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit ChebyshevSolver(const Options& options) : options_(options) {}
-
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
-  bool is_direct() const override { return false; }
+  explicit ChebyshevSolver(const Options& options)
+      : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
 
@@ -97,6 +91,8 @@ class ChebyshevSolver final : public LinearSolver {
   const Bounds& bounds() const { return bounds_; }
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  friend class iterative::BlockIterativeSolver<ChebyshevSolver>;
   template <int K>
   SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                           Eigen::Index first);
@@ -104,10 +100,12 @@ class ChebyshevSolver final : public LinearSolver {
   Options options_;
   SparseMatrix a_;
   Eigen::VectorXd inverse_diagonal_;
-  bool factorized_ = false;
   Bounds bounds_;
   uint64_t matrix_hash_ = 0;  ///< Of the matrix bounds_ belongs to (0: none).
   iterative::Block b_, x_, r_, d_, d_next_;
 };
+
+// SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.
+extern template class iterative::BlockIterativeSolver<ChebyshevSolver>;
 
 }  // namespace harap

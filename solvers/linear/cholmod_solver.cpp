@@ -631,18 +631,14 @@ struct CholmodSolver::Impl {
                                  options.pivot_tolerance);
   }
 
-  // Checks a solution, measures its residual if asked to, and the time since `clock` started.
+  // Measures a solution's residual if asked to (LinearSolver::Solve() checks and times it).
   SolveSummary FinishSolve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                           const Eigen::Ref<Eigen::MatrixXd>& x, const Stopwatch& clock) {
+                           const Eigen::Ref<Eigen::MatrixXd>& x) {
     SolveSummary summary;
-    if (!x.allFinite()) {
-      summary.success = false;
-      summary.message = solver_checks::NonFiniteSolutionMessage("cholmod", b);
-    } else if (options.check_residual) {
+    if (options.check_residual && x.allFinite()) {
       summary.relative_residual = solver_checks::MaxRelativeResidual(matrix, b, x, residual);
-      summary.residual_computed = true;
+      summary.outcome = SolveOutcome::kSolvedChecked;
     }
-    summary.seconds = clock.Seconds();
     return summary;
   }
 
@@ -735,16 +731,13 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
   return options;
 }
 
-CholmodSolver::CholmodSolver(const Options& options) : impl_(std::make_unique<Impl>(options)) {
+CholmodSolver::CholmodSolver(const Options& options)
+    : LinearSolver(kName), impl_(std::make_unique<Impl>(options)) {
   // Early, while memory is likely still free (see EnsureBlasWorkBuffer); Factorize checks again.
   if (options.mode != Mode::kSimplicial) EnsureBlasWorkBuffer();
 }
 
 CholmodSolver::~CholmodSolver() = default;
-
-std::unique_ptr<LinearSolver> CholmodSolver::Create(const ConfigNode& node) {
-  return std::make_unique<CholmodSolver>(Options::FromConfig(node));
-}
 
 const CholmodSolver::Options& CholmodSolver::options() const { return impl_->options; }
 
@@ -768,8 +761,7 @@ std::string_view CholmodSolver::ToString(RefactorChoice choice) {
   return ToName(kRefactorNames, choice);
 }
 
-void CholmodSolver::Factorize(const SparseMatrix& a, const Context& context) {
-  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
+void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context) {
   Impl& impl = *impl_;
   impl.factorized = false;
   impl.use_tree_solve = false;
@@ -846,9 +838,9 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
   return estimate;
 }
 
-LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
-                                                      const std::vector<Index>& changed_rows,
-                                                      const Context& context) {
+LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
+                                                          const std::vector<Index>& changed_rows,
+                                                          const Context& context) {
   const Stopwatch clock;
   Impl& impl = *impl_;
   RefactorSummary summary;
@@ -1113,19 +1105,15 @@ LinearSolver::RefactorSummary CholmodSolver::Refactor(const SparseMatrix& a,
   return summary;
 }
 
-SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                  Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
-  const Stopwatch clock;
+SolveSummary CholmodSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                      Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   Impl& impl = *impl_;
-  HARAP_CHECK(impl.factorized, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == impl.rows && x.rows() == impl.rows && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), impl.rows);
-  SolveSummary summary;
-  if (impl.rows == 0 || b.cols() == 0) return summary;
+  // A Refactor() that failed midway leaves no factor (LinearSolver only knows the last call
+  // threw).
+  HARAP_CHECK(impl.factorized, "cholmod: Solve() needs a successful Factorize() first");
   if (impl.use_tree_solve) {
     impl.tree_solve.Solve(b, x, context);
-    return impl.FinishSolve(b, x, clock);
+    return impl.FinishSolve(b, x);
   }
 
   // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
@@ -1150,7 +1138,7 @@ SolveSummary CholmodSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   x = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
       static_cast<const double*>(impl.x->x), b.rows(), b.cols(),
       Eigen::OuterStride<>(static_cast<Eigen::Index>(impl.x->d)));
-  return impl.FinishSolve(b, x, clock);
+  return impl.FinishSolve(b, x);
 }
 
 }  // namespace harap

@@ -100,8 +100,6 @@ class CholmodSolver final : public LinearSolver {
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
 
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
   /// What the analysis (ordering and symbolic factorization, no numeric work) says a
   /// factorization of a matrix will cost: the size of L and the flops, before any factoring.
   struct Estimate {
@@ -116,11 +114,9 @@ class CholmodSolver final : public LinearSolver {
   /// whether to factor at all (AdaptiveSolver) for the price of the analysis alone.
   Estimate Analyze(const SparseMatrix& a);
 
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
   bool is_direct() const override { return true; }
 
+  /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below):
   /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
   /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
   /// earlier Factorize(), or refactor = "full") factors from scratch (kFull). For handle edits
@@ -153,8 +149,6 @@ class CholmodSolver final : public LinearSolver {
   /// the last measured set-up of the parallel solve's plan; the numeric time is the one measured
   /// by the last numeric factorization of this pattern. Both sides are measured on the machine
   /// the solver runs on; only the first estimate uses the defaults.
-  RefactorSummary Refactor(const SparseMatrix& a, const std::vector<Index>& changed_rows,
-                           const Context& context) override;
 
   /// With refactor = "auto": keep the copies Refactor() reuses from the next Factorize() on.
   void PrepareForRefactor() override;
@@ -201,6 +195,11 @@ class CholmodSolver final : public LinearSolver {
   static std::string_view ToString(RefactorChoice choice);
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                         const Context& context) override;
+  RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                               const Context& context) override;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -18,8 +18,10 @@ using iterative::ForRows;
 using iterative::RowProduct;
 using iterative::SumRows;
 
-constexpr std::string_view kJacobiName = "jacobi";
-constexpr std::string_view kIncompleteCholeskyName = "incomplete_cholesky";
+constexpr EnumNames<ConjugateGradientSolver::Preconditioner, 2> kPreconditionerNames = {{
+    {ConjugateGradientSolver::Preconditioner::kJacobi, "jacobi"},
+    {ConjugateGradientSolver::Preconditioner::kIncompleteCholesky, "incomplete_cholesky"},
+}};
 
 }  // namespace
 
@@ -27,25 +29,16 @@ ConjugateGradientSolver::Options ConjugateGradientSolver::Options::FromConfig(
     const ConfigNode& node) {
   Options options;
   iterative::ReadIterationLimits(node, "CG iteration", options.limits);
-  const std::string preconditioner = node.GetChoice(
-      "preconditioner", kJacobiName,
-      {std::string(kJacobiName), std::string(kIncompleteCholeskyName)},
+  options.preconditioner = node.GetEnum(
+      "preconditioner", options.preconditioner, kPreconditionerNames,
       "jacobi = diagonal scaling (parallel, fused into the vector updates); incomplete_cholesky "
       "= Eigen's threshold IC with AMD ordering (fewer iterations, sequential triangular "
       "solves)");
-  options.preconditioner =
-      preconditioner == kJacobiName ? Preconditioner::kJacobi : Preconditioner::kIncompleteCholesky;
   node.RejectUnknownKeys();
   return options;
 }
 
-std::unique_ptr<LinearSolver> ConjugateGradientSolver::Create(const ConfigNode& node) {
-  return std::make_unique<ConjugateGradientSolver>(Options::FromConfig(node));
-}
-
-void ConjugateGradientSolver::Factorize(const SparseMatrix& a, const Context& /*context*/) {
-  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
-  factorized_ = false;
+void ConjugateGradientSolver::FactorizeImpl(const SparseMatrix& a, const Context& /*context*/) {
   incomplete_cholesky_.reset();
   a_ = iterative::CompressedCopy(a);
   inverse_diagonal_ = solver_checks::PositiveDiagonal(a_, "cg").cwiseInverse();
@@ -66,7 +59,6 @@ void ConjugateGradientSolver::Factorize(const SparseMatrix& a, const Context& /*
                   "incomplete Cholesky column {} does not start with its diagonal", j);
     }
   }
-  factorized_ = true;
 }
 
 template <int K>
@@ -166,7 +158,7 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
     for (int c = 0; c < K; ++c) {
       if (!convergence.active(c)) continue;
       if (!(pq[c] > 0.0)) {
-        summary.success = false;
+        summary.outcome = SolveOutcome::kFailed;
         summary.message = fmt::format(
             "cg: non-positive curvature pᵀAp = {:.3g} at iteration {} (column {}): the matrix "
             "is not positive definite. {}",
@@ -175,7 +167,7 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
       }
       alpha[c] = rz[c] / pq[c];
     }
-    if (!summary.success) break;
+    if (!summary.success()) break;
 
     // x += α p, r −= α q (and z = D⁻¹ r, rᵀz with Jacobi).
     const auto update = SumRows<2>(n, [&](Index i, auto& sums) {
@@ -200,7 +192,7 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
     }
     ++summary.iterations;
     if (!convergence.Update(update[0])) {
-      summary.success = false;
+      summary.outcome = SolveOutcome::kFailed;
       summary.message = iterative::DivergenceMessage(
           "cg", summary.iterations,
           "the matrix is not positive definite or the right-hand side is not finite");
@@ -221,18 +213,12 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
   }
   // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report
   // the true one, for one more pass over A per solve.
+  if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = iterative::MaxRelativeResidual<K>(a_, b, x, start[0]);
   iterative::ScatterColumns<K>(x, first, x_out);
   return summary;
 }
 
-SolveSummary ConjugateGradientSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                            Eigen::Ref<Eigen::MatrixXd> x,
-                                            const Context& /*context*/) {
-  return iterative::SolveByBlocks(factorized_, static_cast<Index>(a_.rows()), b, x,
-                                  [&](Eigen::Index first, auto width) {
-                                    return SolveBlock<decltype(width)::value>(b, x, first);
-                                  });
-}
+template class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
 
 }  // namespace harap

@@ -29,7 +29,8 @@ namespace harap {
 /// call with a given column count. A non-positive curvature pᵀAp ≤ 0 proves A is not positive
 /// definite: the solve then fails with that message. Not thread-safe; kernels run in parallel in
 /// the caller's task arena.
-class ConjugateGradientSolver final : public LinearSolver {
+class ConjugateGradientSolver final
+    : public iterative::BlockIterativeSolver<ConjugateGradientSolver> {
  public:
   static constexpr std::string_view kName = "cg";
 
@@ -46,20 +47,16 @@ class ConjugateGradientSolver final : public LinearSolver {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit ConjugateGradientSolver(const Options& options) : options_(options) {}
-
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
-  bool is_direct() const override { return false; }
+  explicit ConjugateGradientSolver(const Options& options)
+      : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
   /// The matrix of the last Factorize() (a compressed copy).
   const SparseMatrix& matrix() const { return a_; }
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  friend class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
   template <int K>
   SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                           Eigen::Index first);
@@ -74,9 +71,11 @@ class ConjugateGradientSolver final : public LinearSolver {
   SparseMatrix a_;
   Eigen::VectorXd inverse_diagonal_;
   std::unique_ptr<IncompleteCholesky> incomplete_cholesky_;
-  bool factorized_ = false;
   // Row-major work blocks (b, x, r, z, p, A p, the IC workspace), kept between solves.
   iterative::Block b_, x_, r_, z_, p_, q_, w_;
 };
+
+// SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.
+extern template class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
 
 }  // namespace harap

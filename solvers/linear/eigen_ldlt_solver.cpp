@@ -18,19 +18,9 @@ EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(const ConfigNode& 
   return options;
 }
 
-std::unique_ptr<LinearSolver> EigenLdltSolver::Create(const ConfigNode& node) {
-  return std::make_unique<EigenLdltSolver>(Options::FromConfig(node));
-}
-
-void EigenLdltSolver::Factorize(const SparseMatrix& a, const Context& /*context*/) {
-  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
-  factorized_ = false;
+void EigenLdltSolver::FactorizeImpl(const SparseMatrix& a, const Context& /*context*/) {
   a_copy_ = SparseMatrix();
-  rows_ = a.rows();
-  if (rows_ == 0) {
-    factorized_ = true;
-    return;
-  }
+  if (a.rows() == 0) return;
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "eigen_ldlt");
 
   try {
@@ -60,19 +50,11 @@ void EigenLdltSolver::Factorize(const SparseMatrix& a, const Context& /*context*
   }
   HARAP_CHECK(ldlt_.info() == Eigen::Success, "SimplicialLDLT failed but every pivot is positive");
   if (options_.check_residual) a_copy_ = a;
-  factorized_ = true;
 }
 
-SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                    Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  const Stopwatch clock;
-  HARAP_CHECK(factorized_, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == rows_ && x.rows() == rows_ && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), rows_);
+SolveSummary EigenLdltSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                                        Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
   SolveSummary summary;
-  if (b.rows() == 0 || b.cols() == 0) return summary;
-
   // Eigen's own solve() permutes the result in place and copies D, which allocates on every
   // call; going through a kept workspace and pivot copy makes every step allocation-free.
   workspace_.resize(b.rows(), b.cols());
@@ -82,17 +64,11 @@ SolveSummary EigenLdltSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
   ldlt_.matrixU().solveInPlace(workspace_);
   x.noalias() = ldlt_.permutationPinv() * workspace_;
 
-  if (!x.allFinite()) {
-    summary.success = false;
-    summary.message = solver_checks::NonFiniteSolutionMessage("eigen_ldlt", b);
-    summary.seconds = clock.Seconds();
-    return summary;
-  }
-  if (options_.check_residual) {
+  // (LinearSolver::Solve() turns a non-finite solution into a failure.)
+  if (options_.check_residual && x.allFinite()) {
     summary.relative_residual = solver_checks::MaxRelativeResidual(a_copy_, b, x, residual_);
-    summary.residual_computed = true;
+    summary.outcome = SolveOutcome::kSolvedChecked;
   }
-  summary.seconds = clock.Seconds();
   return summary;
 }
 

@@ -37,24 +37,20 @@ class EigenLdltSolver final : public LinearSolver {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit EigenLdltSolver(const Options& options) : options_(options) {}
+  explicit EigenLdltSolver(const Options& options) : LinearSolver(kName), options_(options) {}
 
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
   bool is_direct() const override { return true; }
 
   const Options& options() const { return options_; }
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                         const Context& context) override;
   using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
 
   Options options_;
   Ldlt ldlt_;
-  Eigen::Index rows_ = 0;
-  bool factorized_ = false;
   Eigen::VectorXd pivots_;     ///< D of L D Lᵀ, in the factor's order.
   Eigen::MatrixXd workspace_;  ///< n×k permuted right-hand side / solution.
   SparseMatrix a_copy_;        ///< Only with check_residual.

@@ -41,41 +41,36 @@ std::vector<int> GreedyColoring(const SparseMatrix& a, int& num_colors) {
   return color;
 }
 
+constexpr EnumNames<GaussSeidelSolver::Sweep, 2> kSweepNames = {{
+    {GaussSeidelSolver::Sweep::kForward, "forward"},
+    {GaussSeidelSolver::Sweep::kSymmetric, "symmetric"},
+}};
+constexpr EnumNames<GaussSeidelSolver::Ordering, 2> kOrderingNames = {{
+    {GaussSeidelSolver::Ordering::kColored, "colored"},
+    {GaussSeidelSolver::Ordering::kNatural, "natural"},
+}};
+
 }  // namespace
 
 GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;
   iterative::ReadIterationLimits(node, "sweep", options.limits);
-  options.sweep =
-      node.GetChoice("sweep", "forward", {"forward", "symmetric"},
-                     "forward = rows in order; symmetric = forward then backward (SGS/SSOR, one "
-                     "iteration costs about two forward sweeps)") == "forward"
-          ? Sweep::kForward
-          : Sweep::kSymmetric;
+  options.sweep = node.GetEnum("sweep", options.sweep, kSweepNames,
+                               "forward = rows in order; symmetric = forward then backward "
+                               "(SGS/SSOR, one iteration costs about two forward sweeps)");
   options.ordering =
-      node.GetChoice("ordering", "colored", {"colored", "natural"},
-                     "colored = rows grouped by a greedy graph colouring, each colour updated in "
-                     "parallel; natural = rows in order, sequential") == "colored"
-          ? Ordering::kColored
-          : Ordering::kNatural;
+      node.GetEnum("ordering", options.ordering, kOrderingNames,
+                   "colored = rows grouped by a greedy graph colouring, each colour updated in "
+                   "parallel; natural = rows in order, sequential");
   options.relaxation = node.Get("relaxation", options.relaxation,
-                                "over-relaxation factor ω in (0, 2): 1 = Gauss–Seidel, > 1 = SOR");
+                                "over-relaxation factor ω: 1 = Gauss–Seidel, > 1 = SOR (which "
+                                "diverges outside (0, 2))",
+                                Range::Open(0.0, 2.0));
   node.RejectUnknownKeys();
-  if (!(options.relaxation > 0.0 && options.relaxation < 2.0)) {
-    throw ConfigError(
-        fmt::format("{}: relaxation must be in (0, 2) (SOR diverges otherwise), got {}",
-                    node.Where("relaxation"), options.relaxation));
-  }
   return options;
 }
 
-std::unique_ptr<LinearSolver> GaussSeidelSolver::Create(const ConfigNode& node) {
-  return std::make_unique<GaussSeidelSolver>(Options::FromConfig(node));
-}
-
-void GaussSeidelSolver::Factorize(const SparseMatrix& a_in, const Context& context) {
-  HARAP_CHECK(a_in.rows() == a_in.cols(), "matrix is {}×{}, not square", a_in.rows(), a_in.cols());
-  factorized_ = false;
+void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& context) {
   const SparseMatrix a = iterative::CompressedCopy(a_in);
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "gauss_seidel");
   rows_ = static_cast<Index>(a.rows());
@@ -124,7 +119,6 @@ void GaussSeidelSolver::Factorize(const SparseMatrix& a_in, const Context& conte
       inverse_diagonal_[k] = 1.0 / diagonal[i];
     });
   });
-  factorized_ = true;
 }
 
 template <int K>
@@ -217,6 +211,7 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
   std::array<bool, 3> active{};
 
   SolveSummary summary;
+  bool diverged = false;
   while (summary.iterations < options_.limits.max_iterations) {
     if (tolerance > 0.0 && !convergence.any_active()) break;
     for (int c = 0; c < K; ++c) active[c] = convergence.active(c);
@@ -224,14 +219,13 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
     if (options_.sweep == Sweep::kSymmetric) RunSweep<K>(b, x, active, /*backward=*/true);
     ++summary.iterations;
     if (tolerance > 0.0 && !convergence.Update(SquaredResidual<K>(b, x))) {
-      summary.success = false;
+      diverged = true;
       break;
     }
   }
-  if (summary.success && tolerance == 0.0) {
-    summary.success = convergence.Update(SquaredResidual<K>(b, x));
-  }
-  if (!summary.success) {
+  if (!diverged && tolerance == 0.0) diverged = !convergence.Update(SquaredResidual<K>(b, x));
+  summary.outcome = diverged ? SolveOutcome::kFailed : iterative::BlockOutcome(convergence);
+  if (diverged) {
     summary.message = iterative::DivergenceMessage(
         "gauss_seidel", summary.iterations,
         fmt::format("the matrix is not positive definite (Gauss–Seidel converges for every SPD "
@@ -245,11 +239,6 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
   return summary;
 }
 
-SolveSummary GaussSeidelSolver::Solve(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                                      Eigen::Ref<Eigen::MatrixXd> x, const Context& /*context*/) {
-  return iterative::SolveByBlocks(factorized_, rows_, b, x, [&](Eigen::Index first, auto width) {
-    return SolveBlock<decltype(width)::value>(b, x, first);
-  });
-}
+template class iterative::BlockIterativeSolver<GaussSeidelSolver>;
 
 }  // namespace harap

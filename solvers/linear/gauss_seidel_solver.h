@@ -28,7 +28,7 @@ namespace harap {
 /// pass over A) and reported. Allocation-free after the first Solve() with a given column count.
 /// A residual that grows by 1e8 proves A is not positive definite (for SPD A, ‖r‖ can grow by at
 /// most √κ(A)): the solve fails with that message. Not thread-safe.
-class GaussSeidelSolver final : public LinearSolver {
+class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeidelSolver> {
  public:
   static constexpr std::string_view kName = "gauss_seidel";
 
@@ -47,20 +47,16 @@ class GaussSeidelSolver final : public LinearSolver {
     static Options FromConfig(const ConfigNode& node);
   };
 
-  explicit GaussSeidelSolver(const Options& options) : options_(options) {}
-
-  static std::unique_ptr<LinearSolver> Create(const ConfigNode& node);
-
-  void Factorize(const SparseMatrix& a, const Context& context) override;
-  SolveSummary Solve(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                     const Context& context) override;
-  bool is_direct() const override { return false; }
+  explicit GaussSeidelSolver(const Options& options)
+      : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
   /// Colours of the last factorized matrix (1 for the natural ordering).
   int num_colors() const { return static_cast<int>(color_begin_.size()) - 1; }
 
  private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  friend class iterative::BlockIterativeSolver<GaussSeidelSolver>;
   template <int K>
   SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                           Eigen::Index first);
@@ -74,7 +70,6 @@ class GaussSeidelSolver final : public LinearSolver {
 
   Options options_;
   Index rows_ = 0;
-  bool factorized_ = false;
   // The matrix in sweep order: row k of the stored matrix is row order_[k] of A.
   std::vector<Index> order_;
   std::vector<Index> color_begin_;  ///< Rows [color_begin_[c], color_begin_[c+1]) share colour c.
@@ -85,5 +80,8 @@ class GaussSeidelSolver final : public LinearSolver {
   std::vector<double> inverse_diagonal_;
   iterative::Block b_, x_;
 };
+
+// SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.
+extern template class iterative::BlockIterativeSolver<GaussSeidelSolver>;
 
 }  // namespace harap

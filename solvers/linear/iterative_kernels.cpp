@@ -51,18 +51,12 @@ void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
                          IterationLimits& limits) {
   limits.max_iterations =
       node.Get("max_iterations", limits.max_iterations,
-               fmt::format("{}s per solve (per global step); a cap when tolerance > 0", iteration));
+               fmt::format("{}s per solve (per global step); a cap when tolerance > 0", iteration),
+               Range::AtLeast(1));
   limits.tolerance = node.Get("tolerance", limits.tolerance,
                               "stop when ‖b − A x‖ / ‖b‖ ≤ tolerance (per column); 0: always run "
-                              "max_iterations");
-  if (limits.max_iterations < 1) {
-    throw ConfigError(fmt::format("{}: max_iterations must be >= 1, got {}",
-                                  node.Where("max_iterations"), limits.max_iterations));
-  }
-  if (!(limits.tolerance >= 0.0 && limits.tolerance < 1.0)) {
-    throw ConfigError(fmt::format("{}: tolerance must be in [0, 1), got {}",
-                                  node.Where("tolerance"), limits.tolerance));
-  }
+                              "max_iterations",
+                              Range::HalfOpen(0.0, 1.0));
 }
 
 std::string DivergenceMessage(std::string_view solver, int iteration, std::string_view cause) {

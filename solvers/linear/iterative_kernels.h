@@ -211,35 +211,56 @@ void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
 /// The message for an iteration that diverged (residual grew by kDivergenceFactor, or NaN).
 std::string DivergenceMessage(std::string_view solver, int iteration, std::string_view cause);
 
-/// The body of every iterative Solve(): checks the call (a Factorize() happened, b and x fit
-/// the `rows`×`rows` matrix), runs solve_block(first, std::integral_constant<int, K>{}) for the
-/// column blocks [first, first + K) of b and x (K = 3 except for the last block), merges what
-/// the blocks report (iterations and residual are maxima over blocks, the first failure wins)
-/// and times the whole call. Every block measures its final residual (the stopping test needs
-/// it), so the summary's residual counts as computed.
+/// The body of every iterative SolveImpl(): runs solve_block(first, std::integral_constant<int,
+/// K>{}) for the column blocks [first, first + K) of b and x (K = 3 except for the last block)
+/// and merges what the blocks report: iterations and residual are maxima over blocks, the first
+/// failure wins, and the outcome is kConverged only if every block converged. (LinearSolver's
+/// Solve() checked the call and times it.)
 template <class F>
-SolveSummary SolveByBlocks(bool factorized, Index rows, const Eigen::Ref<const Eigen::MatrixXd>& b,
-                           const Eigen::Ref<Eigen::MatrixXd>& x, F&& solve_block) {
-  const Stopwatch clock;
-  HARAP_CHECK(factorized, "Solve() needs a successful Factorize() first");
-  HARAP_CHECK(b.rows() == rows && x.rows() == rows && x.cols() == b.cols(),
-              "b is {}×{} and x is {}×{}, the matrix has {} rows", b.rows(), b.cols(), x.rows(),
-              x.cols(), rows);
+SolveSummary SolveByBlocks(const Eigen::Ref<const Eigen::MatrixXd>& b, F&& solve_block) {
   SolveSummary summary;
-  summary.residual_computed = rows > 0 && b.cols() > 0;
-  for (Eigen::Index first = 0; rows > 0 && first < b.cols(); first += kMaxBlockColumns) {
+  summary.outcome = SolveOutcome::kConverged;
+  for (Eigen::Index first = 0; first < b.cols(); first += kMaxBlockColumns) {
     const int k = static_cast<int>(std::min<Eigen::Index>(kMaxBlockColumns, b.cols() - first));
     const SolveSummary block =
         DispatchColumns(k, [&](auto width) { return solve_block(first, width); });
     summary.iterations = std::max(summary.iterations, block.iterations);
     summary.relative_residual = std::max(summary.relative_residual, block.relative_residual);
-    if (!block.success && summary.success) {
-      summary.success = false;
+    if (!summary.success()) continue;
+    if (!block.success()) {
+      summary.outcome = SolveOutcome::kFailed;
       summary.message = block.message;
+    } else if (block.outcome == SolveOutcome::kIterationLimit) {
+      summary.outcome = SolveOutcome::kIterationLimit;
     }
   }
-  summary.seconds = clock.Seconds();
   return summary;
+}
+
+/// The base of the iterative solvers (gauss_seidel, cg, chebyshev): LinearSolver's SolveImpl()
+/// written once, as SolveByBlocks over Derived::SolveBlock<K>(b, x, first), which solves the
+/// columns [first, first + K) (Derived befriends this class). Not direct.
+template <class Derived>
+class BlockIterativeSolver : public LinearSolver {
+ public:
+  bool is_direct() const final { return false; }
+
+ protected:
+  using LinearSolver::LinearSolver;
+
+ private:
+  SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                         const Context& /*context*/) final {
+    return SolveByBlocks(b, [&](Eigen::Index first, auto width) {
+      return static_cast<Derived&>(*this).template SolveBlock<decltype(width)::value>(b, x, first);
+    });
+  }
+};
+
+/// The outcome of a block that did not fail: kConverged if no column of `convergence` is still
+/// active, else kIterationLimit.
+inline SolveOutcome BlockOutcome(const ColumnConvergence& convergence) {
+  return convergence.any_active() ? SolveOutcome::kIterationLimit : SolveOutcome::kConverged;
 }
 
 /// The compressed copy of `a` the solvers iterate with (Eigen's uncompressed storage has gaps

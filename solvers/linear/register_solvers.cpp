@@ -16,29 +16,23 @@ namespace harap {
 
 void RegisterLinearSolvers(Registry<LinearSolver>& registry) {
 #ifdef HARAP_HAVE_CHOLMOD
-  registry.Add(std::string(CholmodSolver::kName),
-               "sparse Cholesky with CHOLMOD (SuiteSparse), simplicial LDLᵀ or supernodal LLᵀ",
-               &CholmodSolver::Create);
-  registry.Add(std::string(AdaptiveSolver::kName),
-               "cholmod or cg per matrix, chosen from CHOLMOD's analysis (memory and arithmetic "
-               "of the factor vs. CG iterations) before factoring (paper Section 5.2)",
-               &AdaptiveSolver::Create);
+  registry.Add<CholmodSolver>(
+      "sparse Cholesky with CHOLMOD (SuiteSparse), simplicial LDLᵀ or supernodal LLᵀ");
+  registry.Add<AdaptiveSolver>(
+      "cholmod or cg per matrix, chosen from CHOLMOD's analysis (memory and arithmetic of the "
+      "factor vs. CG iterations) before factoring (paper Section 5.2)");
 #endif
-  registry.Add(std::string(EigenLdltSolver::kName),
-               "sparse LDLᵀ with Eigen's SimplicialLDLT and AMD ordering (reference, always built)",
-               &EigenLdltSolver::Create);
-  registry.Add(std::string(GaussSeidelSolver::kName),
-               "Gauss–Seidel/SOR sweeps (forward or symmetric), parallel by graph colouring, "
-               "warm-started",
-               &GaussSeidelSolver::Create);
-  registry.Add(std::string(ConjugateGradientSolver::kName),
-               "preconditioned conjugate gradients (Jacobi or incomplete Cholesky), three "
-               "right-hand sides per pass, warm-started",
-               &ConjugateGradientSolver::Create);
-  registry.Add(std::string(ChebyshevSolver::kName),
-               "Chebyshev semi-iterative acceleration of Jacobi [Wang 2015], bounds from Spectra, "
-               "warm-started",
-               &ChebyshevSolver::Create);
+  registry.Add<EigenLdltSolver>(
+      "sparse LDLᵀ with Eigen's SimplicialLDLT and AMD ordering (reference, always built)");
+  registry.Add<GaussSeidelSolver>(
+      "Gauss–Seidel/SOR sweeps (forward or symmetric), parallel by graph colouring, "
+      "warm-started");
+  registry.Add<ConjugateGradientSolver>(
+      "preconditioned conjugate gradients (Jacobi or incomplete Cholesky), three "
+      "right-hand sides per pass, warm-started");
+  registry.Add<ChebyshevSolver>(
+      "Chebyshev semi-iterative acceleration of Jacobi [Wang 2015], bounds from Spectra, "
+      "warm-started");
 }
 
 }  // namespace harap

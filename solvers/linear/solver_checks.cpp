@@ -58,36 +58,15 @@ double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::
   return worst;
 }
 
-void CheckPivotTolerance(const ConfigNode& node, double value) {
-  if (value >= 0.0 && value < 1.0) return;
-  const std::string key =
-      node.path().empty() ? std::string("pivot_tolerance") : node.path() + ".pivot_tolerance";
-  throw ConfigError(fmt::format("{}: option '{}' is {}, which is not in [0, 1)",
-                                node.Where("pivot_tolerance"), key, value));
-}
-
-std::string NonFiniteSolutionMessage(std::string_view solver,
-                                     const Eigen::Ref<const Eigen::MatrixXd>& b) {
-  return b.allFinite() ? fmt::format(
-                             "{}: the solution has NaN or infinite entries (the matrix is "
-                             "numerically singular)",
-                             solver)
-                       : fmt::format("{}: the right-hand side has NaN or infinite entries", solver);
-}
-
-}  // namespace harap::solver_checks
-
-namespace harap::solver_checks {
-
 void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
                               bool& check_residual) {
   pivot_tolerance =
       node.Get("pivot_tolerance", pivot_tolerance,
                "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "
-               "error); in [0, 1)");
+               "error)",
+               Range::HalfOpen(0.0, 1.0));
   check_residual = node.Get("check_residual", check_residual,
                             "compute max ‖b − A x‖ / ‖b‖ on every solve (keeps a copy of A; slow)");
-  CheckPivotTolerance(node, pivot_tolerance);
 }
 
 }  // namespace harap::solver_checks

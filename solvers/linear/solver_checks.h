@@ -35,17 +35,10 @@ inline bool AcceptablePivot(double pivot, double diagonal, double pivot_toleranc
 double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::MatrixXd>& b,
                            const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::MatrixXd& workspace);
 
-/// Throws ConfigError (naming where `node`'s pivot_tolerance was written) unless 0 ≤ value < 1.
-void CheckPivotTolerance(const ConfigNode& node, double value);
-
 /// Reads the options every factorization-based solver shares — `pivot_tolerance` (validated)
 /// and `check_residual` — with their help texts, into the given fields (defaults on input).
 void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
                               bool& check_residual);
-
-/// The message for a solution with NaN or infinite entries (a singular matrix or a bad `b`).
-std::string NonFiniteSolutionMessage(std::string_view solver,
-                                     const Eigen::Ref<const Eigen::MatrixXd>& b);
 
 /// Advice shared by the "not positive definite" messages.
 inline constexpr std::string_view kNotPositiveDefiniteAdvice =

@@ -70,7 +70,7 @@ class ScaledInverse {
     const Eigen::Index n = s_.size();
     for (Eigen::Index i = 0; i < n; ++i) rhs_(i, 0) = x[i] / s_[i];
     const SolveSummary summary = cholesky_.Solve(rhs_, x_, context_);
-    if (!summary.success) throw NumericalError("spectral bounds: " + summary.message);
+    if (!summary.success()) throw NumericalError("spectral bounds: " + summary.message);
     for (Eigen::Index i = 0; i < n; ++i) y[i] = x_(i, 0) / s_[i];
     ++solves_;
   }

@@ -14,7 +14,7 @@
 #include "framework/error.h"
 #include "framework/rotation.h"
 #include "solvers/optimizers/small_svd.h"
-#include "solvers/optimizers/classic_optimizer.h"
+#include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/local_global_solver.h"
 
 namespace harap {
@@ -76,50 +76,47 @@ double FrobeniusDot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant) {
   AdmmOptions options;
   options.variant = variant;
-  options.beta = node.Get("beta", options.beta,
-                          "ADMM weights w_t² = beta·vol_t (in WRAPD's units, energy ½ vol ‖F − R‖²)");
+  options.beta =
+      node.Get("beta", options.beta,
+               "ADMM weights w_t² = beta·vol_t (in WRAPD's units, energy ½ vol ‖F − R‖²)",
+               Range::Above(0.0));
   options.tolerance = node.Get("tolerance", options.tolerance,
                                "stop when the relative energy change stays below this for "
-                               "`patience` iterations and no element is inverted (0: never)");
-  options.patience = node.Get("patience", options.patience,
-                              "consecutive iterations the tolerance test must hold");
+                               "`patience` iterations and no element is inverted (0: never)",
+                               Range::AtLeast(0.0));
+  options.patience =
+      node.Get("patience", options.patience, "consecutive iterations the tolerance test must hold",
+               Range::AtLeast(1));
   options.max_iterations = node.Get("max_iterations", options.max_iterations,
-                                    "cap on ADMM iterations (per level)");
+                                    "cap on ADMM iterations (per level)", Range::AtLeast(1));
   if (variant == AdmmVariant::kRotationAware) {
     options.lbfgs_iterations = node.Get("lbfgs_iterations", options.lbfgs_iterations,
-                                        "L-BFGS iterations per global step");
-    options.lbfgs_history = node.Get("lbfgs_history", options.lbfgs_history,
-                                     "L-BFGS (s, y) pairs kept within a global step");
+                                        "L-BFGS iterations per global step", Range::AtLeast(1));
+    options.lbfgs_history =
+        node.Get("lbfgs_history", options.lbfgs_history,
+                 "L-BFGS (s, y) pairs kept within a global step", Range::AtLeast(1));
   }
-  const auto require = [&](bool ok, std::string_view key, auto value, std::string_view what) {
-    if (!ok) throw ConfigError(fmt::format("{}: {} must be {}, got {}", node.Where(key), key, what,
-                                           value));
-  };
-  require(std::isfinite(options.beta) && options.beta > 0.0, "beta", options.beta, "> 0");
-  require(std::isfinite(options.tolerance) && options.tolerance >= 0.0, "tolerance",
-          options.tolerance, ">= 0");
-  require(options.patience >= 1, "patience", options.patience, ">= 1");
-  require(options.max_iterations >= 1, "max_iterations", options.max_iterations, ">= 1");
-  require(options.lbfgs_iterations >= 1, "lbfgs_iterations", options.lbfgs_iterations, ">= 1");
-  require(options.lbfgs_history >= 1, "lbfgs_history", options.lbfgs_history, ">= 1");
   return options;
 }
 
-AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& constrained,
-                                 const ComponentFactory& factory, int level,
-                                 const Context& context, bool with_energy, bool drop_misoriented,
-                                 double beta)
-    : level_(level), planar_(mesh.planar), simplex_size_(mesh.simplex_size()),
-      elements_(mesh.elements) {
-  Stopwatch clock;
-  context.ReportPhase(fmt::format("precomputing level {}", level));
+std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAdmmPd(const ConfigNode& node) {
+  return std::make_unique<AdmmLevelSolver>(
+      ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics));
+}
+
+std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateWrapd(const ConfigNode& node) {
+  return std::make_unique<AdmmLevelSolver>(ReadAdmmOptions(node, AdmmVariant::kRotationAware));
+}
+
+std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAnother() const {
+  return std::make_unique<AdmmLevelSolver>(options_);
+}
+
+void AdmmLevelSolver::ElementOperators(const Mesh& mesh, bool drop_misoriented,
+                                       const Context& context) {
   const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
-  if (!tetrahedra && !mesh.planar) {
-    throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
-                     "`elements`); this mesh is a surface");
-  }
   const Index num_elements = mesh.num_elements();
-  const Index num_vertices = mesh.num_vertices();
+  const double beta = options_.beta;
   gradients_.assign(num_elements, Eigen::Matrix<double, 4, 3>::Zero());
   volume_.assign(num_elements, 0.0);
   weight_.assign(num_elements, 0.0);
@@ -168,7 +165,11 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
     volume_[t] = std::abs(signed_volume[t]);
     weight_[t] = beta * volume_[t];
   }
+}
 
+void AdmmLevelSolver::AssembleA0() {
+  const Index num_elements = elements_.rows();
+  const Index num_vertices = mesh_->num_vertices();
   // Vertex → (element, corner) incidence, for the allocation-free parallel gathers.
   incidence_start_.assign(num_vertices + 1, 0);
   for (Index t = 0; t < num_elements; ++t) {
@@ -195,8 +196,40 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
       }
     }
   }
-  SparseMatrix a0(num_vertices, num_vertices);
-  a0.setFromTriplets(triplets.begin(), triplets.end());
+  a0_.resize(num_vertices, num_vertices);
+  a0_.setFromTriplets(triplets.begin(), triplets.end());
+}
+
+void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                                 const Context& context) {
+  if (setup.handle_edits) {
+    throw ConfigError("the ADMM level solvers eliminate their constrained vertices once; they "
+                      "do not support handle edits (interactive sessions): use local_global");
+  }
+  const Mesh& mesh = *setup.mesh;
+  const int level = setup.level;
+  // Only the input level needs the factory's energy (final energy and measures); coarse levels
+  // drop their inverted elements (Section 7: "filtering all inverted elements").
+  const bool with_energy = setup.input_mesh == nullptr;
+  const bool drop_misoriented = setup.input_mesh != nullptr;
+  const double beta = options_.beta;
+  mesh_ = &mesh;
+  level_ = level;
+  planar_ = mesh.planar;
+  simplex_size_ = mesh.simplex_size();
+  elements_ = mesh.elements;
+  Stopwatch clock;
+  context.ReportPhase(fmt::format("precomputing level {}", level));
+  const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
+  if (!tetrahedra && !mesh.planar) {
+    throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
+                     "`elements`); this mesh is a surface");
+  }
+  const Index num_elements = mesh.num_elements();
+  const Index num_vertices = mesh.num_vertices();
+  ElementOperators(mesh, drop_misoriented, context);
+  AssembleA0();
+  const SparseMatrix& a0 = a0_;
 
   if (with_energy) {
     energy_ = factory.MakeEnergy();
@@ -212,19 +245,6 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
           "(the configured energy has a different global-step matrix or rotation sites)");
     }
   }
-  precompute_seconds_ = clock.Seconds();
-
-  clock.Restart();
-  context.ReportPhase(fmt::format("factoring level {}", level));
-  for (Index v : constrained) {
-    HARAP_CHECK(v >= 0 && v < num_vertices, "constrained vertex {} out of range", v);
-  }
-  system_ = std::make_unique<ConstrainedSystem>(a0, constrained);
-  solver_ = factory.MakeLinearSolver(level, system_->num_free());
-  if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
-  constrain_seconds_ = clock.Seconds();
-  if (context.system_callback) context.system_callback(level_, system_->reduced_matrix());
-
   f_.assign(num_elements, Eigen::Matrix3d::Zero());
   z_ = f_;
   dual_ = f_;
@@ -232,8 +252,77 @@ AdmmLevelSolver::AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& con
   goal_ = f_;
   if (!planar_) svd_.assign(num_elements, SignedRightSvd{Eigen::Matrix3d::Identity(), {1.0, 1.0, 1.0}});
   rhs_.resize(num_vertices, 3);
+  precompute_seconds_ = clock.Seconds();
+}
+
+ConstrainSummary AdmmLevelSolver::Constrain(const LevelConstraints& constraints,
+                                            const ComponentFactory& factory,
+                                            const Context& context) {
+  Stopwatch clock;
+  context.ReportPhase(fmt::format("factoring level {}", level_));
+  const Index num_vertices = a0_.rows();
+  for (Index v : constraints.vertices) {
+    HARAP_CHECK(v >= 0 && v < num_vertices, "constrained vertex {} out of range", v);
+  }
+  HARAP_CHECK(static_cast<Index>(constraints.vertices.size()) == constraints.mean_target.rows(),
+              "{} constrained vertices but {} targets", constraints.vertices.size(),
+              constraints.mean_target.rows());
+  constraints_ = constraints;
+  if (constraints_.follow_rotations()) FindIncidentElements(*mesh_, constraints_);
+  system_ = std::make_unique<ConstrainedSystem>(a0_, constraints_.vertices);
+  solver_ = factory.MakeLinearSolver(level_, system_->num_free());
+  if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
+  constrain_seconds_ = clock.Seconds();
+  if (context.system_callback) context.system_callback(level_, system_->reduced_matrix());
   reduced_rhs_.resize(system_->num_free(), 3);
   reduced_x_.resize(system_->num_free(), 3);
+  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system_->num_free(),
+                          constrain_seconds_};
+}
+
+void AdmmLevelSolver::MoveTargets(const Positions& mean_target) {
+  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
+              "{} targets for {} constrained vertices", mean_target.rows(),
+              constraints_.mean_target.rows());
+  constraints_.mean_target = mean_target;
+}
+
+LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveRequest& request,
+                                        const Context& context) {
+  if (request.global_step_only) {
+    throw InputError("the ADMM level solvers have no rotation-driven global step (a preview)");
+  }
+  AdmmOptions options = options_;
+  if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
+  if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
+  // The targets are placed once (ADMM keeps no rotations to follow).
+  const bool have_rotations = state.rotations.size() == f_.size();
+  PlaceConstrainedVertices(constraints_, RotationSite::kElement,
+                           have_rotations ? &state.rotations : nullptr, state.positions);
+  const RunResult run = Run(state.positions, options, context);
+  LevelSolveResult result;
+  result.iterations = run.iterations;
+  result.energy = run.energy;
+  result.converged = run.converged;
+  result.stopped_by_callback = run.stopped_by_callback;
+  result.linear_solves = run.linear_solves;
+  result.measures["inverted_elements"] = static_cast<double>(run.inverted_elements);
+  if (energy_ != nullptr) {
+    // The input level: the report's energy, by the factory's energy.
+    result.energy = FitRotations(state, context);
+    if (run.inverted_elements > 0) {
+      result.notes.push_back(fmt::format("{} elements are inverted (det F < 0) at the end",
+                                         run.inverted_elements));
+    }
+  } else {
+    // The up-sampler's input: rotations of the elements' polar decompositions.
+    state.rotations = ElementRotations(state.positions, context);
+  }
+  if (dropped_ > 0) {
+    result.notes.push_back(
+        fmt::format("level {}: {} inverted elements dropped", level_, dropped_));
+  }
+  return result;
 }
 
 Eigen::Matrix3d AdmmLevelSolver::DeformationGradient(const Positions& u, Index t) const {
@@ -275,7 +364,7 @@ void AdmmLevelSolver::SolveA0(const Eigen::MatrixXd& rhs_f, Eigen::MatrixXd& x_f
                               SolveStatistics& statistics, const Context& context) {
   const SolveSummary summary = solver_->Solve(rhs_f, x_f, context);
   statistics.Add(summary);
-  if (!summary.success) {
+  if (!summary.success()) {
     throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                      summary.message));
   }
@@ -309,13 +398,16 @@ Rotations AdmmLevelSolver::ElementRotations(const Positions& u, const Context& c
   return rotations;
 }
 
-double AdmmLevelSolver::FinalEnergy(const Positions& u, std::map<std::string, double>& measures,
-                                    const Context& context) const {
-  HARAP_CHECK(energy_ != nullptr, "AdmmLevelSolver::FinalEnergy without the level's energy");
-  Rotations rotations = ElementRotations(u, context);
-  const double energy = energy_->FitRotations(u, rotations, context);
-  measures = energy_->AuxiliaryMeasures(u, rotations, context);
-  return energy;
+double AdmmLevelSolver::FitRotations(LevelState& state, const Context& context) {
+  HARAP_CHECK(energy_ != nullptr, "AdmmLevelSolver::FitRotations on a coarse level");
+  state.rotations = ElementRotations(state.positions, context);
+  return energy_->FitRotations(state.positions, state.rotations, context);
+}
+
+std::map<std::string, double> AdmmLevelSolver::AuxiliaryMeasures(const LevelState& state,
+                                                                 const Context& context) const {
+  HARAP_CHECK(energy_ != nullptr, "AdmmLevelSolver::AuxiliaryMeasures on a coarse level");
+  return energy_->AuxiliaryMeasures(state.positions, state.rotations, context);
 }
 
 void AdmmLevelSolver::Decompose(const Positions& u, const Context& context) {
@@ -542,42 +634,6 @@ AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions&
     }
   }
   result.energy = energy;
-  return result;
-}
-
-OptimizeResult OptimizeWithAdmm(const DeformationProblem& problem, const ComponentFactory& factory,
-                                const Context& context, const AdmmOptions& options) {
-  Stopwatch total;
-  OptimizeResult result;
-  const Mesh& mesh = *problem.mesh;
-  Positions u = InitialPositions(problem);
-  AdmmLevelSolver level(mesh, problem.constraints.indices, factory, 0, context,
-                        /*with_energy=*/true, /*drop_misoriented=*/false, options.beta);
-  result.timings.precompute = level.precompute_seconds();
-  result.timings.constrain = level.constrain_seconds();
-
-  Stopwatch solve_clock;
-  const auto run = level.Run(u, options, context);
-  result.timings.solve = solve_clock.Seconds();
-
-  result.energy = level.FinalEnergy(u, result.measures, context);
-  result.positions = std::move(u);
-  result.iterations = run.iterations;
-  result.total_iterations = run.iterations;
-  result.converged = run.converged;
-  result.stopped_by_callback = run.stopped_by_callback;
-  result.constraints = level.system().report();
-  result.notes = DescribeConstraintHandling(result.constraints);
-  if (run.inverted_elements > 0) {
-    result.notes.push_back(fmt::format("{} elements are inverted (det F < 0) at the end",
-                                       run.inverted_elements));
-  }
-  result.timings.total = total.Seconds();
-  LevelResult level_result{0, mesh.num_vertices(), mesh.num_elements(), run.iterations,
-                           result.energy, result.timings.total, run.converged,
-                           level.system().num_free(), run.linear_solves};
-  level_result.inverted_elements = run.inverted_elements;
-  result.levels.push_back(level_result);
   return result;
 }
 

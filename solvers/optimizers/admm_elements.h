@@ -9,6 +9,7 @@
 
 #include "framework/config.h"
 #include "framework/constrained_system.h"
+#include "framework/level_solver.h"
 #include "framework/optimizer.h"
 #include "solvers/optimizers/small_svd.h"
 
@@ -50,22 +51,47 @@ AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant);
 /// free vertices (the factory's LinearSolver, constrained vertices eliminated by
 /// ConstrainedSystem), the ADMM iteration itself and inverted-element counting.
 ///
-/// Construction is the P phase (operators, weights, A₀) and the C phase (elimination and
-/// factorization). Degenerate rest elements get weight 0, exactly as in `elements`. With
-/// `drop_misoriented` (coarse hierarchy levels, whose clustered elements can be turned inside out
+/// Precompute() is the P phase (operators, weights, A₀), Constrain() the C phase (elimination
+/// and factorization). Degenerate rest elements get weight 0, exactly as in `elements`. On
+/// coarse levels (coarse hierarchy levels, whose clustered elements can be turned inside out
 /// relative to the input mesh) elements whose signed rest volume has the opposite sign of the
 /// majority are dropped too: the paper's "filtering all inverted elements from the levels of the
 /// hierarchy ... extending the definition of degenerated elements to inverted elements".
 ///
-/// On level 0 (`with_energy`) the factory's energy is precomputed as well; its A must be the
-/// level's unweighted Laplacian Σ_t vol_t D_tᵀ D_t (so it is the `elements` energy), else
-/// ConfigError. The final energy and its auxiliary measures (energy_wrapd) come from it, so the
-/// report uses one energy definition for every optimizer.
-class AdmmLevelSolver {
+/// On the input level (LevelSetup::input_mesh null) the factory's energy is precomputed as well;
+/// its A must be the level's unweighted Laplacian Σ_t vol_t D_tᵀ D_t (so it is the `elements`
+/// energy), else ConfigError. The final energy and its auxiliary measures (energy_wrapd) come
+/// from it, so the report uses one energy definition for every optimizer.
+///
+/// As a LevelSolver (registry names `admm_pd` and `wrapd`): the targets are placed once per
+/// solve (with the handed-down rotations on coarse levels); Solve() leaves the polar rotations of
+/// the elements in the state (the up-sampler's input; Eq. 11 averages them to vertices) and
+/// reports "inverted_elements". Handle edits (LevelSetup::handle_edits) are not supported.
+class AdmmLevelSolver final : public LevelSolver {
  public:
-  AdmmLevelSolver(const Mesh& mesh, const std::vector<Index>& constrained,
-                  const ComponentFactory& factory, int level, const Context& context,
-                  bool with_energy, bool drop_misoriented, double beta);
+  explicit AdmmLevelSolver(const AdmmOptions& options) : options_(options) {}
+  /// `admm_pd` and `wrapd`: reads AdmmOptions; the caller rejects unknown keys.
+  static std::unique_ptr<LevelSolver> CreateAdmmPd(const ConfigNode& node);
+  static std::unique_ptr<LevelSolver> CreateWrapd(const ConfigNode& node);
+
+  // LevelSolver.
+  std::unique_ptr<LevelSolver> CreateAnother() const override;
+  void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                  const Context& context) override;
+  ConstrainSummary Constrain(const LevelConstraints& constraints, const ComponentFactory& factory,
+                             const Context& context) override;
+  void MoveTargets(const Positions& mean_target) override;
+  /// Run() with the level's options and the request's limits; on the input level the result's
+  /// energy is the factory energy's (rotations fitted), as the report gives it.
+  LevelSolveResult Solve(LevelState& state, const LevelSolveRequest& request,
+                         const Context& context) override;
+  /// Element rotations polar(F_t) refined by the factory's energy (input level only).
+  double FitRotations(LevelState& state, const Context& context) override;
+  std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
+                                                  const Context& context) const override;
+  RotationSite rotation_site() const override { return RotationSite::kElement; }
+  Index num_unknowns() const override { return system_->num_free(); }
+  ConstraintReport constraint_report() const override { return system_->report(); }
 
   struct RunResult {
     int iterations = 0;
@@ -84,20 +110,18 @@ class AdmmLevelSolver {
   /// the element-rotation up-sampling (Eq. 11 averages them to vertices).
   Rotations ElementRotations(const Positions& u, const Context& context) const;
 
-  /// Energy of `u` by the factory's energy (rotations fitted), and its auxiliary measures.
-  /// Requires with_energy.
-  double FinalEnergy(const Positions& u, std::map<std::string, double>& measures,
-                     const Context& context) const;
-
   /// Σ_t vol_t ‖F_t − R_t‖² of `u` (weight-0 elements left out) and the inverted-element count.
   double Evaluate(const Positions& u, Index& inverted, const Context& context) const;
 
   const ConstrainedSystem& system() const { return *system_; }
   Index dropped_elements() const { return dropped_; }
-  double precompute_seconds() const { return precompute_seconds_; }
-  double constrain_seconds() const { return constrain_seconds_; }
 
  private:
+  /// The P phase's per-element part: gradients of the barycentric coordinates, rest volumes and
+  /// weights (degenerate and, with `drop_misoriented`, misoriented elements get weight 0).
+  void ElementOperators(const Mesh& mesh, bool drop_misoriented, const Context& context);
+  /// The vertex → (element, corner) incidence and A₀ = Σ_t w_t² D_tᵀ D_t into a0_.
+  void AssembleA0();
   /// F_t(u) = Σ_a u_a ∇φ_aᵀ of element t (planar meshes: z row and column of the identity).
   Eigen::Matrix3d DeformationGradient(const Positions& u, Index t) const;
   /// F_t(u) for every element into f_.
@@ -120,9 +144,13 @@ class AdmmLevelSolver {
   void WrapdGlobalStep(Positions& u, const AdmmOptions& options, SolveStatistics& statistics,
                        const Context& context);
 
-  int level_;
-  bool planar_;
-  int simplex_size_;
+  AdmmOptions options_;
+  const Mesh* mesh_ = nullptr;  ///< the level's (outlives the solver)
+  int level_ = 0;
+  bool planar_ = false;
+  int simplex_size_ = 3;
+  LevelConstraints constraints_;
+  SparseMatrix a0_;  ///< A₀ on all vertices (Precompute), eliminated by Constrain
   Elements elements_;
   std::vector<Eigen::Matrix<double, 4, 3>> gradients_;  ///< rows: ∇φ_a at rest (unused rows 0)
   std::vector<double> volume_;         ///< rest volume (area); 0 for degenerate/dropped
@@ -133,8 +161,6 @@ class AdmmLevelSolver {
   std::unique_ptr<Energy> energy_;
   std::unique_ptr<ConstrainedSystem> system_;
   std::unique_ptr<LinearSolver> solver_;
-  double precompute_seconds_ = 0.0;
-  double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
   std::vector<Eigen::Matrix3d> f_, z_, dual_, target_, goal_;  ///< goal_ = Z − U
   std::vector<SignedRightSvd> svd_;  ///< wrapd: of f_ (not for planar meshes)
@@ -148,9 +174,5 @@ class AdmmLevelSolver {
   Eigen::MatrixXd gradient_f_, trial_gradient_f_, direction_f_, x_f_, trial_x_f_;
   Positions trial_u_;
 };
-
-/// The flat optimizers `admm_pd` and `wrapd`: one AdmmLevelSolver on the input mesh.
-OptimizeResult OptimizeWithAdmm(const DeformationProblem& problem, const ComponentFactory& factory,
-                                const Context& context, const AdmmOptions& options);
 
 }  // namespace harap

@@ -36,35 +36,52 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
   return result;
 }
 
-namespace {
-
-// Vertex rotation of constrained vertex k: the site rotation for per-vertex energies, else the
-// projected mean of its incident elements' rotations (Eq. 11).
-Eigen::Matrix3d ConstrainedVertexRotation(const LevelConstraints& constraints, size_t k,
-                                          RotationSite site, const Rotations& rotations) {
-  if (site == RotationSite::kVertex) return rotations[constraints.vertices[k]];
-  const auto& elements = constraints.incident_elements[k];
-  if (elements.empty()) return Eigen::Matrix3d::Identity();
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-  for (Index e : elements) sum += rotations[e];
-  return NearestRotation(sum, constraints.planar);
+void FindIncidentElements(const Mesh& mesh, LevelConstraints& constraints) {
+  auto& incident = constraints.incident_elements;
+  incident.assign(constraints.vertices.size(), {});
+  std::vector<Index> slot(mesh.num_vertices(), kNoVertex);
+  for (size_t k = 0; k < constraints.vertices.size(); ++k) {
+    slot[constraints.vertices[k]] = static_cast<Index>(k);
+  }
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < mesh.simplex_size(); ++a) {
+      if (slot[mesh.elements(e, a)] != kNoVertex) incident[slot[mesh.elements(e, a)]].push_back(e);
+    }
+  }
 }
-
-}  // namespace
 
 void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite site,
                               const Rotations* rotations, Positions& positions) {
+  const bool exact = !constraints.follow_rotations();
   for (size_t k = 0; k < constraints.vertices.size(); ++k) {
     Eigen::RowVector3d target = constraints.mean_target.row(k);
-    if (rotations) {
-      const Eigen::Matrix3d r = ConstrainedVertexRotation(constraints, k, site, *rotations);
-      target -= (r * constraints.mean_offset.row(k).transpose()).transpose();
-    } else {
+    if (exact) {
+      // The input level: the targets themselves.
+    } else if (rotations == nullptr) {
       target -= constraints.mean_offset.row(k);
+    } else {
+      // The vertex's rotation: its own for per-vertex energies, else Eq. 11.
+      const auto& elements = constraints.incident_elements;
+      const Eigen::Matrix3d r =
+          site == RotationSite::kVertex
+              ? (*rotations)[constraints.vertices[k]]
+              : MeanElementRotation(*rotations, static_cast<Index>(elements[k].size()),
+                                    [&](Index i) { return elements[k][i]; }, constraints.planar);
+      target -= (r * constraints.mean_offset.row(k).transpose()).transpose();
     }
     positions.row(constraints.vertices[k]) = target;
   }
 }
 
+LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
+                                       const std::vector<Index>& new_vertex,
+                                       const std::vector<Index>& new_element) {
+  LevelConstraints renumbered = constraints;
+  for (Index& v : renumbered.vertices) v = new_vertex[v];
+  for (auto& elements : renumbered.incident_elements) {
+    for (Index& e : elements) e = new_element[e];
+  }
+  return renumbered;
+}
 
 }  // namespace harap

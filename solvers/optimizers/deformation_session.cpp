@@ -13,34 +13,23 @@
 #include <unordered_set>
 
 #include "framework/error.h"
-#include "solvers/optimizers/classic_optimizer.h"
+#include "solvers/optimizers/local_global_solver.h"
 #include "solvers/optimizers/level_setup_pipeline.h"
 
 namespace harap {
 
-SessionOptions SessionOptions::FromConfig(const ConfigNode& node) {
+SessionOptions SessionOptions::FromConfig(const ConfigNode& node,
+                                          const Registry<LevelSolver>& level_solvers) {
   SessionOptions options;
   const std::string type =
       node.GetChoice("type", "classic", {"classic", "hierarchical"},
                      "which optimizer (a session runs classic or hierarchical)");
-  if (type == "classic") {
-    options.optimizer.iterations = ClassicOptimizer::Options::FromConfig(node).iterations;
-  } else {
-    options.hierarchical = true;
-    options.optimizer = HierarchicalOptimizer::Options::FromConfig(node);
-    if (options.optimizer.inner != HierarchicalOptimizer::Inner::kLocalGlobal) {
-      throw ConfigError(
-          fmt::format("{}: a session runs the local/global iteration on every "
-                      "level; the ADMM inner optimizers are for one-shot runs",
-                      node.Where("inner")));
-    }
-  }
-  if (options.optimizer.iterations.newton > 0) {
-    throw ConfigError(fmt::format(
-        "{}: Newton steps work on the eliminated global system of a one-shot run; a session "
-        "masks its handles instead: set newton = 0 (anderson works in a session)",
-        node.Where("newton")));
-  }
+  options.hierarchical = type == "hierarchical";
+  // The level solvers say themselves what they cannot do in a session (handle edits).
+  options.optimizer = options.hierarchical
+                          ? HierarchicalOptimizer::Options::FromConfig(node, level_solvers)
+                          : HierarchicalOptimizer::Options::OneLevel(node, level_solvers,
+                                                                     LocalGlobalSolver::kName);
   return options;
 }
 
@@ -65,9 +54,8 @@ std::string_view SessionOptions::FrameStartName(FrameStart start) {
 }
 
 struct DeformationSession::Level {
-  std::unique_ptr<LocalGlobalSolver> solver;
-  LevelConstraints constraints;  ///< coarse levels: in the mesh's numbering
-  LevelConstraints internal;     ///< the same in the solver's numbering (moving targets)
+  std::unique_ptr<LevelSolver> solver;
+  LevelConstraints constraints;  ///< coarse levels (the mesh's numbering)
   LevelState state;              ///< the last solution, in the mesh's numbering
   bool has_solution = false;
   /// The session's problem version `state` solves (DeformationSession::version_).
@@ -90,24 +78,20 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
     setup_timings_.hierarchy = phase.Seconds();
     const int levels = num_levels();
     const int coarsest = levels - 1;
-    std::vector<bool> solved(levels, false);
-    solved[0] = solved[coarsest] = true;
-    const HierarchicalOptimizer::Options& o = options_.optimizer;
-    if (options_.hierarchical && !o.coarsest_only && !o.coarse_approximation) {
-      for (int l = coarsest; l >= 0; l -= o.level_step) solved[l] = true;
-    }
+    solved_levels_ = options_.optimizer.SolvedLevels(levels);
     levels_.resize(levels);
-    for (int l = coarsest; l >= 0; --l) {
-      if (!solved[l]) continue;
-      solved_levels_.push_back(l);
+    for (int l : solved_levels_) {
       levels_[l] = std::make_unique<Level>();
-      // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-      levels_[l]->solver =
-          std::make_unique<LocalGlobalSolver>(l == 0 ? mesh_ : hierarchy_.levels[l].mesh, factory_,
-                                              l, context_, l > 0 ? &mesh_ : nullptr);
+      levels_[l]->solver = options_.optimizer.level_solver->CreateAnother();
+      // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh);
+      // every level keeps one system for all handle sets (handle edits).
+      levels_[l]->solver->Precompute(
+          LevelSetup{l == 0 ? &mesh_ : &hierarchy_.levels[l].mesh, l > 0 ? &mesh_ : nullptr, l,
+                     /*handle_edits=*/true},
+          factory_, context_);
       setup_timings_.precompute += levels_[l]->solver->precompute_seconds();
     }
-    site_ = levels_[coarsest]->solver->energy().rotation_site();
+    site_ = levels_[coarsest]->solver->rotation_site();
   });
   setup_timings_.total = clock.Seconds();
 }
@@ -179,7 +163,7 @@ void DeformationSession::SetTargets(const Positions& targets) {
   ValidateTargets(targets, handles_.size(), "SetTargets");
   targets_ = targets;
   ++version_;
-  UpdateCoarseTargets();
+  UpdateTargets();
 }
 
 HandleEditResult DeformationSession::AddHandles(const std::vector<Index>& indices,
@@ -273,39 +257,16 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   const Constraints finest{handles_, targets_};
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
-    LocalGlobalSolver& solver = *level.solver;
-    LocalGlobalSolver::ConstrainSummary summary;
+    LevelSolver& solver = *level.solver;
+    ConstrainSummary summary;
     Index constrained = static_cast<Index>(handles_.size());
     if (l == 0) {
-      summary = solver.ConstrainMasked(handles_, factory, context_);
+      summary = solver.Constrain(LevelConstraints::Exact(finest, mesh_.planar), factory, context_);
     } else {
-      // As the hierarchical optimizer's level setup: clusters holding a handle are
-      // constrained; per-element energies average the rotations of the incident elements.
-      const Mesh& level_mesh = hierarchy_.levels[l].mesh;
+      // As the hierarchical optimizer's level setup: clusters holding a handle are constrained.
       level.constraints = MapConstraints(hierarchy_, l, finest);
-      if (site_ == RotationSite::kElement) {
-        auto& incident = level.constraints.incident_elements;
-        incident.assign(level.constraints.vertices.size(), {});
-        std::vector<Index> slot(level_mesh.num_vertices(), kNoVertex);
-        for (size_t k = 0; k < level.constraints.vertices.size(); ++k) {
-          slot[level.constraints.vertices[k]] = static_cast<Index>(k);
-        }
-        for (Index e = 0; e < level_mesh.num_elements(); ++e) {
-          for (int a = 0; a < level_mesh.simplex_size(); ++a) {
-            if (slot[level_mesh.elements(e, a)] != kNoVertex) {
-              incident[slot[level_mesh.elements(e, a)]].push_back(e);
-            }
-          }
-        }
-      }
-      const MeshOrdering& ordering = solver.ordering();
-      level.internal = level.constraints;
-      for (Index& v : level.internal.vertices) v = ordering.new_vertex[v];
-      for (auto& elements : level.internal.incident_elements) {
-        for (Index& e : elements) e = ordering.new_element[e];
-      }
       constrained = static_cast<Index>(level.constraints.vertices.size());
-      summary = solver.ConstrainMasked(level.constraints.vertices, factory, context_);
+      summary = solver.Constrain(level.constraints, factory, context_);
     }
     done[l] = HandleEditResult::Level{
         l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds};
@@ -343,21 +304,21 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   for (auto it = solved_levels_.rbegin(); it != solved_levels_.rend(); ++it) {
     result.levels.push_back(done[*it]);
   }
-  result.constraints = levels_[0]->solver->system().report();
+  result.constraints = levels_[0]->solver->constraint_report();
   result.notes = DescribeConstraintHandling(result.constraints);
   result.seconds = clock.Seconds();
   return result;
 }
 
-void DeformationSession::UpdateCoarseTargets() {
+void DeformationSession::UpdateTargets() {
   const Constraints finest{handles_, targets_};
+  levels_[0]->solver->MoveTargets(targets_);
   for (int l : solved_levels_) {
     if (l == 0) continue;
     Level& level = *levels_[l];
     // The constrained vertices are the same (same handles): only the mean targets move.
-    const LevelConstraints mapped = MapConstraints(hierarchy_, l, finest);
-    level.constraints.mean_target = mapped.mean_target;
-    level.internal.mean_target = mapped.mean_target;
+    level.constraints.mean_target = MapConstraints(hierarchy_, l, finest).mean_target;
+    level.solver->MoveTargets(level.constraints.mean_target);
   }
 }
 
@@ -379,6 +340,100 @@ double DeformationSession::CurrentEnergy() {
   return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
 }
 
+bool DeformationSession::StraightPreview(bool preview, int top) {
+  // A preview whose upsampler only copies each coarse vertex's rotation down: straight from the
+  // coarsest level to the finest along the composed map (the paper's Fig. 15), one parallel
+  // gather into the kept state instead of up-sampling positions and rotations through every
+  // level (fresh arrays per level). The finest level's rotations are the same; its positions
+  // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
+  // so with a direct solver the result is identical (an iterative one starts from the last
+  // frame's positions instead of the up-sampled ones).
+  const bool straight = preview && preview_straight_ && top > 0 &&
+                        upsampler_->output() == UpsampleOutput::kRotations &&
+                        upsampler_->RotationsFollowCoarseVertex(site_);
+  if (straight && preview_map_.empty()) {
+    preview_map_.resize(mesh_.num_vertices());
+    for (Index v = 0; v < mesh_.num_vertices(); ++v) {
+      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
+    }
+  }
+  return straight;
+}
+
+LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
+                                                   bool preview, bool out_of_time,
+                                                   bool start_with_global_step) const {
+  // The level solver places the handles (coarse levels: with the state's rotations, and again
+  // before every global step with update_constraints).
+  LevelSolveRequest request =
+      options_.optimizer.Request(l, num_levels(), start_with_global_step, diagonal_);
+  if (solve_options.tolerance >= 0.0 && request.tolerance < 0.0) {
+    request.tolerance = solve_options.tolerance;
+  }
+  if (solve_options.max_iterations > 0 && request.max_iterations <= 0) {
+    request.max_iterations = solve_options.max_iterations;
+  }
+  if (l == 0 && (preview || out_of_time)) request.max_iterations = 1;
+  // The paper's approximation: one global solve from the up-sampled rotations, no local step
+  // (the energy is left to CurrentEnergy()).
+  request.global_step_only = l == 0 && preview && start_with_global_step;
+  return request;
+}
+
+bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
+                                    const LevelState* cur, int coarse_before_level,
+                                    const Context& context) {
+  LevelState& work = work_[l];
+  if (straight && l == 0) {
+    const Rotations& coarse = cur->rotations;
+    if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
+    work.rotations.resize(preview_map_.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t v = range.begin(); v != range.end(); ++v) {
+                          const Index c = preview_map_[v];
+                          work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
+                        }
+                      });
+    return true;
+  } else if (l == top) {
+    Level* level = levels_[l].get();
+    if (level->has_solution) {
+      // Warm start: the previous solution's rotations drive the first global step, which
+      // places the (moved) handles' influence smoothly over the mesh.
+      work = level->state;
+      return true;
+    } else {
+      work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
+      work.rotations.clear();
+      return false;
+    }
+  } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
+             !preview) {
+    // Nothing changed since this level's last solution: it is the best start there is (an
+    // up-sampled one would start the level's iterations over).
+    work = levels_[l]->state;
+    return true;
+  } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
+             levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
+             work_[l + 1].rotations.size() == cur->rotations.size()) {
+    // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
+    // the coarser level's solution changed since then (the smooth motion), up-sampled.
+    LevelState& now = scratch_[l];
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
+                         context);
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
+                         work, context);
+    work.positions = levels_[l]->state.positions + now.positions - work.positions;
+    work.rotations = levels_[l]->state.rotations;
+    return false;
+  } else {
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
+                         context);
+    return upsampler_->output() == UpsampleOutput::kRotations;
+  }
+}
+
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -387,7 +442,6 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   Stopwatch total;
   OptimizeResult result;
   const int coarsest = num_levels() - 1;
-  const HierarchicalOptimizer::Options& o = options_.optimizer;
   // The cascade from the coarsest level, or the finest level alone from its previous solution.
   const bool cascade = preview || options_.frame_start != SessionOptions::FrameStart::kPrevious ||
                        !levels_[0]->has_solution;
@@ -412,7 +466,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
     return CallbackAction::kContinue;
   };
 
-  std::vector<std::string> frozen_target_notes;
+  std::vector<std::string> level_notes;
   // The states are kept between solves (work_[l], scratch_[l]: no allocation per frame on the
   // big levels). `cur` is the state being solved or handed down; a solved level's result is
   // swapped into its Level, so work_[l] then holds the level's previous solution.
@@ -424,81 +478,20 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   bool start_with_global_step = false;
   // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
   int coarse_before_level = -1;
-  // A preview whose upsampler only copies each coarse vertex's rotation down: straight from the
-  // coarsest level to the finest along the composed map (the paper's Fig. 15), one parallel
-  // gather into the kept state instead of up-sampling positions and rotations through every
-  // level (fresh arrays per level). The finest level's rotations are the same; its positions
-  // are not up-sampled: the global step overwrites every free row and sets the handles' rows,
-  // so with a direct solver the result is identical (an iterative one starts from the last
-  // frame's positions instead of the up-sampled ones).
-  const bool straight = preview && preview_straight_ && top > 0 &&
-                        upsampler_->output() == UpsampleOutput::kRotations &&
-                        upsampler_->RotationsFollowCoarseVertex(site_);
-  if (straight && preview_map_.empty()) {
-    preview_map_.resize(mesh_.num_vertices());
-    for (Index v = 0; v < mesh_.num_vertices(); ++v) {
-      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
-    }
-  }
+  const bool straight = StraightPreview(preview, top);
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       LevelState& work = work_[l];
       if (straight && l != top && l != 0) continue;  // the levels in between: skipped
-      if (straight && l == 0) {
-        const Rotations& coarse = cur->rotations;
-        if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
-        work.rotations.resize(preview_map_.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                            for (size_t v = range.begin(); v != range.end(); ++v) {
-                              const Index c = preview_map_[v];
-                              work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
-                            }
-                          });
-        start_with_global_step = true;
-      } else if (l == top) {
-        Level* level = levels_[l].get();
-        if (level->has_solution) {
-          // Warm start: the previous solution's rotations drive the first global step, which
-          // places the (moved) handles' influence smoothly over the mesh.
-          work = level->state;
-          start_with_global_step = true;
-        } else {
-          work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
-          work.rotations.clear();
-          start_with_global_step = false;
-        }
-      } else if (levels_[l] && levels_[l]->has_solution && levels_[l]->version == version_ &&
-                 !preview) {
-        // Nothing changed since this level's last solution: it is the best start there is (an
-        // up-sampled one would start the level's iterations over).
-        work = levels_[l]->state;
-        start_with_global_step = true;
-      } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
-                 levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
-                 work_[l + 1].rotations.size() == cur->rotations.size()) {
-        // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
-        // the coarser level's solution changed since then (the smooth motion), up-sampled.
-        LevelState& now = scratch_[l];
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
-                             context);
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
-                             work, context);
-        work.positions = levels_[l]->state.positions + now.positions - work.positions;
-        work.rotations = levels_[l]->state.rotations;
-        start_with_global_step = false;
-      } else {
-        upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
-                             context);
-        start_with_global_step = upsampler_->output() == UpsampleOutput::kRotations;
-      }
+      start_with_global_step = StartLevel(l, top, preview, straight, cur, coarse_before_level,
+                                          context);
       cur = &work;
       LevelState& state = work;
       Level* level = levels_[l].get();
       if (level == nullptr) continue;  // not a solved level: only up-sampled
       if (preview && l != top && l != 0) continue;
       if (l > 0 && (user_stop || out_of_time)) continue;  // finish on the finest level
-      LocalGlobalSolver& solver = *level->solver;
+      LevelSolver& solver = *level->solver;
       if (user_stop) {
         // As a one-shot run stopped on a coarse level: the up-sampled state, rotations fitted.
         result.energy = solver.FitRotations(state, context);
@@ -508,41 +501,11 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         break;
       }
       Stopwatch level_clock;
-      LocalGlobalOptions options = o.iterations;
-      if (solve_options.tolerance >= 0.0) options.tolerance = solve_options.tolerance;
-      if (solve_options.max_iterations > 0) options.max_iterations = solve_options.max_iterations;
-      if (l > 0 && o.coarse_tolerance >= 0.0) options.tolerance = o.coarse_tolerance;
-      const bool approximation = o.coarse_approximation && coarsest > 0;
-      if (l == 0 && (preview || out_of_time || approximation)) options.max_iterations = 1;
-      LocalGlobalSolver::FixedPositionUpdate update;
-      if (l == 0) {
-        for (size_t k = 0; k < handles_.size(); ++k) {
-          state.positions.row(handles_[k]) = targets_.row(static_cast<Index>(k));
-        }
-      } else {
-        const bool have_rotations =
-            static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations();
-        PlaceConstrainedVertices(level->constraints, site_,
-                                 have_rotations ? &state.rotations : nullptr, state.positions);
-        if (o.update_constraints) {
-          update = [&, level](const Rotations& rotations, Positions& positions) {
-            PlaceConstrainedVertices(level->internal, site_, &rotations, positions);
-          };
-        }
-      }
+      const LevelSolveRequest request =
+          LevelRequest(l, solve_options, preview, out_of_time, start_with_global_step);
       const bool was_out_of_time = out_of_time;
       const bool had_solution = level->has_solution;
-      LocalGlobalSolver::RunResult run;
-      if (l == 0 && preview && start_with_global_step &&
-          static_cast<Index>(state.rotations.size()) == solver.energy().num_rotations()) {
-        // The paper's approximation: one global solve from the up-sampled rotations, no local
-        // step (the energy is left to CurrentEnergy()).
-        run.linear_solves.Add(solver.GlobalStep(state, context));
-        run.iterations = 1;
-        run.energy = std::numeric_limits<double>::quiet_NaN();
-      } else {
-        run = solver.Run(state, start_with_global_step, options, diagonal_, context, update);
-      }
+      const LevelSolveResult run = solver.Solve(state, request, context);
       // The new solution into the Level; work_[l] keeps the previous one (the correction of
       // the next finer level needs it).
       std::swap(level->state, work);
@@ -551,19 +514,13 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       coarse_before_level = had_solution ? l : -1;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
       level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
-      if (run.targets_frozen_at > 0) {
-        frozen_target_notes.push_back(
-            fmt::format("level {}: coarse constraint targets stopped following the rotations after "
-                        "iteration {} (the energy kept rising)",
-                        l, run.targets_frozen_at));
-      }
+      level_notes.insert(level_notes.end(), run.notes.begin(), run.notes.end());
       result.total_iterations += run.iterations;
-      result.levels.push_back(
-          LevelResult{l, solver.system().num_vertices(),
-                      l == 0 ? mesh_.num_elements() : hierarchy_.levels[l].mesh.num_elements(),
-                      run.iterations, run.energy, level_clock.Seconds(), run.converged,
-                      solver.system().num_free(), run.linear_solves});
-      RecordAcceleration(options, run, result.levels.back());
+      const Mesh& level_mesh = l == 0 ? mesh_ : hierarchy_.levels[l].mesh;
+      result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
+                                          run.iterations, run.energy, level_clock.Seconds(),
+                                          run.converged, solver.num_unknowns(),
+                                          run.linear_solves, run.measures});
       if (l == 0) {
         result.energy = run.energy;
         result.iterations = run.iterations;
@@ -573,12 +530,12 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   });
   result.stopped_by_callback = user_stop;
   std::reverse(result.levels.begin(), result.levels.end());
-  LocalGlobalSolver& finest = *levels_[0]->solver;
+  const LevelSolver& finest = *levels_[0]->solver;
   // A preview's rotations are not fitted to its positions: no measures of that state.
   if (!preview) {
     result.measures = context.Run([&] { return finest.AuxiliaryMeasures(*cur, context); });
   }
-  result.constraints = finest.system().report();
+  result.constraints = finest.constraint_report();
   std::vector<std::string> notes = DescribeConstraintHandling(result.constraints);
   result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
   if (out_of_time) {
@@ -588,7 +545,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         out_of_time_level > 0 ? "; the finest level did one iteration from the up-sampled state"
                               : ""));
   }
-  result.notes.insert(result.notes.end(), frozen_target_notes.begin(), frozen_target_notes.end());
+  result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
   result.positions = cur->positions;
   result.timings.solve = total.Seconds();
   result.timings.total = result.timings.solve;

@@ -7,10 +7,11 @@
 #include <vector>
 
 #include "framework/config.h"
+#include "framework/level_solver.h"
 #include "framework/optimizer.h"
+#include "framework/registry.h"
 #include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/hierarchical_optimizer.h"
-#include "solvers/optimizers/local_global_solver.h"
 
 namespace harap {
 
@@ -18,9 +19,10 @@ namespace harap {
 /// hierarchy levels) and its options, read from the same `[optimizer]` table as `harap deform`.
 struct SessionOptions {
   bool hierarchical = false;
-  /// The per-level options; for classic only `iterations` is used. The hierarchical options
-  /// `overlap_setup` (a session sets up once) does not apply; `inner` must be local_global and
-  /// `newton` 0 (Newton steps need the eliminated system; Anderson acceleration works).
+  /// The optimizer's options and its level solver (classic: a one-level run of local_global).
+  /// `overlap_setup` (a session sets up once) does not apply; the level solver must support
+  /// handle edits (local_global with `newton` 0: Newton steps need the eliminated system;
+  /// Anderson acceleration works).
   HierarchicalOptimizer::Options optimizer;
 
   /// Where the finer levels of a hierarchical session start a frame (the coarsest level always
@@ -47,8 +49,10 @@ struct SessionOptions {
   static std::string_view FrameStartName(FrameStart start);
 
   /// Reads `type` (classic or hierarchical) and that optimizer's options from an `[optimizer]`
-  /// table; other optimizers and options a session cannot run are rejected (ConfigError).
-  static SessionOptions FromConfig(const ConfigNode& optimizer_node);
+  /// table, `inner` from `level_solvers`; other optimizers are rejected (ConfigError), and level
+  /// solver options a session cannot run when the session is built.
+  static SessionOptions FromConfig(const ConfigNode& optimizer_node,
+                                   const Registry<LevelSolver>& level_solvers);
 };
 
 /// Per-solve limits; negative values take the optimizer's configured ones.
@@ -86,8 +90,9 @@ struct HandleEditResult {
 /// factorization on the rows that changed (LinearSolver::Refactor); Solve() runs the S phase,
 /// warm-started from the previous solution; Preview() is the paper's coarse approximation.
 ///
-/// Levels use MaskedSystem (LocalGlobalSolver::ConstrainMasked), so their matrices keep one size
-/// and pattern whatever the handles. Coarse levels are constrained as in the hierarchical
+/// A session is level solvers (framework/level_solver.h) that keep their state between solves:
+/// set up with LevelSetup::handle_edits (local_global: MaskedSystem), so their matrices keep one
+/// size and pattern whatever the handles. Coarse levels are constrained as in the hierarchical
 /// optimizer (coarse_constraints.h): a coarse vertex is constrained when a handle maps to it, its
 /// target follows its rotation (`update_constraints`).
 ///
@@ -155,10 +160,21 @@ class DeformationSession {
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
   HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
   HandleEditResult ConstrainLevels();
-  void UpdateCoarseTargets();
+  /// Moves every level's targets after SetTargets() (same handles).
+  void UpdateTargets();
   /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
   /// FrameStart::kPrevious, the finest level alone).
   OptimizeResult Run(const SessionSolveOptions& options, bool preview);
+  /// Where level `l` starts this solve, into work_[l] (`cur`: the state of the level above, the
+  /// cascade's `top` level has none); returns whether it starts with a global step.
+  bool StartLevel(int l, int top, bool preview, bool straight, const LevelState* cur,
+                  int coarse_before_level, const Context& context);
+  /// Whether a preview goes straight from level `top` to the finest (see Run()); builds the
+  /// composed vertex map on first use.
+  bool StraightPreview(bool preview, int top);
+  /// The request for level `l`: the optimizer's, with the solve's limits.
+  LevelSolveRequest LevelRequest(int l, const SessionSolveOptions& solve_options, bool preview,
+                                 bool out_of_time, bool start_with_global_step) const;
 
   const Mesh& mesh_;
   const ComponentFactory& factory_;

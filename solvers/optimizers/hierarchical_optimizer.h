@@ -2,48 +2,53 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "framework/config.h"
+#include "framework/level_solver.h"
 #include "framework/optimizer.h"
-#include "solvers/optimizers/admm_elements.h"
-#include "solvers/optimizers/local_global_solver.h"
+#include "framework/registry.h"
 
 namespace harap {
 
-/// Hierarchical (cascadic) ARAP, the paper's Algorithm 2: build a mesh hierarchy (Section 4),
-/// precompute and factor every level, solve the coarsest level with local/global iterations until
-/// the convergence test holds, up-sample to the next finer level (Section 5.1) and solve again,
-/// down to the input mesh.
+/// The one optimizer loop: a level solver (framework/level_solver.h, `inner`) on every solved
+/// level of a mesh hierarchy, from the coarsest level down, each finer level starting from the
+/// up-sampled solution of the coarser one. Registered four times:
+///
+/// - `hierarchical`, the paper's Algorithm 2: build a mesh hierarchy (Section 4), precompute and
+///   factor every solved level, solve the coarsest level until the convergence test holds,
+///   up-sample to the next finer level (Section 5.1) and solve again, down to the input mesh.
+///   `inner` chooses the level solver: `local_global` (the paper's), or the ADMM solvers
+///   `admm_pd` / `wrapd` (the paper's "hierarchical WRAPD", Section 7), energy `elements` only.
+///   With an ADMM level solver `tolerance`, `max_iterations` and `coarse_tolerance` take the ADMM
+///   meanings (relative energy change, see admm_elements.h); update_constraints and
+///   freeze_targets_after do not apply (targets are placed once per level).
+/// - `classic` [Sorkine & Alexa 2007], `admm_pd` [Overby et al. 2017] and `wrapd` [Brown &
+///   Narain 2021]: one-level runs of the same loop on the input mesh with that level solver
+///   (`classic` = `local_global`), their options being the level solver's.
 ///
 /// Constraints on coarse levels (Section 4): a coarse vertex is constrained if any finest-level
 /// vertex mapped to it is; its target is the average over those members of
-/// (target_m − R_c (v̄_m − v̄_c)), i.e. mean target minus the rotated mean offset, with R_c the
-/// coarse vertex's current rotation (identity at first). With `update_constraints` the targets
-/// follow R_c before every global step (Fig. 16, right).
+/// (target_m − R_c (v̄_m − v̄_c)), with R_c the coarse vertex's current rotation (identity at
+/// first). The level solver places its constrained vertices itself; with `update_constraints`
+/// the targets follow R_c before every global step (Fig. 16, right).
 ///
-/// `inner` chooses the optimizer run on each level: `local_global` (the paper's), or the ADMM
-/// optimizers `admm_pd` / `wrapd` (the paper's "hierarchical WRAPD", Section 7), energy
-/// `elements` only. ADMM keeps no rotations, so a finished level hands the up-sampler the
-/// rotations of the polar decompositions of its elements (averaged to vertices by Eq. 11 and
-/// applied to the positions by Eq. 6 inside the up-sampler), the finer level starts from the
-/// up-sampled positions, and coarse levels drop their inverted (misoriented) elements.
-/// With an ADMM inner optimizer `tolerance`, `max_iterations` and `coarse_tolerance` take the
-/// ADMM meanings (relative energy change, see admm_elements.h); update_constraints and
-/// freeze_targets_after do not apply (targets are placed once per level).
-///
-/// The coarsest level starts like classic ARAP: coarse rest positions with constrained vertices at
-/// their targets, then a local step. With a one-level hierarchy the result equals `classic`.
+/// The coarsest level starts like classic ARAP: coarse rest positions with constrained vertices
+/// at their targets, then a local step. With a one-level hierarchy the result equals `classic`.
 class HierarchicalOptimizer final : public Optimizer {
  public:
   static constexpr std::string_view kName = "hierarchical";
 
-  enum class Inner { kLocalGlobal, kAdmmPd, kWrapd };
-
   struct Options {
-    Inner inner = Inner::kLocalGlobal;  ///< the optimizer on each level
-    AdmmOptions admm;                   ///< with inner = admm_pd or wrapd (admm_elements.h)
-    LocalGlobalOptions iterations;  ///< tolerance (1e-6) and max_iterations (1000), per level
+    /// The level solver's registry name, and one configured from the optimizer's table: every
+    /// level gets a fresh one like it (LevelSolver::CreateAnother).
+    std::string inner = "local_global";
+    std::shared_ptr<const LevelSolver> level_solver;
+    /// false: a one-level run on the input mesh (`classic`, `admm_pd`, `wrapd`); no hierarchy,
+    /// the options below do not apply (their defaults hold).
+    bool hierarchical = true;
     /// Tolerance on the coarse levels (l > 0); negative: the same as `tolerance`.
     double coarse_tolerance = -1.0;
     /// Solve every k-th level below the coarsest (1: all levels; Fig. 14 "every second level":
@@ -56,6 +61,9 @@ class HierarchicalOptimizer final : public Optimizer {
     bool coarse_approximation = false;
     /// Re-evaluate coarse constraint targets with the current rotations during each level.
     bool update_constraints = true;
+    /// With update_constraints: keep a level's coarse targets fixed after this many iterations
+    /// raised its energy (LevelSolveRequest::freeze_targets_after).
+    int freeze_targets_after = 3;
     /// Set up (precompute and factor) the finer levels on another thread while the coarser ones
     /// are solved. The finest level's setup is mostly sequential (ordering, symbolic analysis)
     /// and longer than all coarse solves together, so this hides the coarse solves. Results are
@@ -63,17 +71,39 @@ class HierarchicalOptimizer final : public Optimizer {
     /// threads (else off).
     bool overlap_setup = true;
 
-    static Options FromConfig(const ConfigNode& node);
+    /// The `hierarchical` table: `inner` (a name in `level_solvers`), that level solver's
+    /// options, then the hierarchy's.
+    static Options FromConfig(const ConfigNode& node, const Registry<LevelSolver>& level_solvers);
+    /// A one-level run of level solver `inner` with its options from `node`.
+    static Options OneLevel(const ConfigNode& node, const Registry<LevelSolver>& level_solvers,
+                            std::string_view inner);
+
+    /// The levels a run solves, coarsest first, of a hierarchy of `num_levels` levels.
+    std::vector<int> SolvedLevels(int num_levels) const;
+    /// The request for level `level` of `num_levels` (limits and target handling).
+    LevelSolveRequest Request(int level, int num_levels, bool start_from_rotations,
+                              double diagonal) const;
   };
 
-  explicit HierarchicalOptimizer(const Options& options) : options_(options) {}
-  static std::unique_ptr<Optimizer> Create(const ConfigNode& node);
+  explicit HierarchicalOptimizer(Options options) : options_(std::move(options)) {}
+
+  /// Registry factories; `level_solvers` is the registry `inner` names (kept alive by them).
+  static Registry<Optimizer>::Factory Factory(
+      std::shared_ptr<const Registry<LevelSolver>> level_solvers);
+  static Registry<Optimizer>::Factory OneLevelFactory(
+      std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner);
 
   OptimizeResult Optimize(const DeformationProblem& problem, const ComponentFactory& factory,
                           const Context& context) const override;
 
+  const Options& options() const { return options_; }
+
  private:
   Options options_;
 };
+
+/// Notes for the report about what constraint handling did (pinned components, isolated
+/// vertices); shared by the optimizers and the session.
+std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& report);
 
 }  // namespace harap

@@ -7,27 +7,51 @@
 
 #include "framework/config.h"
 #include "framework/error.h"
+#include "solvers/optimizers/coarse_constraints.h"
 
 namespace harap {
 
+std::unique_ptr<LevelSolver> LocalGlobalSolver::Create(const ConfigNode& node) {
+  return std::make_unique<LocalGlobalSolver>(ReadLocalGlobalOptions(node));
+}
+
+std::unique_ptr<LevelSolver> LocalGlobalSolver::CreateAnother() const {
+  return std::make_unique<LocalGlobalSolver>(options_);
+}
+
 LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory,
-                                     int level, const Context& context, const Mesh* input_mesh)
-    : level_(level) {
-  Stopwatch clock;
-  context.ReportPhase(fmt::format("precomputing level {}", level));
-  ordering_ = LocalityOrdering(mesh);
-  energy_ = factory.MakeEnergy();
-  if (input_mesh) energy_->SetInputMesh(*input_mesh, context);
-  energy_->Precompute(ordering_.mesh, context);
-  precompute_seconds_ = clock.Seconds();
-  rhs_.resize(mesh.num_vertices(), 3);
+                                     int level, const Context& context, const Mesh* input_mesh) {
+  Precompute(LevelSetup{&mesh, input_mesh, level, false}, factory, context);
 }
 
 LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
                                      const ComponentFactory& factory, int level,
                                      const Context& context, const Mesh* input_mesh)
     : LocalGlobalSolver(mesh, factory, level, context, input_mesh) {
-  Constrain(constrained, factory, context);
+  // Targets are not needed: Run() keeps the constrained rows of the state it is given.
+  LevelConstraints constraints;
+  constraints.vertices = constrained;
+  constraints.mean_target = Positions::Zero(static_cast<Index>(constrained.size()), 3);
+  Constrain(constraints, factory, context);
+}
+
+void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                                   const Context& context) {
+  if (setup.handle_edits && options_.newton > 0) {
+    throw ConfigError(
+        "Newton steps work on the eliminated global system of a one-shot run; a session masks "
+        "its handles instead: set newton = 0 (anderson works in a session)");
+  }
+  Stopwatch clock;
+  setup_ = setup;
+  level_ = setup.level;
+  context.ReportPhase(fmt::format("precomputing level {}", level_));
+  ordering_ = LocalityOrdering(*setup.mesh);
+  energy_ = factory.MakeEnergy();
+  if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
+  energy_->Precompute(ordering_.mesh, context);
+  precompute_seconds_ = clock.Seconds();
+  rhs_.resize(setup.mesh->num_vertices(), 3);
 }
 
 namespace {
@@ -46,8 +70,36 @@ std::vector<Index> Renumbered(const std::vector<Index>& constrained, const MeshO
 
 }  // namespace
 
-void LocalGlobalSolver::Constrain(const std::vector<Index>& constrained,
-                                  const ComponentFactory& factory, const Context& context) {
+ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraints,
+                                              const ComponentFactory& factory,
+                                              const Context& context) {
+  HARAP_CHECK(energy_ != nullptr, "level {} constrained before its precomputation", level_);
+  HARAP_CHECK(static_cast<Index>(constraints.vertices.size()) == constraints.mean_target.rows(),
+              "{} constrained vertices but {} targets", constraints.vertices.size(),
+              constraints.mean_target.rows());
+  LevelConstraints mapped = constraints;
+  if (mapped.follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
+    FindIncidentElements(*setup_.mesh, mapped);
+  }
+  const ConstrainSummary summary =
+      setup_.handle_edits ? ConstrainMasked(mapped.vertices, factory, context)
+                          : ConstrainEliminated(mapped.vertices, factory, context);
+  internal_ = RenumberedConstraints(mapped, ordering_.new_vertex, ordering_.new_element);
+  constraints_ = std::move(mapped);
+  return summary;
+}
+
+void LocalGlobalSolver::MoveTargets(const Positions& mean_target) {
+  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
+              "{} targets for {} constrained vertices", mean_target.rows(),
+              constraints_.mean_target.rows());
+  constraints_.mean_target = mean_target;
+  internal_.mean_target = mean_target;
+}
+
+ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>& constrained,
+                                                        const ComponentFactory& factory,
+                                                        const Context& context) {
   Stopwatch clock;
   context.ReportPhase(fmt::format("factoring level {}", level_));
   masked_ = nullptr;
@@ -60,9 +112,11 @@ void LocalGlobalSolver::Constrain(const std::vector<Index>& constrained,
   if (context.system_callback) context.system_callback(level_, system_->system_matrix());
   reduced_rhs_.resize(system_->num_unknowns(), 3);
   reduced_x_.resize(system_->num_unknowns(), 3);
+  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system_->num_unknowns(),
+                          constrain_seconds_};
 }
 
-LocalGlobalSolver::ConstrainSummary LocalGlobalSolver::ConstrainMasked(
+ConstrainSummary LocalGlobalSolver::ConstrainMasked(
     const std::vector<Index>& constrained, const ComponentFactory& factory,
     const Context& context) {
   Stopwatch clock;
@@ -129,7 +183,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
   return result;
 }
 
-double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context) const {
+double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context) {
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
   const Positions u = ordering_.ToNew(state.positions);
   Rotations rotations = ordering_.ToNew(state.rotations, per_element);
@@ -139,6 +193,54 @@ double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context
   const double energy = energy_->FitRotations(u, rotations, context);
   state.rotations = ordering_.ToOld(rotations, per_element);
   return energy;
+}
+
+LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveRequest& request,
+                                          const Context& context) {
+  LocalGlobalOptions options = options_;
+  if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
+  if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
+  options.freeze_targets_after = request.freeze_targets_after;
+  const RotationSite site = energy_->rotation_site();
+  const bool have_rotations =
+      static_cast<Index>(state.rotations.size()) == energy_->num_rotations();
+  PlaceConstrainedVertices(constraints_, site, have_rotations ? &state.rotations : nullptr,
+                           state.positions);
+  LevelSolveResult result;
+  if (request.global_step_only && have_rotations) {
+    // The paper's approximation: one global solve from the given rotations, no local step (the
+    // energy would cost one).
+    result.linear_solves.Add(GlobalStep(state, context));
+    result.iterations = 1;
+    result.energy = std::numeric_limits<double>::quiet_NaN();
+    return result;
+  }
+  FixedPositionUpdate update;
+  if (request.targets_follow_rotations && constraints_.follow_rotations()) {
+    // Before every global step, in the internal numbering of the iteration.
+    update = [this, site](const Rotations& rotations, Positions& positions) {
+      PlaceConstrainedVertices(internal_, site, &rotations, positions);
+    };
+  }
+  const RunResult run =
+      Run(state, request.start_from_rotations, options, request.diagonal, context, update);
+  result.iterations = run.iterations;
+  result.energy = run.energy;
+  result.converged = run.converged;
+  result.stopped_by_callback = run.stopped_by_callback;
+  result.linear_solves = run.linear_solves;
+  if (options.anderson > 0) result.measures["accelerated_iterations"] = run.accelerated_iterations;
+  if (options.newton > 0) {
+    result.measures["newton_steps"] = run.newton_steps;
+    result.measures["hessian_products"] = static_cast<double>(run.hessian_products);
+  }
+  if (run.targets_frozen_at > 0) {
+    result.notes.push_back(fmt::format(
+        "level {}: coarse constraint targets stopped following the rotations after iteration "
+        "{} (the energy kept rising)",
+        level_, run.targets_frozen_at));
+  }
+  return result;
 }
 
 SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& context) {
@@ -156,7 +258,7 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   system_->ReducedRhs(rhs_, reduced_rhs_);
   if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
   const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
-  if (!summary.success) {
+  if (!summary.success()) {
     throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                      summary.message));
   }
@@ -238,7 +340,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     if (!solver_->is_direct()) system_->GatherFree(state.positions, reduced_x_);
     const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
     result.linear_solves.Add(summary);
-    if (!summary.success) {
+    if (!summary.success()) {
       throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
                                        summary.message));
     }
@@ -388,47 +490,30 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
   LocalGlobalOptions options;
   options.tolerance = node.Get("tolerance", options.tolerance,
                                "stop when max squared vertex displacement of a global step / "
-                               "squared bounding-box diagonal falls below this (0: never)");
-  options.max_iterations = node.Get("max_iterations", options.max_iterations,
-                                    "cap on local/global iterations (per level)");
+                               "squared bounding-box diagonal falls below this (0: never)",
+                               Range::AtLeast(0.0));
+  options.max_iterations =
+      node.Get("max_iterations", options.max_iterations,
+               "cap on local/global iterations (per level)", Range::AtLeast(1));
   options.anderson = node.Get("anderson", options.anderson,
                               "Anderson acceleration with this many previous iterates, "
-                              "safeguarded by the energy (0: off; 5 is typical)");
+                              "safeguarded by the energy (0: off; 5 is typical)",
+                              Range::AtLeast(0));
   options.newton = node.Get("newton", options.newton,
                             "truncated Newton steps with at most this many preconditioned "
                             "conjugate-gradient iterations each, instead of local/global steps "
-                            "(0: off; 20 is typical)");
+                            "(0: off; 20 is typical)",
+                            Range::AtLeast(0));
   options.newton_exact_hessian =
       node.GetChoice("newton_hessian", "exact", {"exact", "projected"},
                      "Hessian model of the Newton steps: exact (indefinite, trust region) or "
                      "projected per rotation site (positive semi-definite, line search)") ==
       "exact";
-  if (options.anderson < 0) {
-    node.Fail("anderson", fmt::format("must be >= 0, got {}", options.anderson));
-  }
-  if (options.newton < 0) {
-    node.Fail("newton", fmt::format("must be >= 0, got {}", options.newton));
-  }
   if (options.newton > 0 && options.anderson > 0) {
     node.Fail("newton", "Newton steps and Anderson acceleration exclude each other: set one of "
                         "`newton` and `anderson` to 0");
   }
-  if (options.tolerance < 0.0) {
-    node.Fail("tolerance", fmt::format("must be >= 0, got {}", options.tolerance));
-  }
-  if (options.max_iterations < 1) {
-    node.Fail("max_iterations", fmt::format("must be >= 1, got {}", options.max_iterations));
-  }
   return options;
-}
-
-void RecordAcceleration(const LocalGlobalOptions& options,
-                        const LocalGlobalSolver::RunResult& run, LevelResult& level) {
-  if (options.anderson > 0) level.accelerated_iterations = run.accelerated_iterations;
-  if (options.newton > 0) {
-    level.newton_steps = run.newton_steps;
-    level.hessian_products = run.hessian_products;
-  }
 }
 
 }  // namespace harap

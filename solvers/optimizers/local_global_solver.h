@@ -5,9 +5,11 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "framework/config.h"
 #include "framework/constrained_system.h"
+#include "framework/level_solver.h"
 #include "framework/optimizer.h"
 #include "solvers/optimizers/anderson_acceleration.h"
 #include "solvers/optimizers/newton_cg.h"
@@ -42,52 +44,66 @@ struct LocalGlobalOptions {
   bool newton_exact_hessian = true;
 };
 
-/// Local/global ARAP iterations on one mesh level: owns the level's energy, constrained system
-/// and factored linear solver. Construction does the precomputation (energy weights: the paper's
-/// P phase), Constrain() or ConstrainMasked() the constraint handling and factorization (the C
-/// phase); Run() does the S phase. Per-iteration work allocates nothing.
+/// Local/global ARAP iterations on one mesh level, the paper's level solver (registry name
+/// `local_global`): owns the level's energy, constrained system and factored linear solver.
+/// Precompute() (or the first constructors) does the precomputation (energy weights: the paper's
+/// P phase), Constrain() the constraint handling and factorization (the C phase); Solve() and
+/// Run() do the S phase. Per-iteration work allocates nothing.
 ///
-/// Two ways to constrain: Constrain() eliminates the fixed vertices (ConstrainedSystem: the
-/// smallest system, for a run with one constraint set); ConstrainMasked() masks them
+/// Two ways to constrain (LevelSetup::handle_edits): eliminating the fixed vertices
+/// (ConstrainedSystem: the smallest system, for a run with one constraint set) or masking them
 /// (MaskedSystem: a system of one size and pattern for every constraint set, so a later call
 /// with another set brings the factorization up to date with LinearSolver::Refactor on the rows
 /// that changed instead of factoring anew: interactive sessions). Newton steps need the
 /// eliminated system.
 ///
-/// Internally the level is renumbered for memory locality (vertex_ordering.h); Run() takes and
-/// returns states in the mesh's own numbering. Only `update_fixed` sees the internal numbering
-/// (translate indices with ordering()).
-class LocalGlobalSolver {
+/// Internally the level is renumbered for memory locality (vertex_ordering.h); states go in and
+/// out in the mesh's own numbering. Coarse constraint targets that follow the rotations are
+/// placed in the internal numbering, before every global step (Solve()).
+class LocalGlobalSolver final : public LevelSolver {
  public:
-  /// The P phase only: ordering and energy precomputation; Constrain() or ConstrainMasked() must
-  /// follow before Run(). `input_mesh`: the mesh of the whole problem when `mesh` is a level of a
-  /// hierarchy (handed to Energy::SetInputMesh before the precomputation).
+  static constexpr std::string_view kName = "local_global";
+
+  explicit LocalGlobalSolver(const LocalGlobalOptions& options = {}) : options_(options) {}
+  /// Reads LocalGlobalOptions (ReadLocalGlobalOptions); the caller rejects unknown keys.
+  static std::unique_ptr<LevelSolver> Create(const ConfigNode& node);
+
+  /// The P phase only (Precompute()); Constrain() must follow before Run(). `input_mesh`: see
+  /// LevelSetup.
   LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory, int level,
                     const Context& context, const Mesh* input_mesh = nullptr);
-  /// P and C at once (Constrain()): `constrained` are vertex indices whose positions are
-  /// prescribed (their rows of `u` at Run()).
+  /// P and C at once (eliminated): `constrained` are vertex indices whose positions are
+  /// prescribed (their rows of the state at Run()).
   LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>& constrained,
                     const ComponentFactory& factory, int level, const Context& context,
                     const Mesh* input_mesh = nullptr);
 
-  /// Eliminates `constrained` (the mesh's numbering) and factors the reduced system with a new
-  /// solver from `factory`.
-  void Constrain(const std::vector<Index>& constrained, const ComponentFactory& factory,
-                 const Context& context);
-
-  /// What ConstrainMasked() did to the factorization.
-  struct ConstrainSummary {
-    bool factored = false;  ///< false: the fixed set did not change, nothing was refactored
-    LinearSolver::RefactorRoute route = LinearSolver::RefactorRoute::kFull;
-    Index changed_rows = 0;  ///< rows of the masked matrix that changed (all on the first call)
-    double seconds = 0.0;
-  };
-  /// Masks `constrained` (the mesh's numbering; unique, in range): the first call builds the
-  /// masked system and factors it with a new solver from `factory` (asked for num_vertices()
-  /// unknowns); later calls refactor only the changed rows (LinearSolver::Refactor). On a throw
-  /// from the linear solver the next call factors from scratch.
-  ConstrainSummary ConstrainMasked(const std::vector<Index>& constrained,
-                                   const ComponentFactory& factory, const Context& context);
+  // LevelSolver.
+  std::unique_ptr<LevelSolver> CreateAnother() const override;
+  void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                  const Context& context) override;
+  /// Eliminated: a new solver from `factory` factors the reduced system. Masked
+  /// (LevelSetup::handle_edits): the first call builds the masked system and factors it (a
+  /// solver asked for num_vertices() unknowns); later calls refactor only the changed rows
+  /// (LinearSolver::Refactor). On a throw from the linear solver the next call factors anew.
+  ConstrainSummary Constrain(const LevelConstraints& constraints, const ComponentFactory& factory,
+                             const Context& context) override;
+  void MoveTargets(const Positions& mean_target) override;
+  /// Run() with the level's options (the request's limits), the constrained vertices placed
+  /// first and, with request.targets_follow_rotations on a coarse level, before every global
+  /// step. Measures: "accelerated_iterations" (with `anderson`), "newton_steps" and
+  /// "hessian_products" (with `newton`).
+  LevelSolveResult Solve(LevelState& state, const LevelSolveRequest& request,
+                         const Context& context) override;
+  /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
+  /// returns the energy.
+  double FitRotations(LevelState& state, const Context& context) override;
+  /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
+  std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
+                                                  const Context& context) const override;
+  RotationSite rotation_site() const override { return energy_->rotation_site(); }
+  Index num_unknowns() const override { return system_->num_free(); }
+  ConstraintReport constraint_report() const override { return system_->report(); }
 
   /// What the level's run did.
   struct RunResult {
@@ -108,14 +124,17 @@ class LocalGlobalSolver {
     SolveStatistics linear_solves;  ///< The global steps' solves (iterations, residuals, time).
   };
 
+  /// The iteration Solve() runs, with explicit options and no placement of the constrained
+  /// vertices (drivers call Solve(); this is for tests of the iteration itself).
   /// Iterates from `state`. If `start_with_global_step`, the rotations in `state` are used for
   /// the first global step (rotation up-sampling, Eq. 7); otherwise the first step is a local step
   /// from state.positions. Fixed vertices keep their rows of state.positions. `diagonal` scales the
   /// convergence test. On return `state` holds the final positions and fitted rotations.
   ///
   /// `update_fixed`, if set, is called before every global step with the current rotations and
-  /// may move constrained vertices in the positions (coarse constraint targets that follow the
-  /// cluster rotations, Section 4); the reduced right-hand side then uses the new positions.
+  /// may move constrained vertices in the positions (Solve(): coarse constraint targets that
+  /// follow the cluster rotations, Section 4); the reduced right-hand side then uses the new
+  /// positions.
   /// Both arrays are in the internal numbering of ordering(). Moving targets make the iteration
   /// non-monotone in principle: after the first iteration that increases the energy, the targets
   /// stay where they are and the run continues as a plain, monotone local/global iteration.
@@ -124,24 +143,17 @@ class LocalGlobalSolver {
                 double diagonal, const Context& context,
                 const FixedPositionUpdate& update_fixed = {});
 
-  /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
-  /// returns the energy.
-  double FitRotations(LevelState& state, const Context& context) const;
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
   /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
   SolveSummary GlobalStep(LevelState& state, const Context& context);
-  /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
-  std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
-                                                  const Context& context) const;
 
   /// The level's energy; it works in the internal numbering of ordering().
   const Energy& energy() const { return *energy_; }
   const MeshOrdering& ordering() const { return ordering_; }
-  /// The constrained system (Constrain() or ConstrainMasked() must have been called).
+  /// The constrained system (Constrain() must have been called).
   const GlobalStepSystem& system() const { return *system_; }
   bool constrained() const { return system_ != nullptr; }
-  double precompute_seconds() const { return precompute_seconds_; }
-  double constrain_seconds() const { return constrain_seconds_; }
+  const LocalGlobalOptions& options() const { return options_; }
 
  private:
   RunResult Iterate(LevelState& state, bool start_with_global_step,
@@ -157,15 +169,22 @@ class LocalGlobalSolver {
                               bool energy_is_fitted, double squared_diagonal,
                               const Context& context, RunResult& result);
 
-  int level_;
+  ConstrainSummary ConstrainEliminated(const std::vector<Index>& constrained,
+                                       const ComponentFactory& factory, const Context& context);
+  ConstrainSummary ConstrainMasked(const std::vector<Index>& constrained,
+                                   const ComponentFactory& factory, const Context& context);
+
+  LocalGlobalOptions options_;
+  LevelSetup setup_;
+  int level_ = 0;
+  LevelConstraints constraints_;  ///< the mesh's numbering (placement before a solve)
+  LevelConstraints internal_;     ///< the same in the internal numbering (moving targets)
   MeshOrdering ordering_;
   std::unique_ptr<Energy> energy_;
   std::unique_ptr<GlobalStepSystem> system_;
   MaskedSystem* masked_ = nullptr;  ///< system_ when masked
   bool needs_factorization_ = false;  ///< masked: a Refactor threw, factor anew next time
   std::unique_ptr<LinearSolver> solver_;
-  double precompute_seconds_ = 0.0;
-  double constrain_seconds_ = 0.0;
   // Per-iteration buffers, allocated once.
   LevelState internal_state_;  ///< Run()'s and GlobalStep()'s state in the internal numbering
   Positions rhs_;
@@ -185,9 +204,5 @@ Positions InitialPositions(const DeformationProblem& problem);
 
 /// Reads the options shared by all local/global optimizers from their config table.
 LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node);
-
-/// Copies what the acceleration options did on a level (Anderson, Newton) into its report entry.
-void RecordAcceleration(const LocalGlobalOptions& options,
-                        const LocalGlobalSolver::RunResult& run, LevelResult& level);
 
 }  // namespace harap

@@ -77,6 +77,83 @@ void NewtonCgStep::HessianProduct(const Energy& energy_function, const Constrain
   });
 }
 
+NewtonCgStep::CgSearch NewtonCgStep::NewtonDirection(const Energy& energy_function,
+                                                     const ConstrainedSystem& system,
+                                                     LinearSolver& solver,
+                                                     const Rotations& rotations,
+                                                     int max_cg_iterations, double initial_rz,
+                                                     double tolerance, int& cg_iterations,
+                                                     const Context& context) {
+  const bool trust_region = exact_;
+  step_.setZero();
+  if (trust_region) step_hessian_.setZero();
+  search_ = preconditioned_;
+  double rz = initial_rz;
+  // ⟨r₀, d⟩ = Σ α_i ⟨r_i, z_i⟩ for CG from 0 (r_i·p_i = r₀·p_i by conjugacy): the slope of E/2
+  // along d is −slope.
+  double slope = 0.0;
+  // P-norms for the trust region, by the recurrences of preconditioned Steihaug–Toint CG:
+  // ‖d‖², ⟨d, p⟩ and ‖p‖² in the metric of P = A_ff.
+  double dd = 0.0, dp = 0.0, pp = initial_rz;
+  bool on_boundary = false;
+  const auto add_to_step = [&](double length, double rz_of_search) {
+    ForBlockChunks(step_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
+      Chunk(step_.data() + begin, size) += length * ConstChunk(search_.data() + begin, size);
+      if (trust_region) {
+        Chunk(step_hessian_.data() + begin, size) +=
+            length * ConstChunk(hessian_search_.data() + begin, size);
+      }
+    });
+    slope += length * rz_of_search;
+  };
+  while (true) {
+    HessianProduct(energy_function, system, rotations, search_, hessian_search_, context);
+    ++cg_iterations;
+    const double curvature = BlockDot(search_, hessian_search_, context);
+    const double alpha = curvature > 0.0 ? rz / curvature : 0.0;
+    if (trust_region &&
+        (!(curvature > 0.0) || dd + 2.0 * alpha * dp + alpha * alpha * pp >= radius_ * radius_)) {
+      // Negative curvature or leaving the region: to the boundary along p (Steihaug–Toint).
+      const double tau = (-dp + std::sqrt(dp * dp + pp * (radius_ * radius_ - dd))) / pp;
+      add_to_step(tau, rz);
+      on_boundary = true;
+      break;
+    }
+    if (!(curvature > 0.0)) {
+      // Negative curvature (projected model: only from round-off): keep the step so far; on the
+      // first iteration take the local/global direction, always a descent direction.
+      if (cg_iterations == 1) {
+        step_ = preconditioned_;
+        slope = initial_rz;
+      }
+      break;
+    }
+    add_to_step(alpha, rz);
+    ForBlockChunks(residual_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
+      Chunk(residual_.data() + begin, size) -=
+          alpha * ConstChunk(hessian_search_.data() + begin, size);
+    });
+    dd += 2.0 * alpha * dp + alpha * alpha * pp;
+    if (cg_iterations >= max_cg_iterations) break;
+    const SolveSummary summary = solver.Solve(residual_, preconditioned_, context);
+    if (!summary.success()) {
+      throw NumericalError(fmt::format("preconditioner solve failed: {}", summary.message));
+    }
+    const double next_rz = BlockDot(residual_, preconditioned_, context);
+    if (!(next_rz > 0.0) || std::sqrt(next_rz) <= tolerance) break;
+    const double beta = next_rz / rz;
+    ForBlockChunks(search_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
+      Chunk p(search_.data() + begin, size);
+      p = ConstChunk(preconditioned_.data() + begin, size) + beta * p;
+    });
+    dp = beta * (dp + alpha * pp);
+    pp = next_rz + beta * beta * pp;
+    rz = next_rz;
+  }
+
+  return CgSearch{slope, dd, on_boundary};
+}
+
 NewtonCgStep::Outcome NewtonCgStep::Step(const Energy& energy_function,
                                          const ConstrainedSystem& system, LinearSolver& solver,
                                          int max_cg_iterations, Positions& positions,
@@ -120,71 +197,11 @@ NewtonCgStep::Outcome NewtonCgStep::Step(const Energy& energy_function,
                                             context);
   const bool trust_region = exact_;
   if (trust_region && radius_ == 0.0) radius_ = gradient_norm;  // the local/global step's length
-  step_.setZero();
-  if (trust_region) step_hessian_.setZero();
-  search_ = preconditioned_;
-  double rz = initial_rz;
-  // ⟨r₀, d⟩ = Σ α_i ⟨r_i, z_i⟩ for CG from 0 (r_i·p_i = r₀·p_i by conjugacy): the slope of E/2
-  // along d is −slope.
-  double slope = 0.0;
-  // P-norms for the trust region, by the recurrences of preconditioned Steihaug–Toint CG:
-  // ‖d‖², ⟨d, p⟩ and ‖p‖² in the metric of P = A_ff.
-  double dd = 0.0, dp = 0.0, pp = initial_rz;
-  bool on_boundary = false;
-  const auto add_to_step = [&](double length, double rz_of_search) {
-    ForBlockChunks(step_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
-      Chunk(step_.data() + begin, size) += length * ConstChunk(search_.data() + begin, size);
-      if (trust_region) {
-        Chunk(step_hessian_.data() + begin, size) +=
-            length * ConstChunk(hessian_search_.data() + begin, size);
-      }
-    });
-    slope += length * rz_of_search;
-  };
-  while (true) {
-    HessianProduct(energy_function, system, rotations, search_, hessian_search_, context);
-    ++outcome.cg_iterations;
-    const double curvature = BlockDot(search_, hessian_search_, context);
-    const double alpha = curvature > 0.0 ? rz / curvature : 0.0;
-    if (trust_region &&
-        (!(curvature > 0.0) || dd + 2.0 * alpha * dp + alpha * alpha * pp >= radius_ * radius_)) {
-      // Negative curvature or leaving the region: to the boundary along p (Steihaug–Toint).
-      const double tau = (-dp + std::sqrt(dp * dp + pp * (radius_ * radius_ - dd))) / pp;
-      add_to_step(tau, rz);
-      on_boundary = true;
-      break;
-    }
-    if (!(curvature > 0.0)) {
-      // Negative curvature (projected model: only from round-off): keep the step so far; on the
-      // first iteration take the local/global direction, always a descent direction.
-      if (outcome.cg_iterations == 1) {
-        step_ = preconditioned_;
-        slope = initial_rz;
-      }
-      break;
-    }
-    add_to_step(alpha, rz);
-    ForBlockChunks(residual_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
-      Chunk(residual_.data() + begin, size) -=
-          alpha * ConstChunk(hessian_search_.data() + begin, size);
-    });
-    dd += 2.0 * alpha * dp + alpha * alpha * pp;
-    if (outcome.cg_iterations >= max_cg_iterations) break;
-    const SolveSummary summary = solver.Solve(residual_, preconditioned_, context);
-    if (!summary.success) {
-      throw NumericalError(fmt::format("preconditioner solve failed: {}", summary.message));
-    }
-    const double next_rz = BlockDot(residual_, preconditioned_, context);
-    if (!(next_rz > 0.0) || std::sqrt(next_rz) <= forcing * gradient_norm) break;
-    const double beta = next_rz / rz;
-    ForBlockChunks(search_.size(), context, [&](Eigen::Index begin, Eigen::Index size) {
-      Chunk p(search_.data() + begin, size);
-      p = ConstChunk(preconditioned_.data() + begin, size) + beta * p;
-    });
-    dp = beta * (dp + alpha * pp);
-    pp = next_rz + beta * beta * pp;
-    rz = next_rz;
-  }
+  const CgSearch cg =
+      NewtonDirection(energy_function, system, solver, rotations, max_cg_iterations, initial_rz,
+                      forcing * gradient_norm, outcome.cg_iterations, context);
+  const double slope = cg.slope, dd = cg.dd;
+  const bool on_boundary = cg.on_boundary;
 
   trial_positions_ = positions;
   const auto try_step = [&](double step_length) {

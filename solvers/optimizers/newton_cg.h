@@ -64,6 +64,20 @@ class NewtonCgStep {
                const Eigen::MatrixXd& global_step, const Context& context);
 
  private:
+  /// What the CG iterations on H d = r₀ found (d in step_).
+  struct CgSearch {
+    double slope = 0.0;  ///< ⟨r₀, d⟩: the slope of E/2 along d is −slope
+    double dd = 0.0;     ///< ‖d‖² in the P-norm
+    bool on_boundary = false;  ///< trust region: d ends on its boundary
+  };
+  /// Preconditioned CG from d = 0 on H d = r₀ (r₀ in residual_, z₀ = P⁻¹ r₀ in
+  /// preconditioned_, ⟨r₀, z₀⟩ = initial_rz): Steihaug–Toint in the trust region with the exact
+  /// Hessian; stops when ‖r‖_P⁻¹ ≤ tolerance or after max_cg_iterations (counted in
+  /// cg_iterations).
+  CgSearch NewtonDirection(const Energy& energy_function, const ConstrainedSystem& system,
+                           LinearSolver& solver, const Rotations& rotations,
+                           int max_cg_iterations, double initial_rz, double tolerance,
+                           int& cg_iterations, const Context& context);
   /// hp = H p on the free vertices (P's half: the factor 2 of E's derivatives is left out of
   /// both H and P, which leaves P⁻¹H unchanged).
   void HessianProduct(const Energy& energy_function, const ConstrainedSystem& system,

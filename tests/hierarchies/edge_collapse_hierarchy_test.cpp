@@ -439,7 +439,7 @@ TEST_CASE("edge_collapse: options from config", "[hierarchies][edge_collapse]") 
     CHECK_THAT(error("ratios = 0.5\n"), Contains("ratios") && Contains("ratio") &&
                                             Contains("min_vertices") &&
                                             Contains("max_normal_deviation"));
-    CHECK_THAT(error("ratio = 1.0\n"), Contains("ratio is 1"));
+    CHECK_THAT(error("ratio = 1.0\n"), Contains("'hierarchy.ratio' is 1, which is not in [0, 1)"));
     CHECK_THAT(error("ratio = -0.5\n"), Contains("ratio"));
     CHECK_THAT(error("min_vertices = -1\n"), Contains("min_vertices"));
     CHECK_THAT(error("max_levels = -2\n"), Contains("max_levels"));

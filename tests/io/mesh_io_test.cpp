@@ -14,6 +14,8 @@
 #include <sstream>
 
 #include "framework/error.h"
+#include "framework/io/file_reading.h"
+#include "framework/io/mesh_writers.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"

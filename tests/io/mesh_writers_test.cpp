@@ -13,6 +13,7 @@
 
 #include "framework/error.h"
 #include "framework/io/mesh_io.h"
+#include "framework/io/tetrahedra.h"
 #include "tests/support/test_meshes.h"
 
 namespace harap {

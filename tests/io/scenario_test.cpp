@@ -9,6 +9,7 @@
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
 #include "framework/io/mesh_io.h"
+#include "framework/io/mesh_writers.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 

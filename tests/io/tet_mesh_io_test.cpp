@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 // TetGen .node/.ele and MEDIT .mesh readers: small files written into a scratch directory, the
 // error for each kind of broken file, and the shared WRAPD scenes.
-#include "framework/io/tet_mesh_io.h"
+#include "framework/io/medit_reader.h"
+#include "framework/io/tetgen_reader.h"
+#include "framework/io/tetrahedra.h"
 
 #include <catch2/catch.hpp>
 

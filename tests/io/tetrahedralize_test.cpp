@@ -12,7 +12,7 @@
 #include "framework/config.h"
 #include "framework/error.h"
 #include "framework/io/builtin_meshes.h"
-#include "framework/io/tet_mesh_io.h"
+#include "framework/io/tetrahedra.h"
 #include "tests/io/io_test_util.h"
 
 namespace harap {

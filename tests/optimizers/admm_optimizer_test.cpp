@@ -115,7 +115,7 @@ TEST_CASE("admm_pd and wrapd reach the local/global minimum of the per-element e
       CHECK(r.measures.at("energy_wrapd") == Approx(r.energy / 2).epsilon(1e-9));
       CheckConstraintsExact(box.problem, r.positions);
       REQUIRE(r.levels.size() == 1);
-      CHECK(r.levels[0].inverted_elements == 0);
+      CHECK(r.levels[0].Measure("inverted_elements") == 0);
       REQUIRE(static_cast<int>(run.trace.size()) == r.iterations);
       for (const IterationSummary& s : run.trace) CHECK(s.inverted_elements >= 0);
       // The last trace energy is the own evaluation of the same energy.
@@ -134,7 +134,7 @@ TEST_CASE("admm_pd counts inverted elements", "[optimizers][admm]") {
   const TracedRun run = Run(Config("admm_pd", "max_iterations = 3"), box.problem);
   REQUIRE(run.trace.size() == 3u);
   CHECK(run.trace.front().inverted_elements > 0);
-  CHECK(run.result.levels[0].inverted_elements == run.trace.back().inverted_elements);
+  CHECK(run.result.levels[0].Measure("inverted_elements") == run.trace.back().inverted_elements);
   CHECK_FALSE(run.result.converged);
 }
 
@@ -192,7 +192,7 @@ TEST_CASE("hierarchical with inner admm_pd and wrapd", "[optimizers][admm]") {
       CHECK(flat.result.energy <= minimum * (1.0 + 1e-4));
       CHECK(h.measures.count("energy_wrapd") == 1);
       CheckConstraintsExact(box.problem, h.positions);
-      for (const LevelResult& level : h.levels) CHECK(level.inverted_elements >= 0);
+      for (const LevelResult& level : h.levels) CHECK(level.Measure("inverted_elements") >= 0);
       // Every level reported its iterations through the callback, coarsest first.
       REQUIRE_FALSE(hierarchical.trace.empty());
       CHECK(hierarchical.trace.front().level == static_cast<int>(h.levels.size()) - 1);

@@ -119,6 +119,9 @@ def test_components_are_what_harap_list_prints():
             listed[kind].add(line.split()[0])
     for kind in ("optimizer", "energy", "solver", "hierarchy", "upsampler"):
         assert set(components[kind]) == listed[kind], kind
+    # Level solvers (optimizer.inner), listed by `harap list` under "inner".
+    assert set(components["level solver"]) == listed["inner"]
+    assert "local_global" in components["level solver"]
     tolerance = components["optimizer"]["classic"]["options"]["tolerance"]
     assert isinstance(tolerance["default"], float) and tolerance["help"]
     assert "type" not in components["energy"]["spokes"]["options"]

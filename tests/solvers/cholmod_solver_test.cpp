@@ -122,7 +122,7 @@ TEST_CASE("cholmod: native_threads caps CHOLMOD's OpenMP and BLAS threads, resul
       // Only the factorization is capped: this thread's OpenMP settings are as they were.
       if (omp_get_dynamic) CHECK(omp_get_dynamic() == dynamic_before);
       if (omp_get_max_threads) CHECK(omp_get_max_threads() == threads_before);
-      CHECK(solver->Solve(b, x, context).success);
+      CHECK(solver->Solve(b, x, context).success());
     });
     worker.join();
     return x;
@@ -160,7 +160,7 @@ TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][
         auto solver = MakeSolver(registry, "cholmod", Options(mode, ordering));
         solver->Factorize(a, context);
         Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
-        REQUIRE(solver->Solve(b, x, context).success);
+        REQUIRE(solver->Solve(b, x, context).success());
         CHECK(RelativeResidual(a, b, x) < 1e-10);
         CHECK(RelativeDifference(x, reference) < 1e-10);
 
@@ -172,7 +172,7 @@ TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][
           solver->Factorize(FromDense(dense), context);
           const Eigen::MatrixXd tiny_b = RandomRhs(n, 3, 26);
           Eigen::MatrixXd tiny_x = Eigen::MatrixXd::Zero(n, 3);
-          REQUIRE(solver->Solve(tiny_b, tiny_x, context).success);
+          REQUIRE(solver->Solve(tiny_b, tiny_x, context).success());
           CHECK(RelativeDifference(tiny_x, dense.llt().solve(tiny_b)) < 1e-14);
         }
       }
@@ -209,7 +209,7 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
           const Context one_thread = Context::WithThreads(1);
           sequential->Factorize(*a, one_thread);
           Eigen::MatrixXd reference = Eigen::MatrixXd::Zero(a->rows(), columns);
-          REQUIRE(sequential->Solve(b, reference, one_thread).success);
+          REQUIRE(sequential->Solve(b, reference, one_thread).success());
           REQUIRE(RelativeResidual(*a, b, reference) < 1e-10);
 
           Eigen::MatrixXd first;
@@ -226,7 +226,7 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
             }
 #endif
             Eigen::MatrixXd x = Eigen::MatrixXd::Constant(a->rows(), columns, 7.0);
-            REQUIRE(parallel->Solve(b, x, context).success);
+            REQUIRE(parallel->Solve(b, x, context).success());
             CHECK(RelativeDifference(x, reference) < 1e-12);
             // Each entry is summed by one thread in a fixed order: bit-identical for any thread
             // count and schedule.
@@ -236,7 +236,7 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
               CHECK((x.array() == first.array()).all());
             }
             Eigen::MatrixXd again = Eigen::MatrixXd::Zero(a->rows(), columns);
-            REQUIRE(parallel->Solve(b, again, context).success);
+            REQUIRE(parallel->Solve(b, again, context).success());
             CHECK((again.array() == x.array()).all());
           }
         }
@@ -288,7 +288,7 @@ TEST_CASE("cholmod: pivot_tolerance decides what counts as singular", "[solvers]
       auto lenient = MakeSolver(registry, "cholmod", options + "pivot_tolerance = 1e-12");
       lenient->Factorize(a, context);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(2, 3);
-      CHECK(lenient->Solve(b, x, context).success);
+      CHECK(lenient->Solve(b, x, context).success());
       CHECK(RelativeDifference(x, dense.llt().solve(b)) < 1e-4);  // cond(A) ≈ 8e9.
     }
   }

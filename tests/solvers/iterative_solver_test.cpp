@@ -64,7 +64,7 @@ Eigen::MatrixXd DirectSolution(const SparseMatrix& a, const Eigen::MatrixXd& b) 
   auto direct = MakeSolver(LinearSolverRegistry(), "eigen_ldlt");
   direct->Factorize(a, Context());
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(b.rows(), b.cols());
-  REQUIRE(direct->Solve(b, x, Context()).success);
+  REQUIRE(direct->Solve(b, x, Context()).success());
   return x;
 }
 
@@ -98,7 +98,7 @@ TEST_CASE("iterative solvers converge to the direct solution", "[solvers]") {
         solver->Factorize(a, context);
         Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
         const SolveSummary summary = solver->Solve(b, x, context);
-        REQUIRE(summary.success);
+        REQUIRE(summary.success());
         CHECK(summary.iterations > 1);
         CHECK(summary.iterations < 20000);
         CHECK(summary.relative_residual <= kConformanceTolerance);
@@ -123,7 +123,7 @@ TEST_CASE("iterative solvers: a fixed budget makes progress and reports the true
       solver->Factorize(a, context);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
       const SolveSummary first = solver->Solve(b, x, context);
-      REQUIRE(first.success);
+      REQUIRE(first.success());
       CHECK(first.iterations == 5);
       CHECK(first.relative_residual == Approx(RelativeResidual(a, b, x)).epsilon(1e-6));
       CHECK(first.relative_residual < 1.0);
@@ -135,7 +135,7 @@ TEST_CASE("iterative solvers: a fixed budget makes progress and reports the true
       };
       double previous = a_norm_error(x);
       for (int k = 0; k < 3; ++k) {
-        REQUIRE(solver->Solve(b, x, context).success);
+        REQUIRE(solver->Solve(b, x, context).success());
         const double error = a_norm_error(x);
         CHECK(error < previous);
         previous = error;
@@ -157,7 +157,7 @@ TEST_CASE("iterative solvers: a warm start at the solution returns it at once", 
       with_tolerance->Factorize(a, context);
       Eigen::MatrixXd x = reference;
       const SolveSummary summary = with_tolerance->Solve(b, x, context);
-      REQUIRE(summary.success);
+      REQUIRE(summary.success());
       CHECK(summary.iterations <= 1);
       CHECK(summary.relative_residual < 1e-9);
       CHECK(RelativeDifference(x, reference) < 1e-12);
@@ -165,7 +165,7 @@ TEST_CASE("iterative solvers: a warm start at the solution returns it at once", 
       auto fixed = MakeSolver(registry, name, options);
       fixed->Factorize(a, context);
       x = reference;
-      REQUIRE(fixed->Solve(b, x, context).success);
+      REQUIRE(fixed->Solve(b, x, context).success());
       CHECK(RelativeDifference(x, reference) < 1e-10);
     }
   }
@@ -199,7 +199,7 @@ TEST_CASE("iterative solvers: results do not depend on the thread count", "[solv
         results[k] = Eigen::MatrixXd::Zero(a.rows(), 3);
         context.Run([&] {
           solver->Factorize(a, context);
-          REQUIRE(solver->Solve(b, results[k], context).success);
+          REQUIRE(solver->Solve(b, results[k], context).success());
         });
       }
       CHECK((results[0].array() == results[1].array()).all());

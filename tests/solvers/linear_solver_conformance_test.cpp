@@ -93,7 +93,7 @@ TEST_CASE("linear solvers: SPD systems with 3 right-hand sides", "[solvers]") {
         const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 11);
         Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
         const SolveSummary summary = solver->Solve(b, x, context);
-        CHECK(summary.success);
+        CHECK(summary.success());
         CHECK(summary.message.empty());
         CHECK(x.allFinite());
         CHECK(RelativeResidual(a, b, x) < 1e-10);
@@ -121,14 +121,14 @@ TEST_CASE("linear solvers: repeated solves, warm starts, strided blocks, refacto
       const Context context;
       solver->Factorize(a, context);
       Eigen::MatrixXd first = Eigen::MatrixXd::Zero(n, 3);
-      REQUIRE(solver->Solve(b, first, context).success);
+      REQUIRE(solver->Solve(b, first, context).success());
 
       // Direct solvers ignore the warm start, so even NaN there must not leak into x.
       Eigen::MatrixXd second =
           solver->is_direct()
               ? Eigen::MatrixXd::Constant(n, 3, std::numeric_limits<double>::quiet_NaN())
               : Eigen::MatrixXd::Zero(n, 3);
-      REQUIRE(solver->Solve(b, second, context).success);
+      REQUIRE(solver->Solve(b, second, context).success());
       if (solver->is_direct()) {
         CHECK(BitwiseEqual(first, second));
       } else {
@@ -139,7 +139,7 @@ TEST_CASE("linear solvers: repeated solves, warm starts, strided blocks, refacto
       Eigen::MatrixXd big_b = RandomRhs(n + 5, 4, 14);
       big_b.block(2, 0, n, 3) = b;
       Eigen::MatrixXd big_x = Eigen::MatrixXd::Zero(n + 7, 5);
-      REQUIRE(solver->Solve(big_b.block(2, 0, n, 3), big_x.block(3, 1, n, 3), context).success);
+      REQUIRE(solver->Solve(big_b.block(2, 0, n, 3), big_x.block(3, 1, n, 3), context).success());
       const Eigen::MatrixXd strided = big_x.block(3, 1, n, 3);
       if (solver->is_direct()) {
         CHECK(BitwiseEqual(strided, first));
@@ -149,7 +149,7 @@ TEST_CASE("linear solvers: repeated solves, warm starts, strided blocks, refacto
       CHECK((big_x.col(0).array() == 0.0).all());
       CHECK((big_x.col(4).array() == 0.0).all());
       Eigen::MatrixXd one_column = Eigen::MatrixXd::Zero(n, 1);
-      REQUIRE(solver->Solve(b.col(1), one_column, context).success);
+      REQUIRE(solver->Solve(b.col(1), one_column, context).success());
       CHECK(RelativeDifference(one_column, first.col(1)) < 1e-12);
 
       // The same object factors another matrix of another size.
@@ -157,7 +157,7 @@ TEST_CASE("linear solvers: repeated solves, warm starts, strided blocks, refacto
       solver->Factorize(other, context);
       const Eigen::MatrixXd other_b = RandomRhs(other.rows(), 3, 16);
       Eigen::MatrixXd other_x = Eigen::MatrixXd::Zero(other.rows(), 3);
-      REQUIRE(solver->Solve(other_b, other_x, context).success);
+      REQUIRE(solver->Solve(other_b, other_x, context).success());
       CHECK(RelativeResidual(other, other_b, other_x) < 1e-10);
 
       // Eigen's uncompressed storage (free space between columns) gives the same answer.
@@ -167,7 +167,7 @@ TEST_CASE("linear solvers: repeated solves, warm starts, strided blocks, refacto
       REQUIRE(!uncompressed.isCompressed());
       solver->Factorize(uncompressed, context);
       Eigen::MatrixXd third = Eigen::MatrixXd::Zero(n, 3);
-      REQUIRE(solver->Solve(b, third, context).success);
+      REQUIRE(solver->Solve(b, third, context).success());
       CHECK(RelativeDifference(third, first) < 1e-12);
     }
   }
@@ -181,7 +181,7 @@ TEST_CASE("linear solvers: an empty system", "[solvers]") {
       const Context context;
       solver->Factorize(SparseMatrix(0, 0), context);
       Eigen::MatrixXd x(0, 3);
-      CHECK(solver->Solve(Eigen::MatrixXd(0, 3), x, context).success);
+      CHECK(solver->Solve(Eigen::MatrixXd(0, 3), x, context).success());
     }
   }
 }
@@ -228,7 +228,7 @@ TEST_CASE("linear solvers: matrices that are not positive definite are rejected"
             solver->Factorize(a, context);
             Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
             const SolveSummary summary = solver->Solve(RandomRhs(a.rows(), 3, 3), x, context);
-            CHECK_FALSE(summary.success);
+            CHECK_FALSE(summary.success());
             CHECK_THAT(summary.message, Catch::Contains("positive definite"));
           } catch (const NumericalError& error) {
             CHECK_THAT(error.what(), Catch::Contains("positive definite"));
@@ -271,7 +271,7 @@ TEST_CASE("linear solvers: singular PSD matrices fail loudly, never with silent 
             solver->Factorize(a, context);
             Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
             const SolveSummary summary = solver->Solve(b, x, context);
-            if (summary.success) {
+            if (summary.success()) {
               // An iterative solver may also run out of iterations; then its report must say
               // that it did not converge, with the residual it really reached.
               CHECK(x.allFinite());
@@ -327,7 +327,7 @@ TEST_CASE("linear solvers: check_residual reports the residual", "[solvers]") {
       checked->Factorize(a, context);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
       const SolveSummary summary = checked->Solve(b, x, context);
-      CHECK(summary.success);
+      CHECK(summary.success());
       CHECK(summary.relative_residual > 0.0);
       // Same evaluation order as the solvers (b − A x accumulated from b rounds differently).
       Eigen::MatrixXd residual = a * x;

@@ -68,7 +68,7 @@ std::set<Index> FirstRow() {
 void RequireSolves(LinearSolver& solver, const SparseMatrix& a, const Context& context) {
   const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 5);
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
-  REQUIRE(solver.Solve(b, x, context).success);
+  REQUIRE(solver.Solve(b, x, context).success());
   REQUIRE(RelativeResidual(a, b, x) <= 1e-12);
 }
 
@@ -371,7 +371,7 @@ TEST_CASE("refactor: the other solvers factor from scratch and solve the new mat
       CHECK(summary.changed_rows == 1);
       const Eigen::MatrixXd rhs = RandomRhs(b.rows(), 3, 2);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(b.rows(), 3);
-      REQUIRE(solver->Solve(rhs, x, context).success);
+      REQUIRE(solver->Solve(rhs, x, context).success());
       CHECK(RelativeResidual(b, rhs, x) <= (IsIterative(registry, name) ? 1e-10 : 1e-12));
     }
   }

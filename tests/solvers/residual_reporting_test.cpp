@@ -21,8 +21,8 @@ TEST_CASE("linear solvers say whether they measured the residual", "[solvers]") 
       solver->Factorize(a, context);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
       const SolveSummary summary = solver->Solve(b, x, context);
-      REQUIRE(summary.success);
-      CHECK(summary.residual_computed == !solver->is_direct());
+      REQUIRE(summary.success());
+      CHECK(summary.residual_computed() == !solver->is_direct());
       SolveStatistics statistics;
       statistics.Add(summary);
       statistics.Add(summary);
@@ -31,7 +31,7 @@ TEST_CASE("linear solvers say whether they measured the residual", "[solvers]") 
         auto checked = MakeSolver(registry, name, "check_residual = true\n");
         checked->Factorize(a, context);
         const SolveSummary measured = checked->Solve(b, x, context);
-        CHECK(measured.residual_computed);
+        CHECK(measured.residual_computed());
         CHECK(measured.relative_residual > 0.0);  // rounding leaves a trace
         CHECK(measured.relative_residual < 1e-12);
       }

@@ -138,12 +138,12 @@ TEST_CASE("linear solvers: Solve() does not allocate after its first call", "[so
       const Context context;
       solver->Factorize(a, context);
       Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
-      REQUIRE(solver->Solve(b, x, context).success);
+      REQUIRE(solver->Solve(b, x, context).success());
       SolveSummary summary;
       const long count = AllocationsIn([&] {
         for (int i = 0; i < 3; ++i) summary = solver->Solve(b, x, context);
       });
-      CHECK(summary.success);
+      CHECK(summary.success());
       const long by_blas = AllocationsByBlas();
       if (by_blas > 0) {
         WARN(configuration << ": " << by_blas << " allocations in 3 solves made inside BLAS "

@@ -1,0 +1,19 @@
+// SPDX-License-Identifier: MIT
+// PLY triangle meshes (ASCII and binary); ReadMesh (mesh_io.h) dispatches here by
+// extension.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "framework/mesh.h"
+
+namespace harap {
+
+/// Parses PLY data, ASCII or binary (either byte order): `vertex` with x y z of any scalar type
+/// (kept exact, float64 included), `face` with a `vertex_indices` (or `vertex_index`) list,
+/// polygons fan-triangulated; other elements and properties are skipped. Throws InputError
+/// naming `source` and the header line, data line or byte offset of the problem.
+Mesh ParsePly(std::string_view data, const std::string& source);
+
+}  // namespace harap

@@ -1,0 +1,155 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "framework/context.h"
+#include "framework/linear_solver.h"
+#include "framework/mesh.h"
+#include "framework/optimizer.h"
+#include "framework/upsampler.h"
+
+namespace harap {
+
+/// The constraints of one level, in the level mesh's numbering. On the input level they are the
+/// problem's: `mean_target` holds the targets and `mean_offset` is empty. On a coarse level (the
+/// paper's Section 4, "Constraints") a vertex is constrained when a constrained input vertex maps
+/// to it, and its target follows its rotation R: target(R) = mean_target − R · mean_offset, the
+/// mean over its input members m of (target_m − R (v̄_m − v̄_c)).
+struct LevelConstraints {
+  std::vector<Index> vertices;
+  Positions mean_target;  ///< #vertices×3
+  Positions mean_offset;  ///< #vertices×3, or empty: the targets are exact (input level)
+  /// Per-element rotation sites: the elements around each constrained vertex, whose rotations
+  /// average to the vertex's (Eq. 11). Filled by the level solver that needs them.
+  std::vector<std::vector<Index>> incident_elements;
+  /// The level is planar: per-element rotations average to a rotation of the plane.
+  bool planar = false;
+
+  /// The input level's constraints: exact targets.
+  static LevelConstraints Exact(const Constraints& constraints, bool planar) {
+    LevelConstraints exact;
+    exact.vertices = constraints.indices;
+    exact.mean_target = constraints.targets;
+    exact.planar = planar;
+    return exact;
+  }
+  /// Whether the targets depend on the rotations (a coarse level's).
+  bool follow_rotations() const { return mean_offset.rows() > 0; }
+};
+
+/// Where a level solver works.
+struct LevelSetup {
+  const Mesh* mesh = nullptr;  ///< the level's mesh
+  /// The problem's mesh when `mesh` is a coarse level of a hierarchy (energies are normalized
+  /// like it: Energy::SetInputMesh), nullptr on the input level.
+  const Mesh* input_mesh = nullptr;
+  int level = 0;  ///< 0 = input mesh
+  /// The constrained vertices will change between solves (an interactive session's handle
+  /// edits): keep one system size and pattern and refactor only the rows that change, instead
+  /// of eliminating the constrained vertices (the smallest system, for one constraint set).
+  bool handle_edits = false;
+};
+
+/// What a driver asks of one level solve. Negative limits take the solver's configured ones.
+struct LevelSolveRequest {
+  double tolerance = -1.0;
+  int max_iterations = -1;
+  /// state.rotations were handed down by the coarser level (an upsampler with
+  /// UpsampleOutput::kRotations): start with a global step from them (Eq. 7). Otherwise the
+  /// state's positions are the start; rotations there, if any, are only a warm start.
+  bool start_from_rotations = false;
+  /// Coarse levels: the constrained vertices' targets follow their current rotations during
+  /// the iterations, not only at the start (`update_constraints`, Fig. 16). Solvers that place
+  /// the targets once ignore it.
+  bool targets_follow_rotations = false;
+  /// With moving targets: after this many iterations that raised the energy, the targets stay
+  /// where they are (0: never; see LocalGlobalOptions::freeze_targets_after).
+  int freeze_targets_after = 3;
+  /// One global step from the given rotations and nothing else (the paper's coarse
+  /// approximation of the finest level, Fig. 15); the result's energy is NaN. Solvers without a
+  /// rotation-driven global step throw InputError.
+  bool global_step_only = false;
+  double diagonal = 1.0;  ///< bounding-box diagonal of the input mesh: scales convergence tests
+};
+
+/// What one level solve did: the measures every solver has, plus named solver-specific ones.
+struct LevelSolveResult {
+  int iterations = 0;
+  double energy = 0.0;  ///< E of the final state (rotations fitted; the input level: the report's)
+  bool converged = false;
+  bool stopped_by_callback = false;
+  SolveStatistics linear_solves;
+  /// Solver-specific counts, by name (e.g. "inverted_elements", "accelerated_iterations",
+  /// "newton_steps", "hessian_products"); copied into LevelResult::measures and the report.
+  std::map<std::string, double> measures;
+  std::vector<std::string> notes;  ///< remarks for the report ("level 2: ...")
+};
+
+/// What Constrain() did to the level's factorization.
+struct ConstrainSummary {
+  bool factored = false;  ///< false: the constrained set did not change, nothing was refactored
+  LinearSolver::RefactorRoute route = LinearSolver::RefactorRoute::kFull;
+  Index changed_rows = 0;  ///< rows that changed (all on the first call)
+  double seconds = 0.0;
+};
+
+/// The solver of one mesh level: local/global ARAP, ADMM-PD, WRAPD, ... The optimizers drive one
+/// level solver per hierarchy level (classic and the flat ADMM optimizers: one level); an
+/// interactive session keeps them between solves. A level solver owns everything of its level:
+/// its numbering, energy, constrained system and factorization, and where its constrained
+/// vertices go (it places them itself, in its own numbering, as often as it needs). States go in
+/// and out in the level mesh's numbering.
+///
+/// Phases (the paper's Table 1): Precompute() is P, Constrain() is C (again for another
+/// constraint set), Solve() is S. MoveTargets() moves the constrained vertices' targets without
+/// refactoring. Implementations read their options at creation (from the optimizer's table) and
+/// never print; every iteration goes to Context::iteration_callback.
+class LevelSolver {
+ public:
+  virtual ~LevelSolver() = default;
+
+  /// A solver of the same kind with the same options and no state (one per level).
+  virtual std::unique_ptr<LevelSolver> CreateAnother() const = 0;
+
+  virtual void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
+                          const Context& context) = 0;
+  /// Constrains `constraints.vertices` and factors the level's system (a new linear solver from
+  /// `factory` the first time).
+  virtual ConstrainSummary Constrain(const LevelConstraints& constraints,
+                                     const ComponentFactory& factory,
+                                     const Context& context) = 0;
+  /// New `mean_target` rows for the same constrained vertices (no refactoring).
+  virtual void MoveTargets(const Positions& mean_target) = 0;
+
+  /// Places the constrained vertices (with the state's rotations where it has them for the
+  /// level's sites) and iterates from `state`; on return `state` holds the final positions and
+  /// rotations fitted to them, the input of an upsampler.
+  virtual LevelSolveResult Solve(LevelState& state, const LevelSolveRequest& request,
+                                 const Context& context) = 0;
+  /// Fits the state's rotations to its positions and returns the energy (the report's energy on
+  /// the input level).
+  virtual double FitRotations(LevelState& state, const Context& context) = 0;
+  /// Energy::AuxiliaryMeasures of a state whose rotations are fitted (e.g. "energy_wrapd").
+  virtual std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
+                                                          const Context& context) const = 0;
+
+  /// Where the level's rotations live (the upsampler's input); valid after Precompute().
+  virtual RotationSite rotation_site() const = 0;
+  virtual Index num_unknowns() const = 0;  ///< rows of the factored system
+  virtual ConstraintReport constraint_report() const = 0;
+  double precompute_seconds() const { return precompute_seconds_; }
+  double constrain_seconds() const { return constrain_seconds_; }
+
+ protected:
+  LevelSolver() = default;
+  LevelSolver(const LevelSolver&) = default;
+  LevelSolver& operator=(const LevelSolver&) = default;
+  double precompute_seconds_ = 0.0;
+  double constrain_seconds_ = 0.0;
+};
+
+}  // namespace harap
