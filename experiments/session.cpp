@@ -103,6 +103,8 @@ std::string_view RefactorRouteName(LinearSolver::RefactorRoute route) {
       return "numeric";
     case LinearSolver::RefactorRoute::kUpdate:
       return "update";
+    case LinearSolver::RefactorRoute::kPartial:
+      return "partial";
   }
   return "?";
 }

@@ -74,7 +74,7 @@ std::unique_ptr<ConfiguredSession> MakeSession(
     const Registries& registries, const Mesh& mesh, const ConfigNode& run_config, int threads,
     SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected);
 
-/// "full", "numeric" or "update" (how a handle edit refactored a level).
+/// "full", "numeric", "update" or "partial" (how a handle edit refactored a level).
 std::string_view RefactorRouteName(LinearSolver::RefactorRoute route);
 
 /// A session's Solve() or Preview() result as a DeformOutcome, so that DeformReportJson gives it

@@ -12,6 +12,27 @@
 #include "framework/error.h"
 
 namespace harap {
+namespace {
+
+// Writes the rows of x for the free vertices into u and returns max ‖Δu_v‖² over them; x holds
+// one row per free vertex (eliminated system) or one per vertex (masked system).
+double ScatterRows(const std::vector<Index>& free_vertices, const Eigen::MatrixXd& x,
+                   bool row_per_vertex, Positions& u) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<Index>(0, static_cast<Index>(free_vertices.size()), 4096), 0.0,
+      [&](const tbb::blocked_range<Index>& range, double largest) {
+        for (Index k = range.begin(); k != range.end(); ++k) {
+          const Index v = free_vertices[k];
+          const Index row = row_per_vertex ? v : k;
+          largest = std::max(largest, (x.row(row) - u.row(v)).squaredNorm());
+          u.row(v) = x.row(row);
+        }
+        return largest;
+      },
+      [](double a, double b) { return std::max(a, b); });
+}
+
+}  // namespace
 
 SystemComponents::SystemComponents(const SparseMatrix& a) {
   const Index n = static_cast<Index>(a.rows());
@@ -145,17 +166,7 @@ void ConstrainedSystem::GatherFree(const Positions& u, Eigen::MatrixXd& x_f) con
 }
 
 double ConstrainedSystem::ScatterFree(const Eigen::MatrixXd& x_f, Positions& u) const {
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<Index>(0, num_free(), 4096), 0.0,
-      [&](const tbb::blocked_range<Index>& range, double largest) {
-        for (Index k = range.begin(); k != range.end(); ++k) {
-          const Index v = free_vertices_[k];
-          largest = std::max(largest, (x_f.row(k) - u.row(v)).squaredNorm());
-          u.row(v) = x_f.row(k);
-        }
-        return largest;
-      },
-      [](double a, double b) { return std::max(a, b); });
+  return ScatterRows(free_vertices_, x_f, /*row_per_vertex=*/false, u);
 }
 
 MaskedSystem::MaskedSystem(const SparseMatrix& a) : components_(a) {
@@ -257,17 +268,7 @@ void MaskedSystem::ReducedRhs(const Positions& b, Eigen::MatrixXd& rhs) const {
 void MaskedSystem::GatherFree(const Positions& u, Eigen::MatrixXd& x) const { x = u; }
 
 double MaskedSystem::ScatterFree(const Eigen::MatrixXd& x, Positions& u) const {
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<Index>(0, num_free(), 4096), 0.0,
-      [&](const tbb::blocked_range<Index>& range, double largest) {
-        for (Index k = range.begin(); k != range.end(); ++k) {
-          const Index v = free_vertices_[k];
-          largest = std::max(largest, (x.row(v) - u.row(v)).squaredNorm());
-          u.row(v) = x.row(v);
-        }
-        return largest;
-      },
-      [](double a, double b) { return std::max(a, b); });
+  return ScatterRows(free_vertices_, x, /*row_per_vertex=*/true, u);
 }
 
 }  // namespace harap

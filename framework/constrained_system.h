@@ -81,21 +81,34 @@ class GlobalStepSystem {
 /// Usage per level: construct once, SetFixedPositions() whenever fixed targets move (once for
 /// fixed handles), then per iteration ReducedRhs() → solve → ScatterFree(). The unknowns are the
 /// free vertices (num_unknowns() == num_free()).
-class ConstrainedSystem final : public GlobalStepSystem {
+/// What both implementations keep alike: the split of the vertices into free, fixed and pinned
+/// and the report on it, with the accessors over them; each sets them when it is built or its
+/// constraint set changes.
+class VertexSplitSystem : public GlobalStepSystem {
+ public:
+  Index num_free() const override { return static_cast<Index>(free_vertices_.size()); }
+  const std::vector<Index>& fixed_vertices() const override { return fixed_vertices_; }
+  const std::vector<Index>& free_vertices() const override { return free_vertices_; }
+  const std::vector<Index>& pinned_vertices() const override { return pinned_vertices_; }
+  const ConstraintReport& report() const override { return report_; }
+
+ protected:
+  std::vector<Index> free_vertices_;
+  std::vector<Index> fixed_vertices_;
+  std::vector<Index> pinned_vertices_;
+  ConstraintReport report_;
+};
+
+class ConstrainedSystem final : public VertexSplitSystem {
  public:
   /// `constrained`: indices of vertices with prescribed positions (unique, any order).
   ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained);
 
   Index num_vertices() const override { return static_cast<Index>(free_index_.size()); }
-  Index num_free() const override { return static_cast<Index>(free_vertices_.size()); }
   Index num_unknowns() const override { return num_free(); }
   /// A_ff in full symmetric storage.
   const SparseMatrix& reduced_matrix() const { return a_ff_; }
   const SparseMatrix& system_matrix() const override { return a_ff_; }
-  const std::vector<Index>& fixed_vertices() const override { return fixed_vertices_; }
-  const std::vector<Index>& free_vertices() const override { return free_vertices_; }
-  const std::vector<Index>& pinned_vertices() const override { return pinned_vertices_; }
-  const ConstraintReport& report() const override { return report_; }
 
   /// Caches A_fc · U_c for the fixed vertices' positions in `u` (call when they change).
   void SetFixedPositions(const Positions& u) override;
@@ -108,14 +121,10 @@ class ConstrainedSystem final : public GlobalStepSystem {
 
  private:
   std::vector<Index> free_index_;  ///< vertex → row of A_ff, or kNoVertex if fixed
-  std::vector<Index> free_vertices_;
-  std::vector<Index> fixed_vertices_;
-  std::vector<Index> pinned_vertices_;
   SparseMatrix a_ff_;
   SparseMatrix a_fc_;               ///< #free × #fixed
   Eigen::MatrixXd fixed_coupling_;  ///< A_fc U_c
   Eigen::MatrixXd fixed_positions_;  ///< U_c (scratch for SetFixedPositions)
-  ConstraintReport report_;
 };
 
 /// The global step over all vertices with fixed rows masked: the matrix stays #V×#V with one
@@ -132,7 +141,7 @@ class ConstrainedSystem final : public GlobalStepSystem {
 ///
 /// Usage per level: construct once from A, SetConstrained() for each constraint set, then as a
 /// ConstrainedSystem. The unknowns are all vertices (num_unknowns() == num_vertices()).
-class MaskedSystem final : public GlobalStepSystem {
+class MaskedSystem final : public VertexSplitSystem {
  public:
   /// Nothing is fixed until SetConstrained().
   explicit MaskedSystem(const SparseMatrix& a);
@@ -143,13 +152,8 @@ class MaskedSystem final : public GlobalStepSystem {
   std::vector<Index> SetConstrained(const std::vector<Index>& constrained);
 
   Index num_vertices() const override { return components_.num_vertices(); }
-  Index num_free() const override { return static_cast<Index>(free_vertices_.size()); }
   Index num_unknowns() const override { return num_vertices(); }
   const SparseMatrix& system_matrix() const override { return masked_; }
-  const std::vector<Index>& fixed_vertices() const override { return fixed_vertices_; }
-  const std::vector<Index>& free_vertices() const override { return free_vertices_; }
-  const std::vector<Index>& pinned_vertices() const override { return pinned_vertices_; }
-  const ConstraintReport& report() const override { return report_; }
 
   void SetFixedPositions(const Positions& u) override;
   /// rhs (#V×3): B_f − A_fc U_c on free rows, U_c on fixed rows.
@@ -167,10 +171,6 @@ class MaskedSystem final : public GlobalStepSystem {
   SparseMatrix unmasked_;             ///< A on M's pattern (A's plus the diagonal)
   SparseMatrix masked_;               ///< M
   std::vector<unsigned char> fixed_;  ///< per vertex
-  std::vector<Index> free_vertices_;
-  std::vector<Index> fixed_vertices_;
-  std::vector<Index> pinned_vertices_;
-  ConstraintReport report_;
   Positions fixed_coupling_;   ///< A_fc U_c on free rows, U_c on fixed rows (#V×3)
 };
 

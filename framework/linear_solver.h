@@ -98,6 +98,7 @@ class LinearSolver {
     kFull,     ///< Analysis and factorization from scratch (what Factorize() does).
     kNumeric,  ///< The last analysis (ordering, elimination tree) reused, values factored anew.
     kUpdate,   ///< The existing factor modified row by row (low-rank updates), nothing refactored.
+    kPartial,  ///< Only the part of the factor the changed rows reach factored anew.
   };
   struct RefactorSummary {
     RefactorRoute route = RefactorRoute::kFull;

@@ -5,25 +5,14 @@ against time (the report's per-iteration trace) with matplotlib.
 
     PYTHONPATH=build/python python3 examples/python/deform_and_plot.py --out energy.png
 """
-import argparse
-import os
-import sys
-
 import numpy as np
 
+import example_figure
 import harap
 
-try:
-    import matplotlib
-    matplotlib.use("Agg")  # files only, no display needed
-    import matplotlib.pyplot as plt
-except ImportError:
-    print("skipped: matplotlib is not installed (Debian: python3-matplotlib)")
-    sys.exit(77)
+plt = example_figure.pyplot()
 
-parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-parser.add_argument("--out", default="energy.png", help="the figure (PNG)")
-parser.add_argument("--small", action="store_true", help="a 3K-vertex mesh (tests)")
+parser = example_figure.parser(__doc__, "energy.png", "a 3K-vertex mesh (tests)")
 args = parser.parse_args()
 
 # A capped cylinder along z (height 4): the bottom ring is held, the top ring turned 90 degrees
@@ -51,7 +40,5 @@ axes.set_xlabel("time [s] (precomputation included)")
 axes.set_ylabel("ARAP energy")
 axes.set_title(f"cylinder bend, {len(V)} vertices")
 axes.legend()
-figure.tight_layout()
-os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-figure.savefig(args.out, dpi=100)
+example_figure.save(figure, args.out)
 print(f"wrote {args.out}")

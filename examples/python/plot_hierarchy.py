@@ -5,26 +5,15 @@ triangles, and how the vertices of the finest level map to the next coarser one.
 
     PYTHONPATH=build/python python3 examples/python/plot_hierarchy.py --out levels.png
 """
-import argparse
-import os
-import sys
-
 import numpy as np
 
+import example_figure
 import harap
 
-try:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-except ImportError:
-    print("skipped: matplotlib is not installed (Debian: python3-matplotlib)")
-    sys.exit(77)
+plt = example_figure.pyplot()
 
-parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-parser.add_argument("--out", default="levels.png", help="the figure (PNG)")
+parser = example_figure.parser(__doc__, "levels.png", "a smaller mesh (tests)")
 parser.add_argument("--type", default="octree", help="octree or edge_collapse")
-parser.add_argument("--small", action="store_true", help="a smaller mesh (tests)")
 args = parser.parse_args()
 
 V, F = harap.builtin_mesh("disk", vertices=1500 if args.small else 6000)
@@ -46,9 +35,7 @@ ax.scatter(V[:, 0], V[:, 1], c=np.where(cluster >= 0, shuffled[cluster] % 20, -1
 ax.set_title("level 0 -> level 1 map")
 ax.set_aspect("equal")
 ax.axis("off")
-figure.tight_layout()
-os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-figure.savefig(args.out, dpi=100)
+example_figure.save(figure, args.out)
 for l, level in enumerate(levels):
     print(f"level {l}: {len(level.vertices):6} vertices {len(level.elements):6} triangles")
 print(f"wrote {args.out}")

@@ -9,9 +9,11 @@
 //                                          refactor_MB: the copies kept for Refactor())
 //   HandleEdit_<route>/armadillo-bend     one iteration = add the ball + release it, with
 //                                          CholmodSolver option refactor = <route> (full,
-//                                          numeric, update, auto); counters per edit: add_ms,
-//                                          remove_ms, the route taken (0 full, 1 numeric,
-//                                          2 update), the estimates of auto's rule, the time
+//                                          numeric, update, partial, auto); counters per edit:
+//                                          add_ms, remove_ms, the route taken (0 full,
+//                                          1 numeric, 2 update, 3 partial), the estimates of
+//                                          auto's rule (partial_work: the share of the
+//                                          factorization's flops partial recomputes), the time
 //                                          the parallel solve's plan took after the last edit,
 //                                          the relative residual of a solve after each edit and
 //                                          the time of a 3-column solve (add_solve3_ms,
@@ -114,7 +116,7 @@ std::unique_ptr<CholmodSolver> MakeSolver(const std::string& refactor, int nativ
   node.Set("refactor", "\"" + refactor + "\"");
   node.Set("native_threads", std::to_string(native_threads));
   auto solver = std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(node));
-  // As a session's level (LocalGlobalSolver::ConstrainMasked): refactor = "auto" keeps the
+  // As a session's level (LevelSetup::handle_edits): refactor = "auto" keeps the
   // copies Refactor() reuses only when prepared.
   solver->PrepareForRefactor();
   return solver;
@@ -166,6 +168,7 @@ void Edit(benchmark::State& state, std::string refactor, bool small, int native_
   double add = 0.0, remove = 0.0, residual = 0.0;
   double add_route = 0.0, remove_route = 0.0;
   double add_estimate_update = 0.0, add_estimate_numeric = 0.0, remove_estimate_update = 0.0;
+  double add_estimate_partial = 0.0, partial_fraction = 0.0;
   double solve_setup = 0.0, add_solve = 0.0, remove_solve = 0.0;
   for (auto _ : state) {
     const auto added = solver->Refactor(f.after, f.ball, f.context);
@@ -173,6 +176,8 @@ void Edit(benchmark::State& state, std::string refactor, bool small, int native_
     add_route = static_cast<double>(added.route);
     add_estimate_update = solver->factor_info().estimated_update_seconds;
     add_estimate_numeric = solver->factor_info().estimated_numeric_seconds;
+    add_estimate_partial = solver->factor_info().estimated_partial_seconds;
+    partial_fraction = solver->factor_info().partial_work_fraction;
     state.PauseTiming();
     residual = std::max(residual, Residual(*solver, f.after, f, add_solve));
     state.ResumeTiming();
@@ -193,6 +198,8 @@ void Edit(benchmark::State& state, std::string refactor, bool small, int native_
   state.counters["add_est_update_ms"] = 1e3 * add_estimate_update;
   state.counters["remove_est_update_ms"] = 1e3 * remove_estimate_update;
   state.counters["est_numeric_ms"] = 1e3 * add_estimate_numeric;
+  state.counters["add_est_partial_ms"] = 1e3 * add_estimate_partial;
+  state.counters["partial_work"] = partial_fraction;
   state.counters["residual"] = residual;
   state.counters["solve_setup_ms"] = 1e3 * solve_setup;
   state.counters["add_solve3_ms"] = 1e3 * add_solve;
@@ -208,10 +215,10 @@ void Edit(benchmark::State& state, std::string refactor, bool small, int native_
         ->UseRealTime();
   };
   add("HandleEdit_factorize", Factorize, 1);
-  for (const std::string route : {"full", "numeric", "update", "auto"}) {
+  for (const std::string route : {"full", "numeric", "update", "partial", "auto"}) {
     add("HandleEdit_" + route, Edit, route, false, 1);
   }
-  for (const std::string route : {"numeric", "update", "auto"}) {
+  for (const std::string route : {"numeric", "update", "partial", "auto"}) {
     add("HandleEditSmall_" + route, Edit, route, true, 1);
   }
   // With both cores for CHOLMOD's BLAS and OpenMP, as a session could run an edit when nothing

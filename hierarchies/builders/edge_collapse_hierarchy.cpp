@@ -361,8 +361,6 @@ std::vector<Index> OctreeLevelCounts(const Mesh& mesh, const EdgeCollapseHierarc
 
 // Read with these ranges and checked against them by Validate().
 constexpr Range kRatioRange = Range::HalfOpen(0.0, 1.0);
-constexpr Range kMinVerticesRange = Range::AtLeast(0);
-constexpr Range kMaxLevelsRange = Range::AtLeast(0);
 constexpr Range kNormalDeviationRange = Range::LeftOpen(0.0, 180.0);
 
 // max_aspect_ratio is 0 (no check) or at least 1: not one range.
@@ -377,12 +375,7 @@ EdgeCollapseHierarchy::Options EdgeCollapseHierarchy::Options::FromConfig(const 
                            "vertices kept per level; 0 = the octree's level vertex counts for the "
                            "same mesh",
                            kRatioRange);
-  options.min_vertices =
-      node.Get("min_vertices", options.min_vertices,
-               "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
-  options.max_levels =
-      node.Get("max_levels", options.max_levels,
-               "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
+  options.ReadLimits(node);
   options.max_normal_deviation = node.Get(
       "max_normal_deviation", options.max_normal_deviation,
       "largest turn of a face normal a collapse may cause, in degrees", kNormalDeviationRange);
@@ -399,19 +392,17 @@ EdgeCollapseHierarchy::Options EdgeCollapseHierarchy::Options::FromConfig(const 
 }
 
 void EdgeCollapseHierarchy::Options::Validate() const {
-  std::vector<std::string> problems =
-      RangeProblems({{"ratio", ratio, kRatioRange},
-                     {"min_vertices", double(min_vertices), kMinVerticesRange},
-                     {"max_levels", double(max_levels), kMaxLevelsRange},
-                     {"max_normal_deviation", max_normal_deviation, kNormalDeviationRange}});
+  std::vector<std::string> problems = RangeProblems({{"ratio", ratio, kRatioRange}});
+  for (std::string& problem : LimitProblems()) problems.push_back(std::move(problem));
+  for (std::string& problem :
+       RangeProblems({{"max_normal_deviation", max_normal_deviation, kNormalDeviationRange}})) {
+    problems.push_back(std::move(problem));
+  }
   if (!ValidAspectRatio(max_aspect_ratio)) {
     problems.push_back(
         fmt::format("max_aspect_ratio is {}, {}", max_aspect_ratio, kAspectRatioRule));
   }
-  if (!problems.empty()) {
-    throw ConfigError(
-        fmt::format("invalid {} hierarchy options: {}", kName, fmt::join(problems, "; ")));
-  }
+  ThrowIfInvalidOptions(kName, problems);
 }
 
 EdgeCollapseHierarchy::EdgeCollapseHierarchy(const Options& options) : options_(options) {
@@ -419,8 +410,7 @@ EdgeCollapseHierarchy::EdgeCollapseHierarchy(const Options& options) : options_(
 }
 
 MeshHierarchy EdgeCollapseHierarchy::Build(const Mesh& mesh, const Context& context) const {
-  MeshHierarchy hierarchy;
-  hierarchy.levels.push_back(HierarchyLevel{mesh, {}, {}});
+  MeshHierarchy hierarchy = InputLevelOnly(mesh);
   if (mesh.num_elements() == 0) return hierarchy;
   if (mesh.kind() == ElementKind::kTetrahedron) {
     throw InputError(

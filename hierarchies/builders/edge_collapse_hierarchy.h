@@ -6,6 +6,7 @@
 
 #include "framework/config.h"
 #include "framework/hierarchy.h"
+#include "hierarchies/builders/level_limits.h"
 
 namespace harap {
 
@@ -65,15 +66,12 @@ class EdgeCollapseHierarchy final : public Hierarchy {
  public:
   static constexpr std::string_view kName = "edge_collapse";
 
-  struct Options {
+  struct Options : LevelLimits {
     /// 0: the octree's level vertex counts. In (0, 1): each level keeps ⌈ratio · n⌉ of the n
     /// vertices of the level below.
     double ratio = 0.0;
-    /// Stop once the coarsest level has at most this many vertices (≥ 0; the paper uses 750).
-    /// With ratio 0 it is passed to the octree that gives the counts.
-    int min_vertices = 750;
-    /// At most this many levels, level 0 included (≥ 0; 0 = no limit).
-    int max_levels = 0;
+    // min_vertices, max_levels: LevelLimits; with ratio 0, min_vertices is passed to the octree
+    // that gives the counts.
     /// Largest angle (degrees, in (0, 180]) by which a collapse may turn the normal of a
     /// remaining face (OpenMesh's ModNormalFlippingT; its default 90 forbids fold-overs; 180
     /// allows everything but exactly reversed normals).

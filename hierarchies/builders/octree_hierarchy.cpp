@@ -40,8 +40,6 @@ constexpr EnumNames<OctreeHierarchy::CoarsePositions, 2> kCoarsePositionNames = 
     {OctreeHierarchy::CoarsePositions::kQuantized, "quantized"},
 }};
 // Read with these ranges and checked against them by Validate().
-constexpr Range kMinVerticesRange = Range::AtLeast(0);
-constexpr Range kMaxLevelsRange = Range::AtLeast(0);
 
 /// Elements per TBB task in the parallel loops (they are cheap per element).
 constexpr std::size_t kGrain = 4096;
@@ -811,24 +809,13 @@ OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& 
       node.GetEnum("coarse_positions", options.coarse_positions, kCoarsePositionNames,
                    "rest positions of coarse vertices: mean of the finest cluster members, or "
                    "the cell centre of the truncated integer coordinates (the paper)");
-  options.min_vertices =
-      node.Get("min_vertices", options.min_vertices,
-               "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
-  options.max_levels =
-      node.Get("max_levels", options.max_levels,
-               "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
+  options.ReadLimits(node);
   node.RejectUnknownKeys();
   return options;
 }
 
 void OctreeHierarchy::Options::Validate() const {
-  const std::vector<std::string> problems =
-      RangeProblems({{"min_vertices", double(min_vertices), kMinVerticesRange},
-                     {"max_levels", double(max_levels), kMaxLevelsRange}});
-  if (!problems.empty()) {
-    throw ConfigError(
-        fmt::format("invalid {} hierarchy options: {}", kName, fmt::join(problems, "; ")));
-  }
+  ThrowIfInvalidOptions(kName, LimitProblems());
 }
 
 OctreeHierarchy::OctreeHierarchy(const Options& options) : options_(options) {
@@ -836,8 +823,7 @@ OctreeHierarchy::OctreeHierarchy(const Options& options) : options_(options) {
 }
 
 MeshHierarchy OctreeHierarchy::Build(const Mesh& mesh, const Context& context) const {
-  MeshHierarchy hierarchy;
-  hierarchy.levels.push_back(HierarchyLevel{mesh, {}, {}});
+  MeshHierarchy hierarchy = InputLevelOnly(mesh);
   if (mesh.num_elements() == 0) return hierarchy;
   const int k = mesh.simplex_size();
   HARAP_CHECK(k == 3 || k == 4,

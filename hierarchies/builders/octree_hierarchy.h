@@ -6,6 +6,7 @@
 
 #include "framework/config.h"
 #include "framework/hierarchy.h"
+#include "hierarchies/builders/level_limits.h"
 
 namespace harap {
 
@@ -80,16 +81,13 @@ class OctreeHierarchy final : public Hierarchy {
     kQuantized,  ///< cell centre of the truncated integer coordinates (the paper)
   };
 
-  struct Options {
+  struct Options : LevelLimits {
     /// Merge the vertices of one cell only if they are connected inside it (the paper's
     /// "Topology" paragraph); false merges every vertex of a cell.
     bool topology_aware = true;
     /// Rest positions of coarse vertices; see the class comment for the measured choice.
     CoarsePositions coarse_positions = CoarsePositions::kMean;
-    /// Stop once the coarsest level has at most this many vertices (≥ 0; the paper uses 750).
-    int min_vertices = 750;
-    /// At most this many levels, level 0 included (≥ 0; 0 = no limit).
-    int max_levels = 0;
+    // min_vertices, max_levels: LevelLimits.
 
     /// Reads the options and rejects unknown keys and invalid values (ConfigError).
     static Options FromConfig(const ConfigNode& node);

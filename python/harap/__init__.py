@@ -226,8 +226,8 @@ class Session:
         """Adds vertices that are not handles yet, with their (k, 3) targets; updates every
         level's factorization on the rows that changed. Returns the edit summary: {"seconds",
         "levels": [{"level", "constrained_vertices", "changed_rows", "factored", "route"
-        ("full", "numeric", "update", "none"), "seconds"}] (finest first), "constraints",
-        "notes"}."""
+        ("full", "numeric", "update", "partial", "none"), "seconds"}] (finest first),
+        "constraints", "notes"}."""
         return _json.loads(self._session.add_handles(indices, targets))
 
     def remove_handles(self, indices):

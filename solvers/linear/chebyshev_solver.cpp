@@ -116,13 +116,12 @@ template <int K>
 SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b_in,
                                          Eigen::Ref<Eigen::MatrixXd> x_out, Eigen::Index first) {
   const Index n = static_cast<Index>(a_.rows());
-  double* b = b_.Reserve(n, K);
-  double* x = x_.Reserve(n, K);
+  double* b = nullptr;
+  double* x = nullptr;
+  GatherBlock<K>(b_in, x_out, first, n, b, x);
   double* r = r_.Reserve(n, K);
   double* d = d_.Reserve(n, K);
   double* d_next = d_next_.Reserve(n, K);
-  iterative::GatherColumns<K>(b_in, first, b);
-  iterative::GatherColumns<K>(x_out, first, x);
   const double* inverse_diagonal = inverse_diagonal_.data();
 
   // A single-point interval (D⁻¹A = c·I) makes δ = 0: then one step x += D⁻¹r/θ is exact.

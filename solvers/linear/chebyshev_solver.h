@@ -102,7 +102,7 @@ class ChebyshevSolver final : public iterative::BlockIterativeSolver<ChebyshevSo
   Eigen::VectorXd inverse_diagonal_;
   Bounds bounds_;
   uint64_t matrix_hash_ = 0;  ///< Of the matrix bounds_ belongs to (0: none).
-  iterative::Block b_, x_, r_, d_, d_next_;
+  iterative::Block r_, d_, d_next_;
 };
 
 // SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.

@@ -21,6 +21,7 @@
 
 #include "framework/error.h"
 #include "solvers/linear/elimination_tree_solve.h"
+#include "solvers/linear/partial_supernodal_factor.h"
 #include "solvers/linear/solver_checks.h"
 
 namespace harap {
@@ -63,12 +64,13 @@ constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kO
     {CholmodSolver::Ordering::kBest, "best"},
 }};
 
-constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 4> kRefactorNames =
+constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 5> kRefactorNames =
     {{
         {CholmodSolver::RefactorChoice::kAuto, "auto"},
         {CholmodSolver::RefactorChoice::kFull, "full"},
         {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
         {CholmodSolver::RefactorChoice::kUpdate, "update"},
+        {CholmodSolver::RefactorChoice::kPartial, "partial"},
     }};
 
 template <class Enum, size_t N>
@@ -409,6 +411,7 @@ struct CholmodSolver::Impl {
     FreeFactor();
     FreeSymbolic();
     FreeAnalysis();
+    FreeSuper();
     cholmod_free_dense(&x, &common);
     cholmod_free_dense(&y, &common);
     cholmod_free_dense(&e, &common);
@@ -451,12 +454,108 @@ struct CholmodSolver::Impl {
     return made;
   }
 
+  void FreeSuper() {
+    if (super) cholmod_free_factor(&super, &common);
+    super = nullptr;
+    super_current = false;
+  }
+  // Keeps `super`, the numeric supernodal factor, for partial refactorizations: mode auto (the
+  // solves use the simplicial factor made from it), route partial, or any route but full after
+  // PrepareForRefactor() (set_refactor() may switch to partial later).
+  bool keeps_super() const {
+    return options.mode == Mode::kAuto && options.refactor != RefactorChoice::kFull &&
+           (options.refactor == RefactorChoice::kPartial || prepared_for_refactor);
+  }
+  // `super` as PartialSupernodalFactor reads it.
+  SupernodalFactorView SuperView() const {
+    SupernodalFactorView view;
+    view.n = static_cast<int>(super->n);
+    view.num_supernodes = static_cast<int>(super->nsuper);
+    view.first = static_cast<const int*>(super->super);
+    view.row_start = static_cast<const int*>(super->pi);
+    view.value_start = static_cast<const int*>(super->px);
+    view.row = static_cast<const int*>(super->s);
+    view.value = static_cast<double*>(super->x);
+    view.permutation = static_cast<const int*>(super->Perm);
+    return view;
+  }
+
+  // Factorize()'s numeric factorization when the supernodal factor is kept: the supernodal
+  // factorization into `super` (a copy of the analysis), then `factor` made from a copy of it as
+  // cholmod_factorize makes it (cholmod_change_factor to a packed simplicial LDLᵀ, then
+  // cholmod_resymbol to drop the relaxed supernodes' zeros): the same values.
+  void FactorNumericKeepingSuper(cholmod_sparse& view, const SparseMatrix& a) {
+    const Stopwatch clock;
+    FreeSuper();
+    super = cholmod_copy_factor(factor, &common);
+    ThrowOnFailure("copy of the analysis", a);
+    const int final_asis = common.final_asis;
+    common.final_asis = 1;
+    cholmod_factorize(&view, super, &common);
+    common.final_asis = final_asis;
+    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
+      FreeFactor();
+      factor = super;  // ThrowOnFailure reports its failed pivot
+      super = nullptr;
+      ThrowOnFailure("factorization", a);
+    }
+    FreeFactor();
+    factor = cholmod_copy_factor(super, &common);
+    ThrowOnFailure("copy of the factor", a);
+    if (!cholmod_change_factor(CHOLMOD_REAL, common.final_ll, common.final_super, common.final_pack,
+                               common.final_monotonic, factor, &common)) {
+      ThrowOnFailure("conversion of the factor", a);
+    }
+    if (common.final_resymbol && !factor->is_super &&
+        !cholmod_resymbol(&view, nullptr, 0, common.final_pack, factor, &common)) {
+      ThrowOnFailure("symbolic refactorization", a);
+    }
+    super_current = true;
+    partial.Setup(SuperView());
+    info.numeric_seconds = clock.Seconds();
+  }
+
+  // Copies the columns of the supernodes `partial` marked (all if `all`) from `super` into the
+  // simplicial LDLᵀ `factor` of the same analysis: d_j = L_jj², l_ij = L_ij / L_jj on the
+  // simplicial pattern (a subset of the supernode's rows). False if the patterns do not match.
+  bool CopySuperToSimplicial(bool all) {
+    const auto* ls = static_cast<const int*>(super->s);
+    const auto* pi = static_cast<const int*>(super->pi);
+    const auto* px = static_cast<const int*>(super->px);
+    const auto* first = static_cast<const int*>(super->super);
+    const auto* sx = static_cast<const double*>(super->x);
+    const auto* lp = static_cast<const int*>(factor->p);
+    const auto* lnz = static_cast<const int*>(factor->nz);
+    const auto* li = static_cast<const int*>(factor->i);
+    auto* lx = static_cast<double*>(factor->x);
+    const std::vector<char>& marked = partial.marked();
+    for (size_t s = 0; s < super->nsuper; ++s) {
+      if (!all && !marked[s]) continue;
+      const int rows = pi[s + 1] - pi[s];
+      for (int j = first[s]; j < first[s + 1]; ++j) {
+        const int local = j - first[s];
+        const double* column = sx + px[s] + static_cast<size_t>(local) * rows;
+        const double diagonal = column[local];
+        lx[lp[j]] = diagonal * diagonal;
+        // Both row lists are sorted; the simplicial one is a subset of the supernode's.
+        int r = local + 1;
+        for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
+          while (r < rows && ls[pi[s] + r] < li[e]) ++r;
+          if (r == rows || ls[pi[s] + r] != li[e]) return false;
+          lx[e] = column[r] / diagonal;
+        }
+      }
+    }
+    return true;
+  }
+
   // Keeps copies for Refactor() (the matrix also for check_residual): with an explicit
   // numeric or update route, or with auto after PrepareForRefactor() (a one-shot run that never
   // refactors keeps nothing: ~110 bytes per vertex and the copying time on a surface mesh).
   bool keeps_copies() const {
     return options.refactor == RefactorChoice::kNumeric ||
            options.refactor == RefactorChoice::kUpdate ||
+           options.refactor == RefactorChoice::kPartial ||
            (options.refactor == RefactorChoice::kAuto && prepared_for_refactor);
   }
   bool prepared_for_refactor = false;
@@ -483,11 +582,17 @@ struct CholmodSolver::Impl {
       return false;
     }
     const Stopwatch clock;
-    cholmod_factor* super = cholmod_copy_factor(symbolic, &common);
-    if (super == nullptr) {
-      ThrowOnFailure("copy of the analysis", a);
-      return false;
+    // Into the kept supernodal factor if there is one (its structure is the analysis'), else a
+    // copy of the analysis freed afterwards.
+    if (super == nullptr || !keeps_super()) {
+      FreeSuper();
+      super = cholmod_copy_factor(symbolic, &common);
+      if (super == nullptr) {
+        ThrowOnFailure("copy of the analysis", a);
+        return false;
+      }
     }
+    super_current = false;
     const int final_asis = common.final_asis;
     common.final_asis = 1;  // keep the supernodal LLᵀ factor
     cholmod_factorize(&view, super, &common);
@@ -495,38 +600,16 @@ struct CholmodSolver::Impl {
     if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
       FreeFactor();
       factor = super;  // ThrowOnFailure reports its failed pivot
+      super = nullptr;
       ThrowOnFailure("factorization", a);
     }
-    const auto* ls = static_cast<const int*>(super->s);
-    const auto* pi = static_cast<const int*>(super->pi);
-    const auto* px = static_cast<const int*>(super->px);
-    const auto* first = static_cast<const int*>(super->super);
-    const auto* sx = static_cast<const double*>(super->x);
-    const auto* lp = static_cast<const int*>(factor->p);
-    const auto* lnz = static_cast<const int*>(factor->nz);
-    const auto* li = static_cast<const int*>(factor->i);
-    auto* lx = static_cast<double*>(factor->x);
-    bool matches = true;
-    for (size_t s = 0; s < super->nsuper && matches; ++s) {
-      const int rows = pi[s + 1] - pi[s];
-      for (int j = first[s]; j < first[s + 1] && matches; ++j) {
-        const int local = j - first[s];
-        const double* column = sx + px[s] + static_cast<size_t>(local) * rows;
-        const double diagonal = column[local];
-        lx[lp[j]] = diagonal * diagonal;
-        // Both row lists are sorted; the simplicial one is a subset of the supernode's.
-        int r = local + 1;
-        for (int e = lp[j] + 1; e < lp[j] + lnz[j]; ++e) {
-          while (r < rows && ls[pi[s] + r] < li[e]) ++r;
-          if (r == rows || ls[pi[s] + r] != li[e]) {
-            matches = false;
-            break;
-          }
-          lx[e] = column[r] / diagonal;
-        }
-      }
+    const bool matches = CopySuperToSimplicial(/*all=*/true);
+    if (keeps_super() && matches) {
+      super_current = true;
+      if (!partial.ready()) partial.Setup(SuperView());
+    } else {
+      FreeSuper();
     }
-    cholmod_free_factor(&super, &common);
     if (!matches) return false;  // the caller factors the usual way, overwriting the values
     info.numeric_seconds = clock.Seconds();
     return true;
@@ -656,6 +739,13 @@ struct CholmodSolver::Impl {
     Eigen::Index nnz = 0;
     double lnz = 0.0, fl = 0.0, seconds = 0.0;
   } analysis_of;
+  // With keeps_super(): the numeric supernodal LLᵀ factor `factor` was made from (current: no
+  // update modified `factor` since), and the partial refactorization's structure and last
+  // measured speed.
+  cholmod_factor* super = nullptr;
+  bool super_current = false;
+  PartialSupernodalFactor partial;
+  double partial_seconds_per_flop = kDefaultPartialSecondsPerFlop;
   // Seconds per factor entry touched by the deletions (cholmod_updown) and the additions
   // (cholmod_rowadd), as the last update measured them (see Refactor()).
   double delete_seconds_per_entry = kDefaultDeleteSecondsPerEntry;
@@ -709,9 +799,11 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       node.GetChoice("refactor", ToName(kRefactorNames, options.refactor), Names(kRefactorNames),
                      "how Refactor() (handle edits of a session) updates the factor: numeric = "
                      "reuse the analysis, factor the values; update = modify the factor row by row "
-                     "(cholmod_rowdel/rowadd; not with mode supernodal); auto = the cheaper of the "
-                     "two by an estimate from the factor's elimination tree and measured times; "
-                     "full = factor from scratch (keeps no copies)"));
+                     "(cholmod_rowdel/rowadd; not with mode supernodal); partial = refactor only "
+                     "the supernodes the changed rows reach (mode auto; keeps the supernodal "
+                     "factor); auto = the cheapest of these by estimates from the factor's "
+                     "elimination tree and measured times; full = factor from scratch (keeps no "
+                     "copies)"));
   options.native_threads = node.Get(
       "native_threads", options.native_threads,
       "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
@@ -767,6 +859,8 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
   impl.use_tree_solve = false;
   impl.FreeFactor();
   impl.FreeSymbolic();
+  impl.FreeSuper();
+  impl.partial = PartialSupernodalFactor();
   impl.info = FactorInfo{};
   impl.matrix = SparseMatrix();
   impl.rows = static_cast<int>(a.rows());
@@ -800,7 +894,12 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
                                static_cast<double>(a.cols() + 1) * sizeof(int);
     impl.info.analysis_seconds += copy_clock.Seconds();
   }
-  impl.FactorNumeric(view, a);
+  if (impl.keeps_super() && impl.factor->is_super) {
+    impl.FactorNumericKeepingSuper(view, a);
+    impl.info.refactor_bytes += static_cast<double>(impl.super->xsize) * sizeof(double);
+  } else {
+    impl.FactorNumeric(view, a);
+  }
   impl.FinishFactor(a, diagonal, context);
 }
 
@@ -884,9 +983,12 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
 
   // What an update would touch (see the header for the rule).
   const bool can_update = !impl.factor->is_super && !impl.factor->is_ll;
+  const bool can_partial = impl.super != nullptr && impl.super_current && impl.keeps_super();
   RefactorChoice route = impl.options.refactor;
   if (route == RefactorChoice::kUpdate && !can_update) route = RefactorChoice::kNumeric;
+  if (route == RefactorChoice::kPartial && !can_partial) route = RefactorChoice::kNumeric;
   impl.info.estimated_update_seconds = 0.0;
+  impl.info.estimated_partial_seconds = 0.0;
   impl.info.estimated_numeric_seconds = impl.info.numeric_seconds;
   const cholmod_factor& f = *impl.factor;
   const auto* lp = static_cast<const int*>(f.p);
@@ -894,17 +996,30 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
   const auto* li = static_cast<const int*>(f.i);
   const auto* perm = static_cast<const int*>(f.Perm);
   const auto parent = [&](int j) { return lnz[j] > 1 ? li[lp[j] + 1] : -1; };
+  impl.inverse_permutation.resize(n);
+  for (Index j = 0; j < n; ++j) impl.inverse_permutation[perm ? perm[j] : j] = static_cast<int>(j);
+  // The partial refactorization's share of the work (PartialSupernodalFactor::Mark) and time:
+  // its flops at the speed of the last partial refactorization (before any: the default).
+  double partial_fraction = 0.0;
+  if (can_partial && (route == RefactorChoice::kPartial || route == RefactorChoice::kAuto)) {
+    std::vector<int>& columns = impl.row_index;
+    columns.clear();
+    for (Index r : changed_rows) columns.push_back(impl.inverse_permutation[r]);
+    partial_fraction = impl.partial.Mark(impl.SuperView(), columns);
+    impl.info.partial_work_fraction = partial_fraction;
+    impl.info.partial_supernodes = impl.partial.marked_supernodes();
+    impl.info.estimated_partial_seconds =
+        impl.partial.marked_work() * impl.partial_seconds_per_flop;
+  }
   // Entries the deletions and the additions would touch (see the header for the rule).
   double delete_entries = 0.0, add_entries = 0.0;
   if (can_update) {
     // path_cost[j]: the factor entries in the columns from j up to the root (parents have
     // larger indices, so one descending sweep).
     impl.path_cost.resize(n);
-    impl.inverse_permutation.resize(n);
     for (Index j = n; j-- > 0;) {
       const int p = parent(static_cast<int>(j));
       impl.path_cost[j] = lnz[j] + (p >= 0 ? impl.path_cost[p] : 0.0);
-      impl.inverse_permutation[perm ? perm[j] : j] = static_cast<int>(j);
     }
     // A deletion's column of the update starts at its first row that is not deleted too.
     std::vector<int>& deleted = impl.mark;  // `changed` is no longer needed
@@ -935,18 +1050,41 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
     const double plan = add_entries > 0.0 && impl.use_tree_solve ? impl.plan_seconds : 0.0;
     impl.info.estimated_update_seconds = delete_entries * impl.delete_seconds_per_entry +
                                          add_entries * impl.add_seconds_per_entry + plan;
-    if (route == RefactorChoice::kAuto) {
-      route = impl.info.estimated_update_seconds < impl.info.estimated_numeric_seconds
-                  ? RefactorChoice::kUpdate
-                  : RefactorChoice::kNumeric;
-    }
-  } else if (route == RefactorChoice::kAuto) {
+  }
+  if (route == RefactorChoice::kAuto) {
+    // The lowest estimate of the routes this factor allows (see the header).
     route = RefactorChoice::kNumeric;
+    double best = impl.info.estimated_numeric_seconds;
+    if (can_partial && impl.info.estimated_partial_seconds < best) {
+      route = RefactorChoice::kPartial;
+      best = impl.info.estimated_partial_seconds;
+    }
+    if (can_update && impl.info.estimated_update_seconds < best) route = RefactorChoice::kUpdate;
   }
 
   // From here on the old factor is being replaced: a throw leaves the solver unfactored.
   impl.factorized = false;
   impl.use_tree_solve = false;
+  if (route == RefactorChoice::kPartial) {
+    if (!EnsureBlasWorkBuffer()) return full();
+    const ScopedNativeThreads native_threads(impl.options.native_threads);
+    const Stopwatch partial_clock;
+    const int bad_column = impl.partial.Refactor(impl.SuperView(), a, impl.inverse_permutation);
+    // A non-positive pivot (`a` is not positive definite): Factorize() says so in detail.
+    if (bad_column >= 0 || !impl.CopySuperToSimplicial(/*all=*/false)) {
+      impl.FreeSuper();
+      return full();
+    }
+    // Calibrate on refactorizations large enough to time.
+    constexpr double kCalibrationFlops = 1e7;
+    if (impl.partial.marked_work() >= kCalibrationFlops) {
+      impl.partial_seconds_per_flop = partial_clock.Seconds() / impl.partial.marked_work();
+    }
+    impl.FinishFactor(a, diagonal, context, /*same_arrays=*/true);
+    summary.route = RefactorRoute::kPartial;
+    summary.seconds = clock.Seconds();
+    return summary;
+  }
   if (route == RefactorChoice::kNumeric) {
     if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) return full();
     const ScopedNativeThreads native_threads(impl.options.native_threads);
@@ -954,10 +1092,17 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
     if (impl.FactorNumericInPlace(view, a)) {
       impl.FinishFactor(a, diagonal, context, /*same_arrays=*/true);
     } else {
+      // E.g. a factor whose pattern updates changed: factored from a copy of the analysis
+      // (keeping the supernodal factor again if kept at all).
       impl.FreeFactor();
       impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
       impl.ThrowOnFailure("copy of the analysis", a);
-      impl.FactorNumeric(view, a);
+      if (impl.keeps_super()) {
+        impl.FactorNumericKeepingSuper(view, a);
+      } else {
+        impl.FreeSuper();
+        impl.FactorNumeric(view, a);
+      }
       impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
     }
     summary.route = RefactorRoute::kNumeric;
@@ -975,6 +1120,7 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
   // `a` and the old matrix differ only there. Then each changed row that is not the
   // identity's in `a` is added (cholmod_rowadd) with its entries in the rows already added,
   // which keeps that invariant.
+  impl.super_current = false;  // the kept supernodal factor no longer matches
   const double reallocations_before = impl.common.nrealloc_col;
   const auto fail = [&](std::string_view stage) {
     impl.ThrowOnFailure(stage, a);

@@ -108,14 +108,13 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
                                                  Eigen::Ref<Eigen::MatrixXd> x_out,
                                                  Eigen::Index first) {
   const Index n = static_cast<Index>(a_.rows());
-  double* b = b_.Reserve(n, K);
-  double* x = x_.Reserve(n, K);
+  double* b = nullptr;
+  double* x = nullptr;
+  GatherBlock<K>(b_in, x_out, first, n, b, x);
   double* r = r_.Reserve(n, K);
   double* z = z_.Reserve(n, K);
   double* p = p_.Reserve(n, K);
   double* q = q_.Reserve(n, K);
-  iterative::GatherColumns<K>(b_in, first, b);
-  iterative::GatherColumns<K>(x_out, first, x);
   const bool jacobi = incomplete_cholesky_ == nullptr;
   const double* inverse_diagonal = inverse_diagonal_.data();
 

@@ -72,7 +72,7 @@ class ConjugateGradientSolver final
   Eigen::VectorXd inverse_diagonal_;
   std::unique_ptr<IncompleteCholesky> incomplete_cholesky_;
   // Row-major work blocks (b, x, r, z, p, A p, the IC workspace), kept between solves.
-  iterative::Block b_, x_, r_, z_, p_, q_, w_;
+  iterative::Block r_, z_, p_, q_, w_;
 };
 
 // SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.

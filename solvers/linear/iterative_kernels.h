@@ -248,7 +248,22 @@ class BlockIterativeSolver : public LinearSolver {
  protected:
   using LinearSolver::LinearSolver;
 
+  /// Columns [first, first + K) of b and x copied into the row-major work blocks the kernels
+  /// iterate on, `rows` rows in the matrix's own row order, pointed to by b_block and x_block
+  /// (valid until the next call). gauss_seidel gathers in its colour order and keeps its own.
+  template <int K>
+  void GatherBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
+                   const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::Index first, Index rows,
+                   double*& b_block, double*& x_block) {
+    b_block = b_block_.Reserve(rows, K);
+    x_block = x_block_.Reserve(rows, K);
+    GatherColumns<K>(b, first, b_block);
+    GatherColumns<K>(x, first, x_block);
+  }
+
  private:
+  Block b_block_, x_block_;
+
   SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                          const Context& /*context*/) final {
     return SolveByBlocks(b, [&](Eigen::Index first, auto width) {

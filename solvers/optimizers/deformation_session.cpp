@@ -58,6 +58,8 @@ struct DeformationSession::Level {
   LevelConstraints constraints;  ///< coarse levels (the mesh's numbering)
   LevelState state;              ///< the last solution, in the mesh's numbering
   bool has_solution = false;
+  /// Coarse levels: `constraints.mean_target` is not yet mapped from the current targets.
+  bool targets_stale = false;
   /// The session's problem version `state` solves (DeformationSession::version_).
   long long version = -1;
 };
@@ -222,6 +224,7 @@ void DeformationSession::SetPositions(const Positions& positions) {
   }
   start_positions_ = positions;
   ++version_;
+  preview_rotations_pending_ = false;
   for (const auto& level : levels_) {
     if (level) {
       level->has_solution = false;
@@ -265,6 +268,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
     } else {
       // As the hierarchical optimizer's level setup: clusters holding a handle are constrained.
       level.constraints = MapConstraints(hierarchy_, l, finest);
+      level.targets_stale = false;
       constrained = static_cast<Index>(level.constraints.vertices.size());
       summary = solver.Constrain(level.constraints, factory, context_);
     }
@@ -311,15 +315,39 @@ HandleEditResult DeformationSession::ConstrainLevels() {
 }
 
 void DeformationSession::UpdateTargets() {
-  const Constraints finest{handles_, targets_};
   levels_[0]->solver->MoveTargets(targets_);
+  // The coarse levels' targets are mapped when a solve uses the level (a preview uses only the
+  // coarsest one): UpdateCoarseTargets().
   for (int l : solved_levels_) {
-    if (l == 0) continue;
-    Level& level = *levels_[l];
-    // The constrained vertices are the same (same handles): only the mean targets move.
-    level.constraints.mean_target = MapConstraints(hierarchy_, l, finest).mean_target;
-    level.solver->MoveTargets(level.constraints.mean_target);
+    if (l != 0) levels_[l]->targets_stale = true;
   }
+}
+
+void DeformationSession::UpdateCoarseTargets(int l) {
+  Level& level = *levels_[l];
+  if (l == 0 || !level.targets_stale) return;
+  // The constrained vertices are the same (same handles): only the mean targets move.
+  level.constraints.mean_target =
+      MapConstraints(hierarchy_, l, Constraints{handles_, targets_}).mean_target;
+  level.solver->MoveTargets(level.constraints.mean_target);
+  level.targets_stale = false;
+}
+
+void DeformationSession::MaterializePreviewRotations() {
+  if (!preview_rotations_pending_) return;
+  Rotations& rotations = levels_[0]->state.rotations;
+  rotations.resize(preview_map_.size());
+  context_.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t v = range.begin(); v != range.end(); ++v) {
+                          const Index c = preview_map_[v];
+                          rotations[v] =
+                              c == kNoVertex ? Rotation::Identity() : preview_coarse_rotations_[c];
+                        }
+                      });
+  });
+  preview_rotations_pending_ = false;
 }
 
 OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
@@ -334,9 +362,16 @@ OptimizeResult DeformationSession::Solve(const SessionSolveOptions& options) {
 OptimizeResult DeformationSession::Preview() { return Run({}, /*preview=*/true); }
 
 double DeformationSession::CurrentEnergy() {
-  LevelState state;
+  MaterializePreviewRotations();
+  // Kept buffers: called after every preview frame of a drag, where fresh 10 MB arrays (page
+  // faults, unmapping) slowed the next frames down.
+  LevelState& state = energy_state_;
   state.positions = positions();
-  if (levels_[0]->has_solution) state.rotations = levels_[0]->state.rotations;
+  if (levels_[0]->has_solution) {
+    state.rotations = levels_[0]->state.rotations;
+  } else {
+    state.rotations.clear();
+  }
   return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
 }
 
@@ -362,7 +397,8 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
 
 LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
                                                    bool preview, bool out_of_time,
-                                                   bool start_with_global_step) const {
+                                                   bool start_with_global_step,
+                                                   bool gather) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
   // before every global step with update_constraints).
   LevelSolveRequest request =
@@ -377,14 +413,24 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
   // The paper's approximation: one global solve from the up-sampled rotations, no local step
   // (the energy is left to CurrentEnergy()).
   request.global_step_only = l == 0 && preview && start_with_global_step;
+  if (gather) {
+    // The coarsest rotations, gathered by the finest level's global step itself.
+    request.rotation_source = &preview_map_;
+    request.gathered_rotations = &preview_coarse_rotations_;
+  }
   return request;
 }
 
-bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
+bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight, bool gather,
                                     const LevelState* cur, int coarse_before_level,
                                     const Context& context) {
   LevelState& work = work_[l];
-  if (straight && l == 0) {
+  if (straight && l == 0 && gather) {
+    // The finest level's global step gathers these (the coarsest level's solution) itself.
+    if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
+    preview_coarse_rotations_ = cur->rotations;
+    return true;
+  } else if (straight && l == 0) {
     const Rotations& coarse = cur->rotations;
     if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
     work.rotations.resize(preview_map_.size());
@@ -434,6 +480,28 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
   }
 }
 
+void DeformationSession::FinishResult(const LevelState& final_state, bool preview,
+                                      double time_budget_seconds, int out_of_time_level,
+                                      const std::vector<std::string>& level_notes,
+                                      const Context& context, OptimizeResult& result) const {
+  const LevelSolver& finest = *levels_[0]->solver;
+  // A preview's rotations are not fitted to its positions: no measures of that state.
+  if (!preview) {
+    result.measures = context.Run([&] { return finest.AuxiliaryMeasures(final_state, context); });
+  }
+  result.constraints = finest.constraint_report();
+  std::vector<std::string> notes = DescribeConstraintHandling(result.constraints);
+  result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
+  if (out_of_time_level >= 0) {
+    result.notes.push_back(fmt::format(
+        "the time budget of {} s ran out on level {}{}", time_budget_seconds, out_of_time_level,
+        out_of_time_level > 0 ? "; the finest level did one iteration from the up-sampled state"
+                              : ""));
+  }
+  result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
+  result.positions = final_state.positions;
+}
+
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -479,12 +547,20 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
   int coarse_before_level = -1;
   const bool straight = StraightPreview(preview, top);
+  // With per-vertex rotations the finest level's global step reads the coarse rotations
+  // straight into its own numbering (no finest rotations in the mesh's numbering at all).
+  const bool gathered = straight && levels_[0]->solver->accepts_gathered_rotations();
+  // Whatever this solve reads of the finest level's last rotations must be there.
+  if (!preview) MaterializePreviewRotations();
   context.Run([&] {
     for (int l = top; l >= 0; --l) {
       LevelState& work = work_[l];
       if (straight && l != top && l != 0) continue;  // the levels in between: skipped
-      start_with_global_step = StartLevel(l, top, preview, straight, cur, coarse_before_level,
-                                          context);
+      // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
+      // numbering.)
+      const bool gather_step = gathered && l == 0 && !user_stop;
+      start_with_global_step = StartLevel(l, top, preview, straight, gather_step, cur,
+                                          coarse_before_level, context);
       cur = &work;
       LevelState& state = work;
       Level* level = levels_[l].get();
@@ -501,8 +577,9 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         break;
       }
       Stopwatch level_clock;
-      const LevelSolveRequest request =
-          LevelRequest(l, solve_options, preview, out_of_time, start_with_global_step);
+      const LevelSolveRequest request = LevelRequest(l, solve_options, preview, out_of_time,
+                                                     start_with_global_step, gather_step);
+      UpdateCoarseTargets(l);
       const bool was_out_of_time = out_of_time;
       const bool had_solution = level->has_solution;
       const LevelSolveResult run = solver.Solve(state, request, context);
@@ -510,6 +587,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       // the next finer level needs it).
       std::swap(level->state, work);
       cur = &level->state;
+      // After a gathered preview the finest rotations stay pending (MaterializePreviewRotations).
+      if (l == 0) preview_rotations_pending_ = gather_step;
       level->has_solution = true;
       coarse_before_level = had_solution ? l : -1;
       // A stopped run or a preview is no finished solution: the next solve redoes the level.
@@ -530,23 +609,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   });
   result.stopped_by_callback = user_stop;
   std::reverse(result.levels.begin(), result.levels.end());
-  const LevelSolver& finest = *levels_[0]->solver;
-  // A preview's rotations are not fitted to its positions: no measures of that state.
-  if (!preview) {
-    result.measures = context.Run([&] { return finest.AuxiliaryMeasures(*cur, context); });
-  }
-  result.constraints = finest.constraint_report();
-  std::vector<std::string> notes = DescribeConstraintHandling(result.constraints);
-  result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
-  if (out_of_time) {
-    result.notes.push_back(fmt::format(
-        "the time budget of {} s ran out on level {}{}", solve_options.time_budget_seconds,
-        out_of_time_level,
-        out_of_time_level > 0 ? "; the finest level did one iteration from the up-sampled state"
-                              : ""));
-  }
-  result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
-  result.positions = cur->positions;
+  FinishResult(*cur, preview, solve_options.time_budget_seconds,
+               out_of_time ? out_of_time_level : -1, level_notes, context, result);
   result.timings.solve = total.Seconds();
   result.timings.total = result.timings.solve;
   return result;

@@ -160,21 +160,36 @@ class DeformationSession {
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
   HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
   HandleEditResult ConstrainLevels();
-  /// Moves every level's targets after SetTargets() (same handles).
+  /// Moves the finest level's targets after SetTargets() (same handles); the coarse levels'
+  /// follow when a solve uses them (UpdateCoarseTargets).
   void UpdateTargets();
+  /// Level `l`'s coarse constraint targets for the current finest targets, if SetTargets()
+  /// changed them since (they are mapped only for the levels a solve uses).
+  void UpdateCoarseTargets(int l);
+  /// The finest rotations a preview left pending (see preview_coarse_rotations_) into
+  /// levels_[0]->state.
+  void MaterializePreviewRotations();
   /// The S phase of Solve() and Preview(): the cascade from the coarsest level down (or, with
   /// FrameStart::kPrevious, the finest level alone).
   OptimizeResult Run(const SessionSolveOptions& options, bool preview);
   /// Where level `l` starts this solve, into work_[l] (`cur`: the state of the level above, the
-  /// cascade's `top` level has none); returns whether it starts with a global step.
-  bool StartLevel(int l, int top, bool preview, bool straight, const LevelState* cur,
+  /// cascade's `top` level has none); returns whether it starts with a global step. `gather`:
+  /// a straight preview's finest level that takes the coarse rotations gathered (kept in
+  /// preview_coarse_rotations_, not written out).
+  bool StartLevel(int l, int top, bool preview, bool straight, bool gather, const LevelState* cur,
                   int coarse_before_level, const Context& context);
   /// Whether a preview goes straight from level `top` to the finest (see Run()); builds the
   /// composed vertex map on first use.
   bool StraightPreview(bool preview, int top);
   /// The request for level `l`: the optimizer's, with the solve's limits.
+  /// `gather`: the straight preview's finest level takes the coarsest rotations gathered.
   LevelSolveRequest LevelRequest(int l, const SessionSolveOptions& solve_options, bool preview,
-                                 bool out_of_time, bool start_with_global_step) const;
+                                 bool out_of_time, bool start_with_global_step, bool gather) const;
+  /// Run()'s result from the final state: measures, constraint report, notes, positions
+  /// (`out_of_time_level`: -1 when the time budget did not run out).
+  void FinishResult(const LevelState& final_state, bool preview, double time_budget_seconds,
+                    int out_of_time_level, const std::vector<std::string>& level_notes,
+                    const Context& context, OptimizeResult& result) const;
 
   const Mesh& mesh_;
   const ComponentFactory& factory_;
@@ -196,6 +211,12 @@ class DeformationSession {
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's
   /// coarsest-level vertex (the composed maps; kNoVertex: identity), built on first use.
   std::vector<Index> preview_map_;
+  /// After a gathered preview (LevelSolveRequest::rotation_source) the finest level's rotations
+  /// are these coarse ones gathered along preview_map_; they are written into levels_[0]->state
+  /// only when something reads them (MaterializePreviewRotations): a preview frame never does.
+  Rotations preview_coarse_rotations_;
+  bool preview_rotations_pending_ = false;
+  LevelState energy_state_;  ///< CurrentEnergy()'s buffers
   bool preview_straight_ = true;
   PhaseTimings setup_timings_;
 };

@@ -49,3 +49,73 @@ TEST_CASE("local/global: constraint targets that keep raising the energy are fro
           Approx(tube.problem.constraints.targets(k, 2) + 0.3));
   }
 }
+
+TEST_CASE("local/global: the gathered global step equals the global step on gathered rotations",
+          "[optimizers][session]") {
+  // A preview's finest global step (sessions): rotations gathered from a few coarse ones, the
+  // right-hand side from the probed linear map instead of the energy's assembly.
+  const BentTube tube(20, 12, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4));
+  const Context context;
+  const Constraints& handles = tube.problem.constraints;
+  for (const std::string energy : {"spokes_and_rims", "spokes", "smooth_arap"}) {
+    DYNAMIC_SECTION(energy) {
+      const TestSetup setup("[energy]\ntype = \"" + energy + "\"\n");
+      // As a session's finest level: handle edits (masked system), exact targets.
+      LocalGlobalSolver solver;
+      solver.Precompute(LevelSetup{&tube.mesh, nullptr, 0, /*handle_edits=*/true}, setup.factory,
+                        context);
+      solver.Constrain(LevelConstraints::Exact(handles, false), setup.factory, context);
+      REQUIRE(solver.accepts_gathered_rotations());
+      REQUIRE(solver.energy().rotation_site() == RotationSite::kVertex);
+      const Index n = tube.mesh.num_vertices();
+      // Seven coarse clusters in bands along the tube, a few vertices without one (identity).
+      const auto cluster = [&](Index v) { return v % 13 == 5 ? kNoVertex : (v / 36) % 7; };
+      std::vector<Index> source(n);
+      for (Index s = 0; s < n; ++s) source[s] = cluster(solver.ordering().old_vertex[s]);
+      for (int round = 0; round < 3; ++round) {
+        Rotations coarse(7);
+        for (int c = 0; c < 7; ++c) {
+          coarse[c] = Eigen::AngleAxisd(0.3 * c + 0.2 * round,
+                                        Eigen::Vector3d(1.0, c, round).normalized())
+                          .toRotationMatrix();
+        }
+        const Positions targets = handles.targets * (1.0 + 0.1 * round);
+        LevelState reference;
+        reference.positions = tube.mesh.vertices;
+        for (size_t k = 0; k < handles.indices.size(); ++k) {
+          reference.positions.row(handles.indices[k]) = targets.row(static_cast<Index>(k));
+        }
+        reference.rotations.resize(n);
+        for (Index v = 0; v < n; ++v) {
+          reference.rotations[v] =
+              cluster(v) == kNoVertex ? Rotation(Rotation::Identity()) : coarse[cluster(v)];
+        }
+        solver.GlobalStep(reference, context);
+        Positions gathered = tube.mesh.vertices;
+        solver.GatheredGlobalStep(source, coarse, handles.indices, targets, gathered, context);
+        CHECK(solver.gathered_rhs_is_linear());
+        INFO("round " << round);
+        CHECK((gathered - reference.positions).cwiseAbs().maxCoeff() <=
+              1e-12 * reference.positions.cwiseAbs().maxCoeff());
+        // The same through the LevelSolver interface (the session's preview request): the map
+        // in the mesh's numbering, the targets the level's own (moved by MoveTargets).
+        std::vector<Index> mesh_source(n);
+        for (Index v = 0; v < n; ++v) mesh_source[v] = cluster(v);
+        solver.MoveTargets(targets);
+        LevelState state;
+        state.positions = tube.mesh.vertices;
+        LevelSolveRequest request;
+        request.global_step_only = true;
+        request.start_from_rotations = true;
+        request.rotation_source = &mesh_source;
+        request.gathered_rotations = &coarse;
+        const LevelSolveResult result = solver.Solve(state, request, context);
+        CHECK(result.iterations == 1);
+        CHECK(state.rotations.empty());  // never written out
+        CHECK((state.positions - reference.positions).cwiseAbs().maxCoeff() <=
+              1e-12 * reference.positions.cwiseAbs().maxCoeff());
+        solver.MoveTargets(handles.targets);
+      }
+    }
+  }
+}

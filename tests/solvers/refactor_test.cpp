@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // LinearSolver::Refactor after handle edits: masked grid Laplacians (handles' rows and columns
-// become the identity's, the pattern stays), every CHOLMOD route (full, numeric, update, auto)
+// become the identity's, the pattern stays), every CHOLMOD route (full, numeric, update, partial,
+// auto)
 // and the default of the other solvers. Each refactored solver must solve the NEW matrix.
 
 #include <algorithm>
@@ -72,12 +73,28 @@ void RequireSolves(LinearSolver& solver, const SparseMatrix& a, const Context& c
   REQUIRE(RelativeResidual(a, b, x) <= 1e-12);
 }
 
-Route Expected(const std::string& refactor, Route automatic) {
+Route Expected(const std::string& refactor, const std::string& mode, Route automatic) {
   if (refactor == "full") return Route::kFull;
   if (refactor == "numeric") return Route::kNumeric;
   if (refactor == "update") return Route::kUpdate;
+  // The partial refactorization keeps mode auto's supernodal factor; other modes: numeric.
+  if (refactor == "partial") return mode == "auto" ? Route::kPartial : Route::kNumeric;
   return automatic;
 }
+
+#ifdef HARAP_HAVE_CHOLMOD
+// The route auto must take by the estimates the solver reports (the lowest; see Refactor()).
+Route AutoRoute(const CholmodSolver::FactorInfo& info, bool can_partial, bool can_update) {
+  Route route = Route::kNumeric;
+  double best = info.estimated_numeric_seconds;
+  if (can_partial && info.estimated_partial_seconds < best) {
+    route = Route::kPartial;
+    best = info.estimated_partial_seconds;
+  }
+  if (can_update && info.estimated_update_seconds < best) route = Route::kUpdate;
+  return route;
+}
+#endif
 
 #define HARAP_REQUIRE_CHOLMOD(registry)                              \
   if (!(registry).Contains("cholmod")) {                             \
@@ -111,7 +128,7 @@ TEST_CASE("refactor: every cholmod route solves the new matrix after handle edit
   steps.push_back(handles);
 
   for (const std::string mode : {"auto", "simplicial", "supernodal"}) {
-    for (const std::string refactor : {"auto", "full", "numeric", "update"}) {
+    for (const std::string refactor : {"auto", "full", "numeric", "update", "partial"}) {
       if (mode == "supernodal" && refactor == "update") continue;  // rejected, tested below
       DYNAMIC_SECTION(mode << ", refactor = " << refactor) {
         auto solver = MakeSolver(registry, "cholmod",
@@ -127,13 +144,14 @@ TEST_CASE("refactor: every cholmod route solves the new matrix after handle edit
           const auto summary = solver->Refactor(a, changed, context);
           CHECK(summary.changed_rows == static_cast<Index>(changed.size()));
           CHECK(summary.seconds >= 0.0);
-          // auto takes numeric or update (never full) on a simplicial factor; numeric on a
-          // supernodal one.
+          // auto never factors from scratch; on a supernodal factor it refactors numerically,
+          // partial refactorizations only in mode auto.
           if (refactor == "auto") {
             CHECK(summary.route != Route::kFull);
             if (mode == "supernodal") CHECK(summary.route == Route::kNumeric);
+            if (mode != "auto") CHECK(summary.route != Route::kPartial);
           } else {
-            CHECK(summary.route == Expected(refactor, summary.route));
+            CHECK(summary.route == Expected(refactor, mode, summary.route));
           }
           RequireSolves(*solver, a, context);
           current = next;
@@ -166,8 +184,12 @@ TEST_CASE("refactor: auto takes the route its estimate says, large edits estimat
   a = Masked(laplacian, one);
   const auto small = solver->Refactor(a, SymmetricDifference(handles, one), context);
   const double small_estimate = cholmod.factor_info().estimated_update_seconds;
-  const bool small_cheaper = small_estimate < cholmod.factor_info().estimated_numeric_seconds;
-  CHECK(small.route == (small_cheaper ? Route::kUpdate : Route::kNumeric));
+  // The partial refactorization recomputes a part of the work only, estimated below numeric.
+  CHECK(cholmod.factor_info().partial_work_fraction > 0.0);
+  CHECK(cholmod.factor_info().partial_work_fraction < 1.0);
+  CHECK(cholmod.factor_info().estimated_partial_seconds <
+        cholmod.factor_info().estimated_numeric_seconds);
+  CHECK(small.route == AutoRoute(cholmod.factor_info(), true, true));
   RequireSolves(*solver, a, context);
 
   std::set<Index> most = one;
@@ -178,10 +200,9 @@ TEST_CASE("refactor: auto takes the route its estimate says, large edits estimat
   const auto large = solver->Refactor(a, SymmetricDifference(one, most), context);
   const double large_estimate = cholmod.factor_info().estimated_update_seconds;
   CHECK(large_estimate > 100.0 * small_estimate);
-  CHECK(large.route == (large_estimate < cholmod.factor_info().estimated_numeric_seconds
-                            ? Route::kUpdate
-                            : Route::kNumeric));
-  if (large.route != Route::kNumeric) {
+  // After an update the kept supernodal factor is stale: no partial route.
+  CHECK(large.route == AutoRoute(cholmod.factor_info(), small.route != Route::kUpdate, true));
+  if (large.route == Route::kUpdate) {
     WARN("the numeric factorization was timed slower than " << large_estimate
                                                             << " s (a loaded machine?)");
   }
@@ -208,22 +229,33 @@ TEST_CASE("refactor: routes can follow each other on one factor", "[solvers][cho
     SparseMatrix a = Masked(laplacian, current);
     solver->Factorize(a, context);
     // Deletions, then additions (they move columns of the factor), then numeric on that
-    // factor, then an update of the numerically refactored one, numeric again, then full.
+    // factor, partial refactorizations of it (mode auto), then an update of the refactored
+    // one, partial (after an update: numeric, which makes partial possible again), numeric
+    // again, then full.
     const std::vector<std::pair<std::set<Index>, Choice>> steps = {
         {Ball(10, 10, 6.0), Choice::kUpdate},  {Ball(10, 14, 3.0), Choice::kUpdate},
-        {Ball(30, 30, 5.0), Choice::kNumeric}, {Ball(25, 20, 4.0), Choice::kUpdate},
-        {Ball(20, 20, 2.0), Choice::kNumeric}, {Ball(5, 35, 4.0), Choice::kFull}};
+        {Ball(30, 30, 5.0), Choice::kNumeric}, {Ball(30, 25, 5.0), Choice::kPartial},
+        {Ball(5, 5, 3.0), Choice::kPartial},   {Ball(25, 20, 4.0), Choice::kUpdate},
+        {Ball(24, 20, 4.0), Choice::kPartial}, {Ball(20, 20, 2.0), Choice::kPartial},
+        {Ball(20, 20, 3.0), Choice::kNumeric}, {Ball(5, 35, 4.0), Choice::kFull}};
+    Choice previous = Choice::kFull;
+    int step = 0;
     for (const auto& [ball, choice] : steps) {
       std::set<Index> next = FirstRow();
       next.insert(ball.begin(), ball.end());
       cholmod.set_refactor(choice);
       a = Masked(laplacian, next);
       const auto summary = solver->Refactor(a, SymmetricDifference(current, next), context);
+      INFO("mode " << mode << ", step " << step++);
+      const Route partial =
+          mode == "auto" && previous != Choice::kUpdate ? Route::kPartial : Route::kNumeric;
       CHECK(summary.route == (choice == Choice::kUpdate    ? Route::kUpdate
                               : choice == Choice::kNumeric ? Route::kNumeric
+                              : choice == Choice::kPartial ? partial
                                                            : Route::kFull));
       RequireSolves(*solver, a, context);
       current = next;
+      previous = choice;
     }
   }
   auto supernodal = MakeSolver(registry, "cholmod", "mode = \"supernodal\"");
@@ -236,7 +268,7 @@ TEST_CASE("refactor: a different pattern factors from scratch", "[solvers][cholm
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
   const Context context;
-  for (const std::string refactor : {"auto", "numeric", "update"}) {
+  for (const std::string refactor : {"auto", "numeric", "update", "partial"}) {
     auto solver = MakeSolver(registry, "cholmod", "refactor = \"" + refactor + "\"");
     solver->PrepareForRefactor();
     const std::set<Index> handles = FirstRow();
@@ -296,7 +328,7 @@ TEST_CASE("refactor: misuse is an error that keeps the factor, a non-SPD result 
       if (it.row() == 100 && it.col() != 100) it.valueRef() *= 10.0;
     }
   }
-  for (const std::string refactor : {"update", "numeric"}) {
+  for (const std::string refactor : {"update", "numeric", "partial"}) {
     auto forced = MakeSolver(registry, "cholmod", "refactor = \"" + refactor + "\"");
     forced->Factorize(a, context);
     CHECK_THROWS_AS(forced->Refactor(bad, {100}, context), NumericalError);
@@ -319,7 +351,7 @@ TEST_CASE("refactor: auto keeps copies only after PrepareForRefactor, explicit r
   for (Index v : Ball(20, 20, 4.0)) more.insert(v);
   const SparseMatrix a = Masked(laplacian, handles);
   const SparseMatrix b = Masked(laplacian, more);
-  for (const std::string refactor : {"auto", "full", "numeric", "update"}) {
+  for (const std::string refactor : {"auto", "full", "numeric", "update", "partial"}) {
     for (const bool prepare : {false, true}) {
       DYNAMIC_SECTION("refactor = " << refactor << (prepare ? ", prepared" : "")) {
         auto solver = MakeSolver(registry, "cholmod", "refactor = \"" + refactor + "\"");
@@ -328,8 +360,8 @@ TEST_CASE("refactor: auto keeps copies only after PrepareForRefactor, explicit r
         solver->Factorize(a, context);
         // A one-shot run (auto, not prepared) and "full" keep nothing; the others keep the
         // analysis and the matrix.
-        const bool keeps =
-            refactor == "numeric" || refactor == "update" || (refactor == "auto" && prepare);
+        const bool keeps = refactor == "numeric" || refactor == "update" ||
+                           refactor == "partial" || (refactor == "auto" && prepare);
         CHECK((cholmod.factor_info().refactor_bytes > 0.0) == keeps);
         const auto summary = solver->Refactor(b, SymmetricDifference(handles, more), context);
         CHECK((summary.route != Route::kFull) == keeps);
@@ -343,8 +375,8 @@ TEST_CASE("refactor: auto keeps copies only after PrepareForRefactor, explicit r
 TEST_CASE("refactor: options are validated", "[solvers][cholmod][refactor]") {
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
-  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "refactor = \"partial\""),
-                    Catch::Contains("auto, full, numeric, update"));
+  CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "refactor = \"sometimes\""),
+                    Catch::Contains("auto, full, numeric, update, partial"));
   CHECK_THROWS_WITH(MakeSolver(registry, "cholmod", "mode = \"supernodal\"\nrefactor = \"update\""),
                     Catch::Contains("refactor") && Catch::Contains("supernodal"));
   CHECK_NOTHROW(MakeSolver(registry, "cholmod", "mode = \"supernodal\"\nrefactor = \"numeric\""));
