@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <memory>
 #include <string>
 
 #include "framework/config.h"
@@ -33,6 +34,11 @@ struct DefaultComponents {
 ///   [solver.small_systems]
 ///   max_unknowns = 50000      # levels (classic: the mesh) up to this size
 ///   type = "cholmod"
+///
+/// A `[solver.level_<l>]` table (l = 0 is the input mesh, the finest level) names the solver of
+/// level l itself, before the size rule. With type = "adaptive" (AdaptiveSolver) the choice
+/// between factoring and iterating is made per level from CHOLMOD's analysis; the factory
+/// records what each level used (solver_used()).
 class RegistryComponentFactory final : public ComponentFactory {
  public:
   /// Validates the energy and solver tables (and hierarchy/upsampler tables if present) at once,
@@ -49,8 +55,16 @@ class RegistryComponentFactory final : public ComponentFactory {
   /// small-system rule says.
   std::string energy_name() const;
   std::string solver_name() const;
-  /// The solver a reduced system of `num_unknowns` unknowns gets.
+  /// The solver a reduced system of `num_unknowns` unknowns gets (on a level without a
+  /// `[solver.level_<l>]` table).
   std::string solver_name_for(Index num_unknowns) const;
+  /// The solver level `level` gets, and what it used: for "adaptive", "adaptive:cholmod" or
+  /// "adaptive:cg" once the level factored (else the table's type).
+  std::string solver_name_for(int level, Index num_unknowns) const;
+  std::string solver_used(int level, Index num_unknowns) const;
+  /// Whether level `level`'s solver was direct: what an adaptive solver chose, else the kind of
+  /// the table's solver.
+  bool solver_direct(int level, Index num_unknowns) const;
   std::string hierarchy_name() const;
   std::string upsampler_name() const;
   /// Whether an optimizer asked for a hierarchy / an up-sampler (the checks of the constructor
@@ -59,12 +73,17 @@ class RegistryComponentFactory final : public ComponentFactory {
   bool made_upsampler() const { return made_upsampler_; }
 
  private:
-  /// The table whose solver a system of `num_unknowns` unknowns gets.
-  ConfigNode SolverTableFor(Index num_unknowns) const;
+  /// The table whose solver a system of `num_unknowns` unknowns gets on level `level` (-1: any
+  /// level without its own table).
+  ConfigNode SolverTableFor(int level, Index num_unknowns) const;
 
   const Registries& registries_;
   ConfigNode root_;
   DefaultComponents defaults_;
+  /// What the adaptive solvers chose, by level (shared with the solvers' callbacks, which may
+  /// outlive the factory).
+  struct Choices;
+  std::shared_ptr<Choices> choices_;
   mutable std::atomic<bool> made_hierarchy_{false};
   mutable std::atomic<bool> made_upsampler_{false};
 };

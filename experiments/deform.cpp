@@ -79,15 +79,10 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   outcome.result =
       context.Run([&] { return run.optimizer->Optimize(prepared.problem(), factory, context); });
   outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
-  std::map<std::string, bool> direct;  // by solver name: asked once per solver used
   for (const LevelResult& level : outcome.result.levels) {
-    const std::string name = factory.solver_name_for(level.unknowns);
-    if (!direct.count(name)) {
-      // Creating a solver is cheap (no factorization); it knows whether it is direct.
-      direct[name] = factory.MakeLinearSolver(level.level, level.unknowns)->is_direct();
-    }
-    outcome.level_solvers.push_back(name);
-    outcome.level_solver_direct.push_back(direct[name]);
+    // What the level's solver was, and for "adaptive" what it chose.
+    outcome.level_solvers.push_back(factory.solver_used(level.level, level.unknowns));
+    outcome.level_solver_direct.push_back(factory.solver_direct(level.level, level.unknowns));
   }
   // The pieces the optimizer asked for, whether or not their tables were written.
   if (factory.made_hierarchy()) outcome.hierarchy = factory.hierarchy_name();

@@ -274,6 +274,8 @@ int main(int argc, char** argv) {
   deform->add_option("--solver", args.solver, "linear solver name (default cholmod)");
   deform->add_option("--hierarchy", args.hierarchy, "hierarchy name (hierarchical optimizers)");
   deform->add_option("--upsampler", args.upsampler, "upsampler name (hierarchical optimizers)");
+  deform->add_option("--preset", args.preset,
+                     "named option set: fast or hierarchical (docs/solvers.md; other options win)");
   deform->add_option("--tolerance", args.tolerance,
                      "convergence tolerance: squared max displacement / squared diagonal");
   deform->add_option("--max-iterations", args.max_iterations, "iteration cap (per level)");

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "experiments/output_checks.h"
+#include "experiments/presets.h"
 #include "framework/error.h"
 
 namespace harap {
@@ -30,6 +31,7 @@ ConfigNode PieceFlags::BuildConfig() const {
     }
     config.Set(setting.substr(0, eq), setting.substr(eq + 1));
   }
+  ApplyPreset(config, preset);
   return config;
 }
 

@@ -17,9 +17,11 @@ struct PieceFlags {
   std::optional<double> tolerance;                              ///< --tolerance
   std::optional<int> max_iterations;                            ///< --max-iterations
   std::vector<std::string> settings;                            ///< --set KEY=VALUE, in order
+  std::string preset;  ///< --preset NAME (experiments/presets.h); below all of the above
 
   /// The run config: the --config file, then the shortcut flags, then each --set in order (later
-  /// ones win). A mesh given as --config, or a --set without '=', is a ConfigError/InputError
+  /// ones win), then the preset (--preset, else the config's `preset` key) for the keys none of
+  /// them set. A mesh given as --config, or a --set without '=', is a ConfigError/InputError
   /// saying what was expected.
   ConfigNode BuildConfig() const;
 };

@@ -232,8 +232,10 @@ std::string ConfigNode::GetChoice(std::string_view key, std::string_view default
                                 FullKey(key), value, fmt::join(choices, ", ")));
 }
 
-ConfigNode ConfigNode::Child(std::string_view key) const {
-  RecordOption(*state_, path_, key, "(table)", "");
+ConfigNode ConfigNode::Child(std::string_view key) const { return Child(key, ""); }
+
+ConfigNode ConfigNode::Child(std::string_view key, std::string_view help) const {
+  RecordOption(*state_, path_, key, "(table)", help);
   const toml::table* table = FindTable(state_->root, path_);
   if (table) {
     if (const toml::node* node = table->get(key); node && !node->is_table()) {

@@ -145,6 +145,8 @@ class ConfigNode {
 
   /// The sub-table `key` (an empty table if absent). Its keys count as read.
   ConfigNode Child(std::string_view key) const;
+  /// The same, with a help text for the table (listed like an option's).
+  ConfigNode Child(std::string_view key, std::string_view help) const;
 
   bool Has(std::string_view key) const;
   /// Keys present in this table, in document order.

@@ -410,6 +410,7 @@ struct CholmodSolver::Impl {
   ~Impl() {
     FreeFactor();
     FreeSymbolic();
+    FreeAnalysis();
     FreeSuper();
     cholmod_free_dense(&x, &common);
     cholmod_free_dense(&y, &common);
@@ -425,6 +426,34 @@ struct CholmodSolver::Impl {
     if (symbolic) cholmod_free_factor(&symbolic, &common);
     symbolic = nullptr;
   }
+  void FreeAnalysis() {
+    if (analysis) cholmod_free_factor(&analysis, &common);
+    analysis = nullptr;
+    analysis_matrix = SparseMatrix();
+  }
+
+  // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
+  // for this very matrix (same arrays and size), else a new one.
+  cholmod_factor* TakeOrMakeAnalysis(cholmod_sparse& view, const SparseMatrix& a) {
+    if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
+        a.isCompressed() && SamePattern(analysis_matrix, a)) {
+      cholmod_factor* kept = analysis;
+      analysis = nullptr;
+      analysis_matrix = SparseMatrix();
+      common.lnz = analysis_of.lnz;  // restored: other CHOLMOD calls may have changed them
+      common.fl = analysis_of.fl;
+      info.analysis_seconds = analysis_of.seconds;
+      return kept;
+    }
+    FreeAnalysis();
+    const Stopwatch clock;
+    cholmod_factor* made = cholmod_analyze(&view, &common);
+    ThrowOnFailure("analysis (ordering)", a);
+    HARAP_CHECK(made != nullptr, "cholmod_analyze returned no factor (status {})", common.status);
+    info.analysis_seconds = clock.Seconds();
+    return made;
+  }
+
   void FreeSuper() {
     if (super) cholmod_free_factor(&super, &common);
     super = nullptr;
@@ -702,6 +731,14 @@ struct CholmodSolver::Impl {
   // With keeps_copies(): the analysis of the last Factorize() (a symbolic factor), which
   // Refactor() factors anew.
   cholmod_factor* symbolic = nullptr;
+  // Analyze()'s analysis, until the Factorize() of the same matrix takes it.
+  cholmod_factor* analysis = nullptr;
+  SparseMatrix analysis_matrix;  // its pattern (values not kept)
+  struct {
+    Eigen::Index rows = 0;
+    Eigen::Index nnz = 0;
+    double lnz = 0.0, fl = 0.0, seconds = 0.0;
+  } analysis_of;
   // With keeps_super(): the numeric supernodal LLᵀ factor `factor` was made from (current: no
   // update modified `factor` since), and the partial refactorization's structure and last
   // measured speed.
@@ -846,20 +883,17 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
-  const Stopwatch analysis_clock;
-  impl.factor = cholmod_analyze(&view, &impl.common);
-  impl.ThrowOnFailure("analysis (ordering)", a);
-  HARAP_CHECK(impl.factor != nullptr, "cholmod_analyze returned no factor (status {})",
-              impl.common.status);
+  impl.factor = impl.TakeOrMakeAnalysis(view, a);
   if (impl.keeps_copies()) {
+    const Stopwatch copy_clock;  // the copy for Refactor() counts as analysis too
     const size_t in_use = impl.common.memory_inuse;
     impl.symbolic = cholmod_copy_factor(impl.factor, &impl.common);
     impl.ThrowOnFailure("copy of the analysis", a);
     impl.info.refactor_bytes = static_cast<double>(impl.common.memory_inuse - in_use) +
                                static_cast<double>(a.nonZeros()) * (sizeof(double) + sizeof(int)) +
                                static_cast<double>(a.cols() + 1) * sizeof(int);
+    impl.info.analysis_seconds += copy_clock.Seconds();
   }
-  impl.info.analysis_seconds = analysis_clock.Seconds();
   if (impl.keeps_super() && impl.factor->is_super) {
     impl.FactorNumericKeepingSuper(view, a);
     impl.info.refactor_bytes += static_cast<double>(impl.super->xsize) * sizeof(double);
@@ -867,6 +901,40 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
     impl.FactorNumeric(view, a);
   }
   impl.FinishFactor(a, diagonal, context);
+}
+
+CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
+  HARAP_CHECK(a.rows() == a.cols(), "matrix is {}×{}, not square", a.rows(), a.cols());
+  Impl& impl = *impl_;
+  impl.FreeAnalysis();
+  Estimate estimate;
+  if (a.rows() == 0) return estimate;
+  const ScopedNativeThreads native_threads(impl.options.native_threads);
+  cholmod_sparse view = LowerTriangleView(a);
+  const Stopwatch clock;
+  impl.analysis = cholmod_analyze(&view, &impl.common);
+  impl.ThrowOnFailure("analysis (ordering)", a);
+  HARAP_CHECK(impl.analysis != nullptr, "cholmod_analyze returned no factor (status {})",
+              impl.common.status);
+  estimate.analysis_seconds = clock.Seconds();
+  estimate.nnz_l = impl.common.lnz;
+  estimate.flops = impl.common.fl;
+  // A simplicial factor stores a value and a row index per entry plus O(n) column data; the
+  // supernodal factor of modes auto and supernodal pads relaxed supernodes, which CHOLMOD's
+  // analysis sizes exactly (xsize entries, ssize row indices).
+  const cholmod_factor& f = *impl.analysis;
+  const double entries = f.is_super ? std::max(static_cast<double>(f.xsize), estimate.nnz_l)
+                                    : estimate.nnz_l;
+  estimate.factor_bytes = entries * sizeof(double) +
+                          (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) *
+                              sizeof(int) +
+                          static_cast<double>(a.rows()) * 4 * sizeof(int);
+  impl.analysis_of = {a.rows(), a.nonZeros(), impl.common.lnz, impl.common.fl,
+                      estimate.analysis_seconds};
+  // The pattern, to recognize the matrix (or a copy of it) in Factorize().
+  impl.analysis_matrix = a;
+  impl.analysis_matrix.makeCompressed();
+  return estimate;
 }
 
 LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,

@@ -105,6 +105,20 @@ class CholmodSolver final : public LinearSolver {
   CholmodSolver(const CholmodSolver&) = delete;
   CholmodSolver& operator=(const CholmodSolver&) = delete;
 
+  /// What the analysis (ordering and symbolic factorization, no numeric work) says a
+  /// factorization of a matrix will cost: the size of L and the flops, before any factoring.
+  struct Estimate {
+    double nnz_l = 0.0;         ///< Nonzeros of L (simplicial count).
+    double flops = 0.0;         ///< Flop count of the factorization.
+    double factor_bytes = 0.0;  ///< Memory of the numeric factor (values and row indices).
+    double analysis_seconds = 0.0;
+  };
+  /// Analyses `a` (same contract as Factorize()) and keeps the analysis (and a copy of the
+  /// pattern): the next Factorize() of a matrix with the same pattern reuses it instead of
+  /// ordering again. Lets a caller decide
+  /// whether to factor at all (AdaptiveSolver) for the price of the analysis alone.
+  Estimate Analyze(const SparseMatrix& a);
+
   bool is_direct() const override { return true; }
 
   /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below):

@@ -51,6 +51,8 @@ class ConjugateGradientSolver final
       : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
+  /// The matrix of the last Factorize() (a compressed copy).
+  const SparseMatrix& matrix() const { return a_; }
 
  private:
   void FactorizeImpl(const SparseMatrix& a, const Context& context) override;

@@ -8,6 +8,7 @@
 #include "solvers/linear/eigen_ldlt_solver.h"
 #include "solvers/linear/gauss_seidel_solver.h"
 #ifdef HARAP_HAVE_CHOLMOD
+#include "solvers/linear/adaptive_solver.h"
 #include "solvers/linear/cholmod_solver.h"
 #endif
 
@@ -17,6 +18,9 @@ void RegisterLinearSolvers(Registry<LinearSolver>& registry) {
 #ifdef HARAP_HAVE_CHOLMOD
   registry.Add<CholmodSolver>(
       "sparse Cholesky with CHOLMOD (SuiteSparse), simplicial LDLᵀ or supernodal LLᵀ");
+  registry.Add<AdaptiveSolver>(
+      "cholmod or cg per matrix, chosen from CHOLMOD's analysis (memory and arithmetic of the "
+      "factor vs. CG iterations) before factoring (paper Section 5.2)");
 #endif
   registry.Add<EigenLdltSolver>(
       "sparse LDLᵀ with Eigen's SimplicialLDLT and AMD ordering (reference, always built)");

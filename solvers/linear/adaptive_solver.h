@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "framework/config.h"
+#include "framework/linear_solver.h"
+#include "solvers/linear/cholmod_solver.h"
+#include "solvers/linear/conjugate_gradient_solver.h"
+
+namespace harap {
+
+/// Factor or iterate, decided per matrix before any factoring: the paper's suggestion (Section
+/// 5.2) to use Cholesky on the levels where factoring is affordable and a warm-started iterative
+/// solver (preconditioned CG from the up-sampled solution) on the finest levels where factoring
+/// costs too much time or memory.
+///
+/// With choose = "auto", Factorize() first runs CHOLMOD's analysis alone (ordering and symbolic
+/// factorization, a fraction of the factorization's time; kept and reused if it factors) and
+/// reads from it the size of L and the flop count of the factorization. It then iterates when
+///   - the factor would need more than max_factor_megabytes of memory (default: half the
+///     machine's physical memory), or
+///   - factoring plus `expected_solves` solves with the factor would take more arithmetic than
+///     `expected_solves` CG solves of max_iterations iterations each:
+///       flops(L) + s · 4 k nnz(L)  >  s · m · k (2 nnz(A) + 12 n)
+///     (s = expected_solves, k = 3 right-hand sides, m = CG iterations per solve; a forward and
+///     a backward substitution touch each entry of L twice, a Jacobi-preconditioned CG iteration
+///     is a product with A plus about six vector updates).
+/// Both sides are counts of arithmetic from the matrix and CHOLMOD's analysis, not timings, so
+/// the choice is the same on every machine. choose = "direct" or "iterative" fixes the choice
+/// (per level through the factory's `[solver.level_<l>]` tables).
+///
+/// When it iterates by the arithmetic rule (not for memory) and the matrix then serves more
+/// solves than expected, it factors after all — before the solve at which the CG iterations
+/// so far have cost flops(L) — and solves directly from then on (chosen() = "cg>cholmod"): at
+/// most about twice the arithmetic of the better choice in hindsight (the ski-rental argument),
+/// however wrong expected_solves was.
+///
+/// The direct solver is "cholmod" with the options of the `direct` table, the iterative one
+/// "cg" with those of the `iterative` table. chosen() names the one in use.
+/// Compiled only with CHOLMOD (HARAP_HAVE_CHOLMOD).
+class AdaptiveSolver final : public LinearSolver {
+ public:
+  static constexpr std::string_view kName = "adaptive";
+
+  enum class Choice { kAuto, kDirect, kIterative };
+
+  struct Options {
+    Choice choose = Choice::kAuto;
+    /// Memory budget of the factor in MB; 0: half the physical memory (sysconf).
+    double max_factor_megabytes = 0.0;
+    /// Global steps (3-column solves) the matrix is expected to serve: hierarchical levels take
+    /// 5–15 on armadillo-bend at tolerance 1e-6 (docs/results.md), classic runs 20–200.
+    double expected_solves = 10.0;
+    CholmodSolver::Options direct;
+    ConjugateGradientSolver::Options iterative;
+
+    static Options FromConfig(const ConfigNode& node);
+  };
+
+  /// Why the last Factorize() chose what it chose.
+  struct Decision {
+    bool direct = true;
+    bool estimated = false;  ///< Whether the analysis ran (choose = "auto").
+    CholmodSolver::Estimate estimate;
+    double budget_bytes = 0.0;
+    double direct_flops = 0.0;     ///< flops(L) + s · 4 k nnz(L)
+    double iterative_flops = 0.0;  ///< s · m · k (2 nnz(A) + 12 n)
+  };
+
+  explicit AdaptiveSolver(const Options& options);
+  ~AdaptiveSolver() override;
+
+  /// The chosen solver's; false before the first Factorize() (so callers warm-start).
+  bool is_direct() const override;
+  void PrepareForRefactor() override;
+
+  /// "cholmod", "cg" or "cg>cholmod" (switched) after a Factorize(), "" before.
+  std::string_view chosen() const;
+  const Decision& decision() const { return decision_; }
+  const Options& options() const { return options_; }
+
+  /// Called by every successful Factorize() with chosen() and is_direct() (the composition
+  /// root records each level's choice for the report).
+  void set_on_choice(std::function<void(std::string_view, bool)> on_choice) {
+    on_choice_ = std::move(on_choice);
+  }
+
+  /// The memory budget max_factor_megabytes = 0 stands for: half the physical memory.
+  static double DefaultBudgetBytes();
+
+ private:
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
+  SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                         const Context& context) override;
+  /// A direct choice refactors with cholmod's routes (same pattern, so the factor's size is
+  /// unchanged); an iterative one decides anew (FactorizeImpl).
+  RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
+                               const Context& context) override;
+
+  Options options_;
+  bool prepared_for_refactor_ = false;
+  std::unique_ptr<CholmodSolver> direct_;
+  std::unique_ptr<ConjugateGradientSolver> iterative_;
+  LinearSolver* chosen_ = nullptr;
+  Decision decision_;
+  bool may_switch_ = false;
+  bool switched_ = false;
+  double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
+  std::function<void(std::string_view, bool)> on_choice_;
+};
+
+}  // namespace harap
