@@ -418,6 +418,22 @@ struct CholmodSolver::Impl {
     cholmod_finish(&common);
   }
 
+  // Numeric supernodal factorization of `view` into the kept `super` (its analysis), left as
+  // the supernodal LLᵀ (final_asis) for partial refactorization; on failure `super` becomes
+  // `factor` so ThrowOnFailure reports the failed pivot.
+  void FactorizeKeptSupernodal(cholmod_sparse& view, const SparseMatrix& a) {
+    const int final_asis = common.final_asis;
+    common.final_asis = 1;  // keep the supernodal LLᵀ factor
+    cholmod_factorize(&view, super, &common);
+    common.final_asis = final_asis;
+    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
+      FreeFactor();
+      factor = super;
+      super = nullptr;
+      ThrowOnFailure("factorization", a);
+    }
+  }
+
   void FreeFactor() {
     if (factor) cholmod_free_factor(&factor, &common);
     factor = nullptr;
@@ -489,16 +505,7 @@ struct CholmodSolver::Impl {
     FreeSuper();
     super = cholmod_copy_factor(factor, &common);
     ThrowOnFailure("copy of the analysis", a);
-    const int final_asis = common.final_asis;
-    common.final_asis = 1;
-    cholmod_factorize(&view, super, &common);
-    common.final_asis = final_asis;
-    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
-      FreeFactor();
-      factor = super;  // ThrowOnFailure reports its failed pivot
-      super = nullptr;
-      ThrowOnFailure("factorization", a);
-    }
+    FactorizeKeptSupernodal(view, a);
     FreeFactor();
     factor = cholmod_copy_factor(super, &common);
     ThrowOnFailure("copy of the factor", a);
@@ -593,16 +600,7 @@ struct CholmodSolver::Impl {
       }
     }
     super_current = false;
-    const int final_asis = common.final_asis;
-    common.final_asis = 1;  // keep the supernodal LLᵀ factor
-    cholmod_factorize(&view, super, &common);
-    common.final_asis = final_asis;
-    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
-      FreeFactor();
-      factor = super;  // ThrowOnFailure reports its failed pivot
-      super = nullptr;
-      ThrowOnFailure("factorization", a);
-    }
+    FactorizeKeptSupernodal(view, a);
     const bool matches = CopySuperToSimplicial(/*all=*/true);
     if (keeps_super() && matches) {
       super_current = true;
