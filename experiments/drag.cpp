@@ -140,7 +140,7 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   for (int frame = 1; frame <= options.frames; ++frame) {
     std::optional<HandleEditResult> edit;
     std::string description;
-    for (const DragEdit& request : options.edits) {
+    for (const HandleEdit& request : options.edits) {
       if (request.frame != frame) continue;
       // Vertices that are handles already (the scenario's or an earlier edit's) stay as they are.
       std::vector<unsigned char> is_handle(scenario.mesh.num_vertices(), 0);

@@ -25,9 +25,6 @@ namespace harap {
 ///
 /// Selections as in scenarios (select.ball, select.slab, select.indices; box fractions of the
 /// mesh's referenced vertices, ball radius in units of the box diagonal).
-/// A handle edit of `harap drag --edits FILE` (read by LoadHandleEdits, framework/io/scenario.h).
-using DragEdit = HandleEdit;
-
 /// `harap drag`: replays an interaction with a scenario's handles.
 struct DragOptions {
   int frames = 30;  ///< the handles reach the scenario's end pose at the last frame
@@ -37,7 +34,7 @@ struct DragOptions {
   bool from_scratch = false;     ///< a fresh one-shot run per frame (the baseline)
   SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected;
   std::string out_frames;       ///< folder for frame_NNN.ply (empty: none)
-  std::vector<DragEdit> edits;  ///< session modes only
+  std::vector<HandleEdit> edits;  ///< session modes only (LoadHandleEdits)
   IterationCallback progress;
 };
 
