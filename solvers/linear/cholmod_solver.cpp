@@ -437,6 +437,7 @@ struct CholmodSolver::Impl {
   void FreeFactor() {
     if (factor) cholmod_free_factor(&factor, &common);
     factor = nullptr;
+    rows_released = false;
   }
   void FreeSymbolic() {
     if (symbolic) cholmod_free_factor(&symbolic, &common);
@@ -636,7 +637,8 @@ struct CholmodSolver::Impl {
       view.value = static_cast<const double*>(f.x);
       view.permutation = static_cast<const int*>(f.Perm);
       const Stopwatch setup_clock;
-      if (same_arrays && tree_view.row == view.row && tree_view.value == view.value &&
+      if (same_arrays && view.row != nullptr && tree_view.row == view.row &&
+          tree_view.value == view.value &&
           tree_view.column_start == view.column_start &&
           tree_view.column_count == view.column_count && tree_view.n == view.n) {
         tree_solve.RefreshPivots();
@@ -649,6 +651,7 @@ struct CholmodSolver::Impl {
       use_tree_solve = true;
       info.solve_blocks = tree_solve.num_blocks();
       info.solve_critical_path = tree_solve.critical_path_fraction();
+      ReleaseRowsOfOneShotFactor();
     }
     if (options.check_residual || keeps_copies()) {
       if (SamePattern(matrix, a) && matrix.isCompressed() && a.isCompressed()) {
@@ -660,6 +663,23 @@ struct CholmodSolver::Impl {
     }
     factorized = true;
   }
+
+  // A one-shot factor (no analysis copy kept, so Refactor() can only factor anew) solved by the
+  // tree: the tree solve holds its own, renumbered copy of the row indices and nothing reads
+  // CHOLMOD's again (no cholmod_solve2, no update, no conversion; FreeFactor() frees a null
+  // array), so they are freed: 4 bytes per factor entry, the largest array of a large run after
+  // the factor's values (armadillo-bend-692k, classic: peak 1374 -> 1250 MB).
+  void ReleaseRowsOfOneShotFactor() {
+    if (!use_tree_solve || symbolic != nullptr || super != nullptr || keeps_copies() ||
+        keeps_super() || factor == nullptr || factor->is_super || factor->i == nullptr) {
+      return;
+    }
+    info.released_bytes = static_cast<double>(factor->nzmax) * sizeof(int);
+    factor->i = cholmod_free(factor->nzmax, sizeof(int), factor->i, &common);
+    tree_view.row = nullptr;  // same_arrays never matches a factor without rows
+    rows_released = true;
+  }
+  bool rows_released = false;
 
   // Throws for every failure status of the last CHOLMOD call; warnings other than NOT_POSDEF
   // (e.g. DSMALL) are left to the pivot check.
@@ -1260,6 +1280,7 @@ SolveSummary CholmodSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b
     return impl.FinishSolve(b, x);
   }
 
+  HARAP_CHECK(!impl.rows_released, "cholmod: the factor's rows were released for the tree solve");
   // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
   cholmod_dense rhs{};
   rhs.nrow = static_cast<size_t>(b.rows());

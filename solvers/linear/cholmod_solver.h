@@ -196,6 +196,9 @@ class CholmodSolver final : public LinearSolver {
     double solve_setup_seconds = 0.0;
     /// Bytes kept for Refactor() (the analysis and the matrix; 0 with refactor = "full").
     double refactor_bytes = 0.0;
+    /// Bytes of CHOLMOD's row indices freed because the parallel solve has its own copy and a
+    /// one-shot factor (nothing kept for Refactor()) never reads them again (0 otherwise).
+    double released_bytes = 0.0;
     /// The last Refactor()'s estimates (0 when it did not estimate), see Refactor().
     double estimated_update_seconds = 0.0;
     double estimated_numeric_seconds = 0.0;

@@ -245,6 +245,74 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
   }
 }
 
+TEST_CASE("cholmod: a one-shot factor frees CHOLMOD's row indices, a refactorable one keeps them",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  const SparseMatrix a = PinnedGridLaplacian(60, 50, 41);
+  SparseMatrix changed = a;  // row and column 7 changed (a larger diagonal entry)
+  changed.coeffRef(7, 7) += 2.5;
+  const SparseMatrix other = PinnedGridLaplacian(40, 30, 42);  // another pattern and size
+  const Context context = Context::WithThreads(2);
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 43);
+  const Eigen::MatrixXd b_other = RandomRhs(other.rows(), 3, 44);
+  const auto solve = [&](LinearSolver& solver, const SparseMatrix& m, const Eigen::MatrixXd& rhs) {
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(m.rows(), rhs.cols());
+    REQUIRE(solver.Solve(rhs, x, context).success());
+    return RelativeResidual(m, rhs, x);
+  };
+#ifdef HARAP_HAVE_CHOLMOD
+  const auto released = [](const LinearSolver& solver) {
+    return dynamic_cast<const CholmodSolver&>(solver).factor_info().released_bytes;
+  };
+  const auto nnz_l = [](const LinearSolver& solver) {
+    return dynamic_cast<const CholmodSolver&>(solver).factor_info().nnz_l;
+  };
+#endif
+  for (const std::string mode : {"auto", "simplicial"}) {
+    DYNAMIC_SECTION("one-shot, mode " << mode) {
+      auto solver = MakeSolver(registry, "cholmod", Options(mode, "amd"));
+      solver->Factorize(a, context);
+#ifdef HARAP_HAVE_CHOLMOD
+      CHECK(released(*solver) >= 4.0 * nnz_l(*solver));
+#endif
+      // Solves, repeatedly, from the tree's copy alone.
+      CHECK(solve(*solver, a, b) < 1e-10);
+      CHECK(solve(*solver, a, b) < 1e-10);
+      // A new factorization, of another matrix, and a refactorization (a full one: nothing was
+      // kept for a cheaper route) start from scratch.
+      solver->Factorize(other, context);
+      CHECK(solve(*solver, other, b_other) < 1e-10);
+      solver->Factorize(a, context);
+      const auto summary = solver->Refactor(changed, {7}, context);
+      CHECK(summary.route == LinearSolver::RefactorRoute::kFull);
+      CHECK(solve(*solver, changed, b) < 1e-10);
+    }
+  }
+  SECTION("CHOLMOD's own solve needs its rows: kept") {
+    auto solver = MakeSolver(registry, "cholmod", Options("auto", "amd") + "parallel_solve = false\n");
+    solver->Factorize(a, context);
+#ifdef HARAP_HAVE_CHOLMOD
+    CHECK(released(*solver) == 0.0);
+#endif
+    CHECK(solve(*solver, a, b) < 1e-10);
+  }
+  SECTION("prepared for refactorization: kept, and the cheaper routes still work") {
+    for (const std::string route : {"numeric", "update", "partial"}) {
+      auto solver = MakeSolver(registry, "cholmod",
+                               Options("auto", "amd") + "refactor = \"" + route + "\"\n");
+      solver->PrepareForRefactor();
+      solver->Factorize(a, context);
+#ifdef HARAP_HAVE_CHOLMOD
+      CHECK(released(*solver) == 0.0);
+#endif
+      const auto summary = solver->Refactor(changed, {7}, context);
+      CHECK(summary.route != LinearSolver::RefactorRoute::kFull);
+      CHECK(solve(*solver, changed, b) < 1e-10);
+    }
+  }
+}
+
 TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matrices",
           "[solvers][cholmod]") {
   const auto registry = LinearSolverRegistry();
