@@ -487,6 +487,14 @@ std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelSt
   const bool per_element = energy_->rotation_site() == RotationSite::kElement;
   HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
               "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
+  // Run() and FitRotations() leave the state they handed back in internal_state_ (the
+  // internal numbering): used as it is when it still matches, instead of a ~100 bytes per
+  // vertex copy made at the end of a run, when memory peaks.
+  if (ordering_.IsToNew(state.positions, internal_state_.positions) &&
+      ordering_.IsToNew(state.rotations, per_element, internal_state_.rotations)) {
+    return energy_->AuxiliaryMeasures(internal_state_.positions, internal_state_.rotations,
+                                      context);
+  }
   return energy_->AuxiliaryMeasures(ordering_.ToNew(state.positions),
                                     ordering_.ToNew(state.rotations, per_element), context);
 }

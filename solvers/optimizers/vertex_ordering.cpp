@@ -4,6 +4,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <numeric>
 
@@ -119,6 +120,49 @@ void MeshOrdering::ToOld(const Rotations& renumbered, bool per_element, Rotation
   const std::vector<Index>& old = per_element ? old_element : old_vertex;
   out.resize(renumbered.size());
   for (size_t k = 0; k < old.size(); ++k) out[old[k]] = renumbered[k];
+}
+
+namespace {
+
+bool SameBits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+}  // namespace
+
+bool MeshOrdering::IsToNew(const Positions& input, const Positions& renumbered) const {
+  const Index n = static_cast<Index>(old_vertex.size());
+  if (input.rows() != n || renumbered.rows() != n || input.cols() != renumbered.cols()) {
+    return false;
+  }
+  for (Index c = 0; c < input.cols(); ++c) {
+    for (Index k = 0; k < n; ++k) {
+      if (!SameBits(renumbered(k, c), input(old_vertex[k], c))) return false;
+    }
+  }
+  return true;
+}
+
+bool MeshOrdering::IsToNew(const Rotations& input, bool per_element,
+                           const Rotations& renumbered) const {
+  const std::vector<Index>& old = per_element ? old_element : old_vertex;
+  // ToNew passes a rotation list of another size through unchanged.
+  if (input.size() != old.size()) {
+    if (renumbered.size() != input.size()) return false;
+    for (size_t k = 0; k < input.size(); ++k) {
+      for (int e = 0; e < 9; ++e) {
+        if (!SameBits(renumbered[k].data()[e], input[k].data()[e])) return false;
+      }
+    }
+    return true;
+  }
+  if (renumbered.size() != old.size()) return false;
+  for (size_t k = 0; k < old.size(); ++k) {
+    for (int e = 0; e < 9; ++e) {
+      if (!SameBits(renumbered[k].data()[e], input[old[k]].data()[e])) return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace harap

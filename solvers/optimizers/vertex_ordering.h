@@ -32,6 +32,11 @@ struct MeshOrdering {
   void ToOld(const Positions& renumbered, Positions& out) const;
   void ToNew(const Rotations& input, bool per_element, Rotations& out) const;
   void ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const;
+  /// Whether `renumbered` equals ToNew(input) bit for bit: O(n) and allocation-free, so a caller
+  /// holding a renumbered copy can use it instead of making another (a copy of a large level's
+  /// state is ~100 bytes per vertex).
+  bool IsToNew(const Positions& input, const Positions& renumbered) const;
+  bool IsToNew(const Rotations& input, bool per_element, const Rotations& renumbered) const;
 };
 
 MeshOrdering LocalityOrdering(const Mesh& mesh);
