@@ -674,8 +674,11 @@ struct CholmodSolver::Impl {
         keeps_super() || factor == nullptr || factor->is_super || factor->i == nullptr) {
       return;
     }
-    info.released_bytes = static_cast<double>(factor->nzmax) * sizeof(int);
+    const size_t in_use = common.memory_inuse;
     factor->i = cholmod_free(factor->nzmax, sizeof(int), factor->i, &common);
+    // CHOLMOD's workspace (Flag, Head, Iwork, Xwork: O(n)) too; any later call reallocates it.
+    cholmod_free_work(&common);
+    info.released_bytes = static_cast<double>(in_use - common.memory_inuse);
     tree_view.row = nullptr;  // same_arrays never matches a factor without rows
     rows_released = true;
   }
