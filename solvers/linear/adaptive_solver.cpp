@@ -100,11 +100,7 @@ void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context
     iterative_.reset();
     chosen_ = direct_.get();
   } else {
-    // The analysis is not kept for a possible switch (which analyzes again): ~140 bytes per
-    // unknown on a surface mesh (armadillo-bend-692k with --preset fast: peak 1382 -> 1294 MiB),
-    // and a switch, which comes after the iterations cost as much as the factorization, is
-    // rare on the large levels this choice is made for.
-    direct_.reset();
+    if (!may_switch_) direct_.reset();  // frees the analysis; else kept for the switch
     if (!iterative_) iterative_ = std::make_unique<ConjugateGradientSolver>(options_.iterative);
     chosen_ = iterative_.get();
   }
@@ -122,12 +118,10 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
   HARAP_CHECK(chosen_ != nullptr, "adaptive: Solve() needs a successful Factorize() first");
   if (may_switch_ && iterated_flops_ >= decision_.estimate.flops) {
     // The iterations have now cost as much arithmetic as the factorization: the matrix serves
-    // more solves than expected_solves said, so factor (analyzing again) and solve
+    // more solves than expected_solves said, so factor (with the kept analysis) and solve
     // directly from here on. Like renting until the rent paid equals the price, this costs at
     // most about twice what the better choice made in hindsight would have (ski rental).
     may_switch_ = false;
-    direct_ = std::make_unique<CholmodSolver>(options_.direct);
-    if (prepared_for_refactor_) direct_->PrepareForRefactor();
     direct_->Factorize(iterative_->matrix(), context);
     chosen_ = direct_.get();
     iterative_.reset();

@@ -20,8 +20,7 @@ namespace harap {
 /// costs too much time or memory.
 ///
 /// With choose = "auto", Factorize() first runs CHOLMOD's analysis alone (ordering and symbolic
-/// factorization, a fraction of the factorization's time; kept and reused if it factors, freed
-/// if it iterates: ~140 bytes per unknown on a surface mesh) and
+/// factorization, a fraction of the factorization's time; kept and reused if it factors) and
 /// reads from it the size of L and the flop count of the factorization. It then iterates when
 ///   - the factor would need more than max_factor_megabytes of memory (default: half the
 ///     machine's physical memory), or
