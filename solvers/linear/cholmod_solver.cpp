@@ -140,6 +140,15 @@ cholmod_sparse LowerTriangleView(const SparseMatrix& a) {
   return view;
 }
 
+// The same view without values, for CHOLMOD's analysis: the ordering and the symbolic
+// factorization read only the pattern, and the transposes they make of A then copy no values.
+cholmod_sparse PatternView(const SparseMatrix& a) {
+  cholmod_sparse view = LowerTriangleView(a);
+  view.x = nullptr;
+  view.xtype = CHOLMOD_PATTERN;
+  return view;
+}
+
 // Column j's pivot d_j (LDLᵀ) or L_jj² (LLᵀ) of a numeric factor, in the factor's order.
 template <class Visit>
 void ForEachPivot(const cholmod_factor& factor, Visit&& visit) {
@@ -450,7 +459,7 @@ struct CholmodSolver::Impl {
 
   // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
   // for this very matrix (same arrays and size), else a new one.
-  cholmod_factor* TakeOrMakeAnalysis(cholmod_sparse& view, const SparseMatrix& a) {
+  cholmod_factor* TakeOrMakeAnalysis(const SparseMatrix& a) {
     if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
         a.isCompressed() && SamePattern(analysis_matrix, a)) {
       cholmod_factor* kept = analysis;
@@ -463,7 +472,8 @@ struct CholmodSolver::Impl {
     }
     FreeAnalysis();
     const Stopwatch clock;
-    cholmod_factor* made = cholmod_analyze(&view, &common);
+    cholmod_sparse pattern = PatternView(a);
+    cholmod_factor* made = cholmod_analyze(&pattern, &common);
     ThrowOnFailure("analysis (ordering)", a);
     HARAP_CHECK(made != nullptr, "cholmod_analyze returned no factor (status {})", common.status);
     info.analysis_seconds = clock.Seconds();
@@ -881,7 +891,7 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
-  impl.factor = impl.TakeOrMakeAnalysis(view, a);
+  impl.factor = impl.TakeOrMakeAnalysis(a);
   if (impl.keeps_copies()) {
     const Stopwatch copy_clock;  // the copy for Refactor() counts as analysis too
     const size_t in_use = impl.common.memory_inuse;
@@ -908,7 +918,7 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
   Estimate estimate;
   if (a.rows() == 0) return estimate;
   const ScopedNativeThreads native_threads(impl.options.native_threads);
-  cholmod_sparse view = LowerTriangleView(a);
+  cholmod_sparse view = PatternView(a);
   const Stopwatch clock;
   impl.analysis = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);
