@@ -454,17 +454,27 @@ struct CholmodSolver::Impl {
   void FreeAnalysis() {
     if (analysis) cholmod_free_factor(&analysis, &common);
     analysis = nullptr;
-    analysis_matrix = SparseMatrix();
+    analysis_outer = {};
+    analysis_inner = {};
+  }
+
+  // Whether compressed `a` has the pattern Analyze() was given.
+  bool IsAnalysisPattern(const SparseMatrix& a) const {
+    return static_cast<size_t>(a.outerSize()) + 1 == analysis_outer.size() &&
+           static_cast<size_t>(a.nonZeros()) == analysis_inner.size() &&
+           std::equal(analysis_outer.begin(), analysis_outer.end(), a.outerIndexPtr()) &&
+           std::equal(analysis_inner.begin(), analysis_inner.end(), a.innerIndexPtr());
   }
 
   // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
   // for this very matrix (same arrays and size), else a new one.
   cholmod_factor* TakeOrMakeAnalysis(const SparseMatrix& a) {
     if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
-        a.isCompressed() && SamePattern(analysis_matrix, a)) {
+        a.isCompressed() && IsAnalysisPattern(a)) {
       cholmod_factor* kept = analysis;
       analysis = nullptr;
-      analysis_matrix = SparseMatrix();
+      analysis_outer = {};
+      analysis_inner = {};
       common.lnz = analysis_of.lnz;  // restored: other CHOLMOD calls may have changed them
       common.fl = analysis_of.fl;
       info.analysis_seconds = analysis_of.seconds;
@@ -741,7 +751,7 @@ struct CholmodSolver::Impl {
   cholmod_factor* symbolic = nullptr;
   // Analyze()'s analysis, until the Factorize() of the same matrix takes it.
   cholmod_factor* analysis = nullptr;
-  SparseMatrix analysis_matrix;  // its pattern (values not kept)
+  std::vector<int> analysis_outer, analysis_inner;  // its pattern, compressed (no values)
   struct {
     Eigen::Index rows = 0;
     Eigen::Index nnz = 0;
@@ -939,9 +949,19 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
                           static_cast<double>(a.rows()) * 4 * sizeof(int);
   impl.analysis_of = {a.rows(), a.nonZeros(), impl.common.lnz, impl.common.fl,
                       estimate.analysis_seconds};
-  // The pattern, to recognize the matrix (or a copy of it) in Factorize().
-  impl.analysis_matrix = a;
-  impl.analysis_matrix.makeCompressed();
+  // The pattern, to recognize the matrix (or a copy of it) in Factorize(); without the values
+  // (a third of a copy of `a`).
+  SparseMatrix compressed;
+  const SparseMatrix* pattern = &a;
+  if (!a.isCompressed()) {
+    compressed = a;
+    compressed.makeCompressed();
+    pattern = &compressed;
+  }
+  impl.analysis_outer.assign(pattern->outerIndexPtr(),
+                             pattern->outerIndexPtr() + pattern->outerSize() + 1);
+  impl.analysis_inner.assign(pattern->innerIndexPtr(),
+                             pattern->innerIndexPtr() + pattern->nonZeros());
   return estimate;
 }
 
