@@ -84,4 +84,17 @@ LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
   return renumbered;
 }
 
+ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
+                                  const ComponentFactory& factory, const Context& context,
+                                  const Stopwatch& clock, std::unique_ptr<LinearSolver>& solver,
+                                  Eigen::MatrixXd& rhs, Eigen::MatrixXd& x) {
+  solver = factory.MakeLinearSolver(level, system.num_free());
+  if (system.num_free() > 0) solver->Factorize(system.system_matrix(), context);
+  const double seconds = clock.Seconds();
+  if (context.system_callback) context.system_callback(level, system.system_matrix());
+  rhs.resize(system.num_unknowns(), 3);
+  x.resize(system.num_unknowns(), 3);
+  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system.num_unknowns(), seconds};
+}
+
 }  // namespace harap
