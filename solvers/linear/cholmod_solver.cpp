@@ -53,24 +53,6 @@ namespace {
 // (ranges: repeated runs on a loaded VM, ±30%); "auto" needs no such break-even. See
 // docs/benchmarks.md for the armadillo figures.
 
-constexpr EnumNames<CholmodSolver::Mode, 3> kModeNames = {{
-    {CholmodSolver::Mode::kAuto, "auto"},
-    {CholmodSolver::Mode::kSimplicial, "simplicial"},
-    {CholmodSolver::Mode::kSupernodal, "supernodal"},
-}};
-constexpr EnumNames<CholmodSolver::Ordering, 3> kOrderingNames = {{
-    {CholmodSolver::Ordering::kMetis, "metis"},
-    {CholmodSolver::Ordering::kAmd, "amd"},
-    {CholmodSolver::Ordering::kBest, "best"},
-}};
-constexpr EnumNames<CholmodSolver::RefactorChoice, 5> kRefactorNames = {{
-    {CholmodSolver::RefactorChoice::kAuto, "auto"},
-    {CholmodSolver::RefactorChoice::kFull, "full"},
-    {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
-    {CholmodSolver::RefactorChoice::kUpdate, "update"},
-    {CholmodSolver::RefactorChoice::kPartial, "partial"},
-}};
-
 std::string_view OrderingName(int cholmod_ordering) {
   switch (cholmod_ordering) {
     case CHOLMOD_NATURAL:
@@ -767,6 +749,29 @@ struct CholmodSolver::Impl {
   std::vector<int> update_start, update_row;  // the columns of the deletions' update
   std::vector<double> update_value;
 };
+
+namespace {
+
+// The option names, for FromConfig() and ToString().
+constexpr EnumNames<CholmodSolver::Mode, 3> kModeNames = {{
+    {CholmodSolver::Mode::kAuto, "auto"},
+    {CholmodSolver::Mode::kSimplicial, "simplicial"},
+    {CholmodSolver::Mode::kSupernodal, "supernodal"},
+}};
+constexpr EnumNames<CholmodSolver::Ordering, 3> kOrderingNames = {{
+    {CholmodSolver::Ordering::kMetis, "metis"},
+    {CholmodSolver::Ordering::kAmd, "amd"},
+    {CholmodSolver::Ordering::kBest, "best"},
+}};
+constexpr EnumNames<CholmodSolver::RefactorChoice, 5> kRefactorNames = {{
+    {CholmodSolver::RefactorChoice::kAuto, "auto"},
+    {CholmodSolver::RefactorChoice::kFull, "full"},
+    {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
+    {CholmodSolver::RefactorChoice::kUpdate, "update"},
+    {CholmodSolver::RefactorChoice::kPartial, "partial"},
+}};
+
+}  // namespace
 
 CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;

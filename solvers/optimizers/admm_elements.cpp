@@ -277,10 +277,7 @@ ConstrainSummary AdmmLevelSolver::Constrain(const LevelConstraints& constraints,
 }
 
 void AdmmLevelSolver::MoveTargets(const Positions& mean_target) {
-  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
-              "{} targets for {} constrained vertices", mean_target.rows(),
-              constraints_.mean_target.rows());
-  constraints_.mean_target = mean_target;
+  MoveMeanTargets(constraints_, mean_target);
 }
 
 LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveRequest& request,

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/coarse_constraints.h"
 
+#include "framework/error.h"
 #include "framework/rotation.h"
 
 namespace harap {
@@ -82,6 +83,13 @@ LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
     for (Index& e : elements) e = new_element[e];
   }
   return renumbered;
+}
+
+void MoveMeanTargets(LevelConstraints& constraints, const Positions& mean_target) {
+  HARAP_CHECK(mean_target.rows() == constraints.mean_target.rows(),
+              "{} targets for {} constrained vertices", mean_target.rows(),
+              constraints.mean_target.rows());
+  constraints.mean_target = mean_target;
 }
 
 ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,

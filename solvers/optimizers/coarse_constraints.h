@@ -36,6 +36,10 @@ LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
                                        const std::vector<Index>& new_vertex,
                                        const std::vector<Index>& new_element);
 
+/// Replaces the mean targets of `constraints` by `mean_target`, which must have one row per
+/// constrained vertex (InternalError otherwise): a level solver's MoveTargets().
+void MoveMeanTargets(LevelConstraints& constraints, const Positions& mean_target);
+
 /// The factorization of a level solver's Constrain() for a new eliminated system (local_global
 /// and the ADMM level solvers alike): `solver` becomes a new linear solver from `factory` for
 /// level `level`, which factors system.system_matrix() (unless there are no unknowns); `rhs` and

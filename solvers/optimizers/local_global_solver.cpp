@@ -94,10 +94,7 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
 }
 
 void LocalGlobalSolver::MoveTargets(const Positions& mean_target) {
-  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
-              "{} targets for {} constrained vertices", mean_target.rows(),
-              constraints_.mean_target.rows());
-  constraints_.mean_target = mean_target;
+  MoveMeanTargets(constraints_, mean_target);
   internal_.mean_target = mean_target;
 }
 
