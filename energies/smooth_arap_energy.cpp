@@ -7,9 +7,6 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cstdint>
-#include <cstring>
-#include <mutex>
 
 #include "energies/kernels/cotangent_weights.h"
 #include "energies/kernels/triangle_stencil.h"
@@ -118,60 +115,6 @@ double MeanVertexArea(const Eigen::VectorXd& areas) {
   return with_area > 0 ? total / with_area : 0.0;
 }
 
-// A 64-bit fingerprint of a mesh's vertices and elements (sizes included): a word-wise
-// multiply-xorshift mix, a single pass that reads 8 MB in about 2 ms.
-uint64_t MeshFingerprint(const Mesh& mesh) {
-  uint64_t h = 0x9e3779b97f4a7c15ULL;
-  const auto mix = [&h](uint64_t word) {
-    h ^= word + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    h *= 0xbf58476d1ce4e5b9ULL;
-    h ^= h >> 31;
-  };
-  mix(static_cast<uint64_t>(mesh.vertices.rows()));
-  mix(static_cast<uint64_t>(mesh.elements.rows()) << 8 | static_cast<uint64_t>(mesh.elements.cols()));
-  const double* v = mesh.vertices.data();
-  for (Index k = 0; k < mesh.vertices.size(); ++k) {
-    uint64_t word;
-    std::memcpy(&word, v + k, sizeof(word));
-    mix(word);
-  }
-  const Index* e = mesh.elements.data();
-  const Index count = static_cast<Index>(mesh.elements.size());
-  for (Index k = 0; k + 1 < count; k += 2) {
-    mix(static_cast<uint64_t>(static_cast<uint32_t>(e[k])) << 32 |
-        static_cast<uint32_t>(e[k + 1]));
-  }
-  if (count % 2 == 1) mix(static_cast<uint32_t>(e[count - 1]));
-  return h;
-}
-
-// MeanVertexArea of the input mesh, remembered for the last input mesh seen: every coarse level
-// of a hierarchical run normalizes by the same input mesh (5–7 levels, each a pass over the
-// input's faces; 0.1 s of CPU time of smooth ARAP's set-up on armadillo-bend). Recognized by
-// its contents (sizes and MeshFingerprint), so an edited or another mesh gets its own value;
-// levels set up on two threads at once may both compute it, with the same result.
-double InputMeanVertexArea(const Mesh& input, const Context& context) {
-  struct Memo {
-    std::mutex mutex;
-    bool valid = false;
-    uint64_t fingerprint = 0;
-    double mean_area = 0.0;
-  };
-  static Memo memo;
-  const uint64_t fingerprint = MeshFingerprint(input);
-  {
-    const std::lock_guard lock(memo.mutex);
-    if (memo.valid && memo.fingerprint == fingerprint) return memo.mean_area;
-  }
-  const double mean_area = context.Run(
-      [&] { return MeanVertexArea(MixedVoronoiAreas(input.vertices, input.elements)); });
-  const std::lock_guard lock(memo.mutex);
-  memo.valid = true;
-  memo.fingerprint = fingerprint;
-  memo.mean_area = mean_area;
-  return mean_area;
-}
-
 constexpr EnumNames<SmoothArapEnergy::RotationFit, 2> kRotationFitNames = {{
     {SmoothArapEnergy::RotationFit::kWholeEnergy, "energy"},
     {SmoothArapEnergy::RotationFit::kSpokesAndRims, "spokes_and_rims"},
@@ -202,7 +145,8 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
 
 void SmoothArapEnergy::SetInputMesh(const Mesh& input, const Context& context) {
   RequireTriangleMesh(input, kName);
-  input_mean_area_ = InputMeanVertexArea(input, context);
+  input_mean_area_ = context.Run(
+      [&] { return MeanVertexArea(MixedVoronoiAreas(input.vertices, input.elements)); });
 }
 
 void SmoothArapEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

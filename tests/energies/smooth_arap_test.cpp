@@ -289,9 +289,9 @@ TEST_CASE("smooth_arap normalizes coarse levels like the input mesh", "[energies
   CHECK(per_level / reference > 3.0);
 }
 
-TEST_CASE("smooth_arap remembers the input mesh's scale only for that very mesh", "[energies]") {
-  // Coarse levels share the input mesh's mass scale, computed once per input mesh: alternating
-  // inputs, and an input edited in place, must each get their own scale, as if computed afresh.
+TEST_CASE("smooth_arap takes the scale of the input mesh it is given", "[energies]") {
+  // Coarse levels are normalized by the input mesh's mass scale: alternating inputs, and an
+  // input edited in place, must each get their own scale.
   const Mesh coarse = Icosphere(1);
   Mesh a = Icosphere(3), b = Icosphere(3);
   b.vertices *= 2.0;  // same connectivity, 4× the area
