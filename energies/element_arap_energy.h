@@ -33,9 +33,7 @@ class ElementArapEnergy final : public CoupledQuadraticEnergy {
  public:
   static constexpr std::string_view kName = "elements";
 
-  /// No options: the weights are fixed by the definition.
-  using Options = NoOptions;
-
+  /// Options: none (CoupledQuadraticEnergy's NoOptions).
   explicit ElementArapEnergy(const Options& /*options*/)
       : CoupledQuadraticEnergy(RotationSite::kElement) {}
 

@@ -21,9 +21,7 @@ class SpokesAndRimsEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes_and_rims";
 
-  /// No options: the weights are fixed by the definition.
-  using Options = NoOptions;
-
+  /// Options: none (CoupledQuadraticEnergy's NoOptions).
   explicit SpokesAndRimsEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
 
  private:

@@ -20,8 +20,7 @@ class SpokesEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes";
 
-  using Options = NoOptions;
-
+  /// Options: none (CoupledQuadraticEnergy's NoOptions).
   explicit SpokesEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
 
  private:

@@ -21,6 +21,9 @@ struct Preset {
   /// Set only when the run's optimizer is "hierarchical" (the preset's own type, unless a flag
   /// or the config chose another).
   std::vector<std::pair<std::string, std::string>> hierarchical_settings;
+  /// Set only when, besides, the hierarchical optimizer's level solver (`optimizer.inner`) is
+  /// local_global, the default: options only that level solver reads.
+  std::vector<std::pair<std::string, std::string>> local_global_settings;
 };
 
 /// Every preset (docs/solvers.md lists them).

@@ -32,6 +32,51 @@ double ScatterRows(const std::vector<Index>& free_vertices, const Eigen::MatrixX
       [](double a, double b) { return std::max(a, b); });
 }
 
+
+// The rows of the free vertices (renumbered by `free_index`, kNoVertex for fixed ones) of the
+// given columns of `a`, column k of the result being column columns[k] of `a`: A_ff or A_fc.
+// Written straight into compressed storage: `free_index` is increasing on the free vertices, so
+// each column's rows stay sorted (the same matrix setFromTriplets made, without its sort).
+SparseMatrix FreeRowsOfColumns(const SparseMatrix& a, const std::vector<Index>& free_index,
+                               const std::vector<Index>& columns, Index num_free) {
+  const Index m = static_cast<Index>(columns.size());
+  const Index* outer = a.outerIndexPtr();
+  const Index* inner = a.innerIndexPtr();
+  const double* values = a.valuePtr();
+  const auto end_of = [&](Index col) {
+    return a.isCompressed() ? outer[col + 1] : outer[col] + a.innerNonZeroPtr()[col];
+  };
+  SparseMatrix result(num_free, m);
+  Index* result_outer = result.outerIndexPtr();
+  result_outer[0] = 0;
+  tbb::parallel_for(tbb::blocked_range<Index>(0, m, 4096), [&](const tbb::blocked_range<Index>& r) {
+    for (Index k = r.begin(); k != r.end(); ++k) {
+      Index count = 0;
+      for (Index p = outer[columns[k]]; p < end_of(columns[k]); ++p) {
+        count += free_index[inner[p]] != kNoVertex;
+      }
+      result_outer[k + 1] = count;
+    }
+  });
+  for (Index k = 0; k < m; ++k) result_outer[k + 1] += result_outer[k];
+  result.resizeNonZeros(result_outer[m]);
+  Index* result_inner = result.innerIndexPtr();
+  double* result_values = result.valuePtr();
+  tbb::parallel_for(tbb::blocked_range<Index>(0, m, 4096), [&](const tbb::blocked_range<Index>& r) {
+    for (Index k = r.begin(); k != r.end(); ++k) {
+      Index out = result_outer[k];
+      for (Index p = outer[columns[k]]; p < end_of(columns[k]); ++p) {
+        const Index row = free_index[inner[p]];
+        if (row == kNoVertex) continue;
+        result_inner[out] = row;
+        result_values[out] = values[p];
+        ++out;
+      }
+    }
+  });
+  return result;
+}
+
 }  // namespace
 
 SystemComponents::SystemComponents(const SparseMatrix& a) {
@@ -105,10 +150,6 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
   fixed_vertices_ = constrained;
   fixed_vertices_.insert(fixed_vertices_.end(), pinned_vertices_.begin(), pinned_vertices_.end());
   free_index_.assign(n, kNoVertex);
-  std::vector<Index> fixed_index(n, kNoVertex);
-  for (Index k = 0; k < static_cast<Index>(fixed_vertices_.size()); ++k) {
-    fixed_index[fixed_vertices_[k]] = k;
-  }
   for (Index v = 0; v < n; ++v) {
     if (!fixed[v]) {
       free_index_[v] = static_cast<Index>(free_vertices_.size());
@@ -118,23 +159,8 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
 
   // Split the columns of the free vertices into A_ff and A_fc (already sorted by row).
   const Index num_free = static_cast<Index>(free_vertices_.size());
-  std::vector<Eigen::Triplet<double>> ff, fc;
-  ff.reserve(a.nonZeros());
-  for (Index col = 0; col < n; ++col) {
-    for (SparseMatrix::InnerIterator it(a, col); it; ++it) {
-      const Index row_free = free_index_[it.row()];
-      if (row_free == kNoVertex) continue;
-      if (free_index_[col] != kNoVertex) {
-        ff.emplace_back(row_free, free_index_[col], it.value());
-      } else {
-        fc.emplace_back(row_free, fixed_index[col], it.value());
-      }
-    }
-  }
-  a_ff_.resize(num_free, num_free);
-  a_ff_.setFromTriplets(ff.begin(), ff.end());
-  a_fc_.resize(num_free, static_cast<Index>(fixed_vertices_.size()));
-  a_fc_.setFromTriplets(fc.begin(), fc.end());
+  a_ff_ = FreeRowsOfColumns(a, free_index_, free_vertices_, num_free);
+  a_fc_ = FreeRowsOfColumns(a, free_index_, fixed_vertices_, num_free);
   fixed_coupling_ = Eigen::MatrixXd::Zero(num_free, 3);
   fixed_positions_.resize(fixed_vertices_.size(), 3);
 }

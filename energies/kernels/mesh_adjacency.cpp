@@ -31,16 +31,26 @@ Index EntryPosition(const SparseMatrix& a, Index row, Index col) {
 }
 
 std::vector<Index> TransposePositions(const SparseMatrix& a) {
-  std::vector<Index> mirror(a.nonZeros());
-  tbb::parallel_for(tbb::blocked_range<Index>(0, static_cast<Index>(a.outerSize()), 1024),
-                    [&](const tbb::blocked_range<Index>& range) {
-                      for (Index col = range.begin(); col != range.end(); ++col) {
-                        for (Index p = a.outerIndexPtr()[col]; p < a.outerIndexPtr()[col + 1];
-                             ++p) {
-                          mirror[p] = EntryPosition(a, col, a.innerIndexPtr()[p]);
-                        }
-                      }
-                    });
+  // Walking the columns in order, the rows of column r that point back are met in ascending
+  // order too, so a cursor per column finds each mirror entry in O(1) (a symmetric pattern;
+  // one without the mirror entry fails the check, as EntryPosition would).
+  const Index n = static_cast<Index>(a.outerSize());
+  const Index* outer = a.outerIndexPtr();
+  const Index* inner = a.innerIndexPtr();
+  const auto end_of = [&](Index col) {
+    return a.isCompressed() ? outer[col + 1] : outer[col] + a.innerNonZeroPtr()[col];
+  };
+  std::vector<Index> mirror(a.nonZeros(), 0);
+  std::vector<Index> cursor(outer, outer + n);
+  for (Index col = 0; col < n; ++col) {
+    for (Index p = outer[col]; p < end_of(col); ++p) {
+      const Index row = inner[p];
+      Index& q = cursor[row];
+      HARAP_CHECK(q < end_of(row) && inner[q] == col,
+                  "entry ({}, {}) is not in the sparsity pattern", col, row);
+      mirror[p] = q++;
+    }
+  }
   return mirror;
 }
 

@@ -130,6 +130,10 @@ struct NoOptions {
 
 class CoupledQuadraticEnergy : public Energy {
  public:
+  /// An energy of this form has no options unless it declares its own `Options`: the weights of
+  /// spokes, spokes_and_rims and elements are fixed by their definitions.
+  using Options = NoOptions;
+
   /// Keeps the rest positions (for the projected rotation derivative) and calls
   /// PrecomputeCoupledForm.
   void Precompute(const Mesh& rest, const Context& context) final;

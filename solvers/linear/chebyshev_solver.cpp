@@ -9,7 +9,6 @@
 #include <utility>
 
 #include "framework/error.h"
-#include "solvers/linear/solver_checks.h"
 
 namespace harap {
 
@@ -57,27 +56,23 @@ constexpr EnumNames<ChebyshevSolver::LowerBound, 3> kLowerBoundNames = {{
 }  // namespace
 
 ChebyshevSolver::Options ChebyshevSolver::Options::FromConfig(const ConfigNode& node) {
-  Options options;
-  iterative::ReadIterationLimits(node, "Chebyshev step", options.limits);
-  options.lower_bound = node.GetEnum(
-      "lower_bound", options.lower_bound, kLowerBoundNames,
-      "λ_lo: budget = λ_hi / max_iterations² (no factorization; damps what k steps can damp); "
-      "shift_invert = smallest eigenvalue of D^-1/2 A D^-1/2 by Spectra's shift-invert mode "
-      "(costs a Cholesky factorization); auto = budget if tolerance is 0, else shift_invert");
-  options.upper_margin =
-      node.Get("upper_margin", options.upper_margin,
-               "safety margin on λ_max: λ_hi = min((1 + upper_margin) λ_max, Gershgorin bound)",
-               Range::AtLeast(0.0));
-  options.lower_margin =
-      node.Get("lower_margin", options.lower_margin,
-               "with shift_invert: λ_lo = (1 − lower_margin) λ_min", Range::HalfOpen(0.0, 1.0));
-  node.RejectUnknownKeys();
-  return options;
+  return iterative::ReadIterativeOptions<Options>(node, "Chebyshev step", [&](Options& options) {
+    options.lower_bound = node.GetEnum(
+        "lower_bound", options.lower_bound, kLowerBoundNames,
+        "λ_lo: budget = λ_hi / max_iterations² (no factorization; damps what k steps can damp); "
+        "shift_invert = smallest eigenvalue of D^-1/2 A D^-1/2 by Spectra's shift-invert mode "
+        "(costs a Cholesky factorization); auto = budget if tolerance is 0, else shift_invert");
+    options.upper_margin =
+        node.Get("upper_margin", options.upper_margin,
+                 "safety margin on λ_max: λ_hi = min((1 + upper_margin) λ_max, Gershgorin bound)",
+                 Range::AtLeast(0.0));
+    options.lower_margin =
+        node.Get("lower_margin", options.lower_margin,
+                 "with shift_invert: λ_lo = (1 − lower_margin) λ_min", Range::HalfOpen(0.0, 1.0));
+  });
 }
 
-void ChebyshevSolver::FactorizeImpl(const SparseMatrix& a, const Context& context) {
-  a_ = iterative::CompressedCopy(a);
-  inverse_diagonal_ = solver_checks::PositiveDiagonal(a_, "chebyshev").cwiseInverse();
+void ChebyshevSolver::Prepare(const Context& context) {
   if (a_.rows() == 0) return;
   LowerBound lower_bound = options_.lower_bound;
   if (lower_bound == LowerBound::kAuto) {
@@ -113,12 +108,8 @@ void ChebyshevSolver::FactorizeImpl(const SparseMatrix& a, const Context& contex
 }
 
 template <int K>
-SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b_in,
-                                         Eigen::Ref<Eigen::MatrixXd> x_out, Eigen::Index first) {
+SolveSummary ChebyshevSolver::SolveGathered(const double* b, double* x, Eigen::Index /*first*/) {
   const Index n = static_cast<Index>(a_.rows());
-  double* b = nullptr;
-  double* x = nullptr;
-  GatherBlock<K>(b_in, x_out, first, n, b, x);
   double* r = r_.Reserve(n, K);
   double* d = d_.Reserve(n, K);
   double* d_next = d_next_.Reserve(n, K);
@@ -179,10 +170,10 @@ SolveSummary ChebyshevSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>
   }
   if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = convergence.max_relative_residual();
-  iterative::ScatterColumns<K>(x, first, x_out);
   return summary;
 }
 
 template class iterative::BlockIterativeSolver<ChebyshevSolver>;
+template class iterative::MatrixIterativeSolver<ChebyshevSolver>;
 
 }  // namespace harap

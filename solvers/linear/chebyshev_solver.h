@@ -54,7 +54,7 @@ namespace harap {
 /// reuses them).
 ///
 /// Solve() allocates nothing after its first call with a given column count. Not thread-safe.
-class ChebyshevSolver final : public iterative::BlockIterativeSolver<ChebyshevSolver> {
+class ChebyshevSolver final : public iterative::MatrixIterativeSolver<ChebyshevSolver> {
  public:
   static constexpr std::string_view kName = "chebyshev";
 
@@ -76,7 +76,7 @@ class ChebyshevSolver final : public iterative::BlockIterativeSolver<ChebyshevSo
   };
 
   explicit ChebyshevSolver(const Options& options)
-      : BlockIterativeSolver(kName), options_(options) {}
+      : MatrixIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
 
@@ -91,21 +91,21 @@ class ChebyshevSolver final : public iterative::BlockIterativeSolver<ChebyshevSo
   const Bounds& bounds() const { return bounds_; }
 
  private:
-  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
-  friend class iterative::BlockIterativeSolver<ChebyshevSolver>;
+  friend class iterative::MatrixIterativeSolver<ChebyshevSolver>;
+  /// Computes the bounds, unless they belong to this matrix already (Factorize()).
+  void Prepare(const Context& context);
+  /// The Chebyshev iteration on the row-major blocks b and x.
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                          Eigen::Index first);
+  SolveSummary SolveGathered(const double* b, double* x, Eigen::Index first);
 
   Options options_;
-  SparseMatrix a_;
-  Eigen::VectorXd inverse_diagonal_;
   Bounds bounds_;
   uint64_t matrix_hash_ = 0;  ///< Of the matrix bounds_ belongs to (0: none).
   iterative::Block r_, d_, d_next_;
 };
 
-// SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.
+// SolveImpl() calls SolveGathered<K>, defined in the .cpp: instantiated there only.
 extern template class iterative::BlockIterativeSolver<ChebyshevSolver>;
+extern template class iterative::MatrixIterativeSolver<ChebyshevSolver>;
 
 }  // namespace harap

@@ -53,51 +53,6 @@ namespace {
 // (ranges: repeated runs on a loaded VM, ±30%); "auto" needs no such break-even. See
 // docs/benchmarks.md for the armadillo figures.
 
-constexpr std::array<std::pair<CholmodSolver::Mode, std::string_view>, 3> kModeNames = {{
-    {CholmodSolver::Mode::kAuto, "auto"},
-    {CholmodSolver::Mode::kSimplicial, "simplicial"},
-    {CholmodSolver::Mode::kSupernodal, "supernodal"},
-}};
-constexpr std::array<std::pair<CholmodSolver::Ordering, std::string_view>, 3> kOrderingNames = {{
-    {CholmodSolver::Ordering::kMetis, "metis"},
-    {CholmodSolver::Ordering::kAmd, "amd"},
-    {CholmodSolver::Ordering::kBest, "best"},
-}};
-
-constexpr std::array<std::pair<CholmodSolver::RefactorChoice, std::string_view>, 5> kRefactorNames =
-    {{
-        {CholmodSolver::RefactorChoice::kAuto, "auto"},
-        {CholmodSolver::RefactorChoice::kFull, "full"},
-        {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
-        {CholmodSolver::RefactorChoice::kUpdate, "update"},
-        {CholmodSolver::RefactorChoice::kPartial, "partial"},
-    }};
-
-template <class Enum, size_t N>
-std::vector<std::string> Names(const std::array<std::pair<Enum, std::string_view>, N>& table) {
-  std::vector<std::string> names;
-  for (const auto& [value, name] : table) names.emplace_back(name);
-  return names;
-}
-
-template <class Enum, size_t N>
-Enum FromName(const std::array<std::pair<Enum, std::string_view>, N>& table,
-              std::string_view name) {
-  for (const auto& [value, value_name] : table) {
-    if (value_name == name) return value;
-  }
-  HARAP_CHECK(false, "'{}' is not a valid name (GetChoice should have rejected it)", name);
-  return table[0].first;
-}
-
-template <class Enum, size_t N>
-std::string_view ToName(const std::array<std::pair<Enum, std::string_view>, N>& table, Enum value) {
-  for (const auto& [table_value, name] : table) {
-    if (table_value == value) return name;
-  }
-  return "?";
-}
-
 std::string_view OrderingName(int cholmod_ordering) {
   switch (cholmod_ordering) {
     case CHOLMOD_NATURAL:
@@ -137,6 +92,36 @@ cholmod_sparse LowerTriangleView(const SparseMatrix& a) {
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 1;  // Eigen keeps the inner indices of each column sorted.
   view.packed = a.isCompressed() ? 1 : 0;
+  return view;
+}
+
+// The same view without values, for CHOLMOD's analysis: the ordering and the symbolic
+// factorization read only the pattern, and the transposes they make of A then copy no values.
+cholmod_sparse PatternView(const SparseMatrix& a) {
+  cholmod_sparse view = LowerTriangleView(a);
+  view.x = nullptr;
+  view.xtype = CHOLMOD_PATTERN;
+  return view;
+}
+
+// A non-owning CHOLMOD view of `columns` packed, unsymmetric columns of `rows` rows in
+// compressed column form (column_start, row_index, value; room for `capacity` entries), as
+// cholmod_updown and cholmod_rowadd take their modifications.
+cholmod_sparse ColumnsView(Index rows, size_t columns, int* column_start, int* row_index,
+                           double* value, size_t capacity, bool sorted) {
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(rows);
+  view.ncol = columns;
+  view.nzmax = capacity;
+  view.p = column_start;
+  view.i = row_index;
+  view.x = value;
+  view.stype = 0;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = sorted ? 1 : 0;
+  view.packed = 1;
   return view;
 }
 
@@ -446,17 +431,27 @@ struct CholmodSolver::Impl {
   void FreeAnalysis() {
     if (analysis) cholmod_free_factor(&analysis, &common);
     analysis = nullptr;
-    analysis_matrix = SparseMatrix();
+    analysis_outer = {};
+    analysis_inner = {};
+  }
+
+  // Whether compressed `a` has the pattern Analyze() was given.
+  bool IsAnalysisPattern(const SparseMatrix& a) const {
+    return static_cast<size_t>(a.outerSize()) + 1 == analysis_outer.size() &&
+           static_cast<size_t>(a.nonZeros()) == analysis_inner.size() &&
+           std::equal(analysis_outer.begin(), analysis_outer.end(), a.outerIndexPtr()) &&
+           std::equal(analysis_inner.begin(), analysis_inner.end(), a.innerIndexPtr());
   }
 
   // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
   // for this very matrix (same arrays and size), else a new one.
-  cholmod_factor* TakeOrMakeAnalysis(cholmod_sparse& view, const SparseMatrix& a) {
+  cholmod_factor* TakeOrMakeAnalysis(const SparseMatrix& a) {
     if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
-        a.isCompressed() && SamePattern(analysis_matrix, a)) {
+        a.isCompressed() && IsAnalysisPattern(a)) {
       cholmod_factor* kept = analysis;
       analysis = nullptr;
-      analysis_matrix = SparseMatrix();
+      analysis_outer = {};
+      analysis_inner = {};
       common.lnz = analysis_of.lnz;  // restored: other CHOLMOD calls may have changed them
       common.fl = analysis_of.fl;
       info.analysis_seconds = analysis_of.seconds;
@@ -464,7 +459,8 @@ struct CholmodSolver::Impl {
     }
     FreeAnalysis();
     const Stopwatch clock;
-    cholmod_factor* made = cholmod_analyze(&view, &common);
+    cholmod_sparse pattern = PatternView(a);
+    cholmod_factor* made = cholmod_analyze(&pattern, &common);
     ThrowOnFailure("analysis (ordering)", a);
     HARAP_CHECK(made != nullptr, "cholmod_analyze returned no factor (status {})", common.status);
     info.analysis_seconds = clock.Seconds();
@@ -754,7 +750,7 @@ struct CholmodSolver::Impl {
   cholmod_factor* symbolic = nullptr;
   // Analyze()'s analysis, until the Factorize() of the same matrix takes it.
   cholmod_factor* analysis = nullptr;
-  SparseMatrix analysis_matrix;  // its pattern (values not kept)
+  std::vector<int> analysis_outer, analysis_inner;  // its pattern, compressed (no values)
   struct {
     Eigen::Index rows = 0;
     Eigen::Index nnz = 0;
@@ -797,34 +793,52 @@ struct CholmodSolver::Impl {
   std::vector<double> update_value;
 };
 
+namespace {
+
+// The option names, for FromConfig() and ToString().
+constexpr EnumNames<CholmodSolver::Mode, 3> kModeNames = {{
+    {CholmodSolver::Mode::kAuto, "auto"},
+    {CholmodSolver::Mode::kSimplicial, "simplicial"},
+    {CholmodSolver::Mode::kSupernodal, "supernodal"},
+}};
+constexpr EnumNames<CholmodSolver::Ordering, 3> kOrderingNames = {{
+    {CholmodSolver::Ordering::kMetis, "metis"},
+    {CholmodSolver::Ordering::kAmd, "amd"},
+    {CholmodSolver::Ordering::kBest, "best"},
+}};
+constexpr EnumNames<CholmodSolver::RefactorChoice, 5> kRefactorNames = {{
+    {CholmodSolver::RefactorChoice::kAuto, "auto"},
+    {CholmodSolver::RefactorChoice::kFull, "full"},
+    {CholmodSolver::RefactorChoice::kNumeric, "numeric"},
+    {CholmodSolver::RefactorChoice::kUpdate, "update"},
+    {CholmodSolver::RefactorChoice::kPartial, "partial"},
+}};
+
+}  // namespace
+
 CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
   Options options;
-  options.mode = FromName(
-      kModeNames,
-      node.GetChoice("mode", ToName(kModeNames, options.mode), Names(kModeNames),
-                     "simplicial = up-looking LDLᵀ, supernodal = BLAS LLᵀ (fastest "
-                     "factorization, slower 3-column solves), auto = supernodal factorization "
-                     "converted to simplicial form for the solves (both fast)"));
-  options.ordering = FromName(
-      kOrderingNames,
-      node.GetChoice("ordering", ToName(kOrderingNames, options.ordering), Names(kOrderingNames),
-                     "fill-reducing ordering; best = CHOLMOD's default (AMD, then METIS if AMD "
-                     "fills a lot)"));
+  options.mode = node.GetEnum("mode", options.mode, kModeNames,
+                              "simplicial = up-looking LDLᵀ, supernodal = BLAS LLᵀ (fastest "
+                              "factorization, slower 3-column solves), auto = supernodal "
+                              "factorization converted to simplicial form for the solves (both "
+                              "fast)");
+  options.ordering = node.GetEnum("ordering", options.ordering, kOrderingNames,
+                                  "fill-reducing ordering; best = CHOLMOD's default (AMD, then "
+                                  "METIS if AMD fills a lot)");
   options.parallel_solve = node.Get(
       "parallel_solve", options.parallel_solve,
       "solve with a simplicial factor by substitution over independent subtrees of the "
       "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
-  options.refactor = FromName(
-      kRefactorNames,
-      node.GetChoice("refactor", ToName(kRefactorNames, options.refactor), Names(kRefactorNames),
-                     "how Refactor() (handle edits of a session) updates the factor: numeric = "
-                     "reuse the analysis, factor the values; update = modify the factor row by row "
-                     "(cholmod_rowdel/rowadd; not with mode supernodal); partial = refactor only "
-                     "the supernodes the changed rows reach (mode auto; keeps the supernodal "
-                     "factor); auto = the cheapest of these by estimates from the factor's "
-                     "elimination tree and measured times; full = factor from scratch (keeps no "
-                     "copies)"));
+  options.refactor = node.GetEnum(
+      "refactor", options.refactor, kRefactorNames,
+      "how Refactor() (handle edits of a session) updates the factor: numeric = reuse the "
+      "analysis, factor the values; update = modify the factor row by row (cholmod_rowdel/rowadd; "
+      "not with mode supernodal); partial = refactor only the supernodes the changed rows reach "
+      "(mode auto; keeps the supernodal factor); auto = the cheapest of these by estimates from "
+      "the factor's elimination tree and measured times; full = factor from scratch (keeps no "
+      "copies)");
   options.native_threads = node.Get(
       "native_threads", options.native_threads,
       "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
@@ -864,14 +878,14 @@ void CholmodSolver::set_refactor(RefactorChoice choice) {
   impl_->options.refactor = choice;
 }
 
-std::string_view CholmodSolver::ToString(Mode mode) { return ToName(kModeNames, mode); }
+std::string_view CholmodSolver::ToString(Mode mode) { return NameOf(kModeNames, mode); }
 
 std::string_view CholmodSolver::ToString(Ordering ordering) {
-  return ToName(kOrderingNames, ordering);
+  return NameOf(kOrderingNames, ordering);
 }
 
 std::string_view CholmodSolver::ToString(RefactorChoice choice) {
-  return ToName(kRefactorNames, choice);
+  return NameOf(kRefactorNames, choice);
 }
 
 void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context) {
@@ -904,7 +918,7 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
   }
   const ScopedNativeThreads native_threads(impl.options.native_threads);
   cholmod_sparse view = LowerTriangleView(a);
-  impl.factor = impl.TakeOrMakeAnalysis(view, a);
+  impl.factor = impl.TakeOrMakeAnalysis(a);
   if (impl.keeps_copies()) {
     const Stopwatch copy_clock;  // the copy for Refactor() counts as analysis too
     const size_t in_use = impl.common.memory_inuse;
@@ -931,7 +945,7 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
   Estimate estimate;
   if (a.rows() == 0) return estimate;
   const ScopedNativeThreads native_threads(impl.options.native_threads);
-  cholmod_sparse view = LowerTriangleView(a);
+  cholmod_sparse view = PatternView(a);
   const Stopwatch clock;
   impl.analysis = cholmod_analyze(&view, &impl.common);
   impl.ThrowOnFailure("analysis (ordering)", a);
@@ -952,9 +966,19 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
                           static_cast<double>(a.rows()) * 4 * sizeof(int);
   impl.analysis_of = {a.rows(), a.nonZeros(), impl.common.lnz, impl.common.fl,
                       estimate.analysis_seconds};
-  // The pattern, to recognize the matrix (or a copy of it) in Factorize().
-  impl.analysis_matrix = a;
-  impl.analysis_matrix.makeCompressed();
+  // The pattern, to recognize the matrix (or a copy of it) in Factorize(); without the values
+  // (a third of a copy of `a`).
+  SparseMatrix compressed;
+  const SparseMatrix* pattern = &a;
+  if (!a.isCompressed()) {
+    compressed = a;
+    compressed.makeCompressed();
+    pattern = &compressed;
+  }
+  impl.analysis_outer.assign(pattern->outerIndexPtr(),
+                             pattern->outerIndexPtr() + pattern->outerSize() + 1);
+  impl.analysis_inner.assign(pattern->innerIndexPtr(),
+                             pattern->innerIndexPtr() + pattern->nonZeros());
   return estimate;
 }
 
@@ -1187,19 +1211,9 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
       }
     }
     if (cp.size() > 1) {
-      cholmod_sparse c{};
-      c.nrow = static_cast<size_t>(n);
-      c.ncol = cp.size() - 1;
-      c.nzmax = ci.size();
-      c.p = cp.data();
-      c.i = ci.data();
-      c.x = cx.data();
-      c.stype = 0;
-      c.itype = CHOLMOD_INT;
-      c.xtype = CHOLMOD_REAL;
-      c.dtype = CHOLMOD_DOUBLE;
-      c.sorted = 1;  // the factor's columns are sorted
-      c.packed = 1;
+      // The factor's columns are sorted.
+      cholmod_sparse c = ColumnsView(n, cp.size() - 1, cp.data(), ci.data(), cx.data(), ci.size(),
+                                     /*sorted=*/true);
       if (!cholmod_updown(1, &c, impl.factor, &impl.common)) fail("update (cholmod_updown)");
     }
   }
@@ -1224,20 +1238,9 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
       rows.push_back(impl.inverse_permutation[i]);
       values.push_back(a.valuePtr()[e]);
     }
-    cholmod_sparse column{};
-    column.nrow = static_cast<size_t>(n);
-    column.ncol = 1;
-    column.nzmax = std::max<size_t>(rows.size(), 1);
     column_start[1] = static_cast<int>(rows.size());
-    column.p = column_start;
-    column.i = rows.data();
-    column.x = values.data();
-    column.stype = 0;
-    column.itype = CHOLMOD_INT;
-    column.xtype = CHOLMOD_REAL;
-    column.dtype = CHOLMOD_DOUBLE;
-    column.sorted = 0;
-    column.packed = 1;
+    cholmod_sparse column = ColumnsView(n, 1, column_start, rows.data(), values.data(),
+                                        std::max<size_t>(rows.size(), 1), /*sorted=*/false);
     if (!cholmod_rowadd(static_cast<size_t>(impl.inverse_permutation[r]), &column, impl.factor,
                         &impl.common)) {
       fail("row addition (cholmod_rowadd)");

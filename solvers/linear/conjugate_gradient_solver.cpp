@@ -27,21 +27,17 @@ constexpr EnumNames<ConjugateGradientSolver::Preconditioner, 2> kPreconditionerN
 
 ConjugateGradientSolver::Options ConjugateGradientSolver::Options::FromConfig(
     const ConfigNode& node) {
-  Options options;
-  iterative::ReadIterationLimits(node, "CG iteration", options.limits);
-  options.preconditioner = node.GetEnum(
-      "preconditioner", options.preconditioner, kPreconditionerNames,
-      "jacobi = diagonal scaling (parallel, fused into the vector updates); incomplete_cholesky "
-      "= Eigen's threshold IC with AMD ordering (fewer iterations, sequential triangular "
-      "solves)");
-  node.RejectUnknownKeys();
-  return options;
+  return iterative::ReadIterativeOptions<Options>(node, "CG iteration", [&](Options& options) {
+    options.preconditioner = node.GetEnum(
+        "preconditioner", options.preconditioner, kPreconditionerNames,
+        "jacobi = diagonal scaling (parallel, fused into the vector updates); incomplete_cholesky "
+        "= Eigen's threshold IC with AMD ordering (fewer iterations, sequential triangular "
+        "solves)");
+  });
 }
 
-void ConjugateGradientSolver::FactorizeImpl(const SparseMatrix& a, const Context& /*context*/) {
+void ConjugateGradientSolver::Prepare(const Context& /*context*/) {
   incomplete_cholesky_.reset();
-  a_ = iterative::CompressedCopy(a);
-  inverse_diagonal_ = solver_checks::PositiveDiagonal(a_, "cg").cwiseInverse();
   if (options_.preconditioner == Preconditioner::kIncompleteCholesky && a_.rows() > 0) {
     incomplete_cholesky_ = std::make_unique<IncompleteCholesky>();
     incomplete_cholesky_->compute(a_);
@@ -104,13 +100,9 @@ void ConjugateGradientSolver::ApplyIncompleteCholesky(const double* r, double* z
 }
 
 template <int K>
-SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b_in,
-                                                 Eigen::Ref<Eigen::MatrixXd> x_out,
-                                                 Eigen::Index first) {
+SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
+                                                    Eigen::Index first) {
   const Index n = static_cast<Index>(a_.rows());
-  double* b = nullptr;
-  double* x = nullptr;
-  GatherBlock<K>(b_in, x_out, first, n, b, x);
   double* r = r_.Reserve(n, K);
   double* z = z_.Reserve(n, K);
   double* p = p_.Reserve(n, K);
@@ -214,10 +206,10 @@ SolveSummary ConjugateGradientSolver::SolveBlock(const Eigen::Ref<const Eigen::M
   // the true one, for one more pass over A per solve.
   if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = iterative::MaxRelativeResidual<K>(a_, b, x, start[0]);
-  iterative::ScatterColumns<K>(x, first, x_out);
   return summary;
 }
 
 template class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
+template class iterative::MatrixIterativeSolver<ConjugateGradientSolver>;
 
 }  // namespace harap

@@ -30,7 +30,7 @@ namespace harap {
 /// definite: the solve then fails with that message. Not thread-safe; kernels run in parallel in
 /// the caller's task arena.
 class ConjugateGradientSolver final
-    : public iterative::BlockIterativeSolver<ConjugateGradientSolver> {
+    : public iterative::MatrixIterativeSolver<ConjugateGradientSolver> {
  public:
   static constexpr std::string_view kName = "cg";
 
@@ -48,18 +48,17 @@ class ConjugateGradientSolver final
   };
 
   explicit ConjugateGradientSolver(const Options& options)
-      : BlockIterativeSolver(kName), options_(options) {}
+      : MatrixIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
-  /// The matrix of the last Factorize() (a compressed copy).
-  const SparseMatrix& matrix() const { return a_; }
 
  private:
-  void FactorizeImpl(const SparseMatrix& a, const Context& context) override;
-  friend class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
+  friend class iterative::MatrixIterativeSolver<ConjugateGradientSolver>;
+  /// Builds the incomplete Cholesky preconditioner if it is the one chosen (Factorize()).
+  void Prepare(const Context& context);
+  /// CG on the row-major blocks b and x (the columns [first, first + K) of the solve).
   template <int K>
-  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
-                          Eigen::Index first);
+  SolveSummary SolveGathered(const double* b, double* x, Eigen::Index first);
   /// z = M⁻¹ r for the incomplete Cholesky preconditioner (sequential).
   template <int K>
   void ApplyIncompleteCholesky(const double* r, double* z);
@@ -68,14 +67,13 @@ class ConjugateGradientSolver final
       Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
 
   Options options_;
-  SparseMatrix a_;
-  Eigen::VectorXd inverse_diagonal_;
   std::unique_ptr<IncompleteCholesky> incomplete_cholesky_;
-  // Row-major work blocks (b, x, r, z, p, A p, the IC workspace), kept between solves.
+  // Row-major work blocks (r, z, p, A p, the IC workspace), kept between solves.
   iterative::Block r_, z_, p_, q_, w_;
 };
 
-// SolveImpl() calls SolveBlock<K>, defined in the .cpp: instantiated there only.
+// SolveImpl() calls SolveGathered<K>, defined in the .cpp: instantiated there only.
 extern template class iterative::BlockIterativeSolver<ConjugateGradientSolver>;
+extern template class iterative::MatrixIterativeSolver<ConjugateGradientSolver>;
 
 }  // namespace harap

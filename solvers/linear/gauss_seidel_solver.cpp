@@ -53,21 +53,19 @@ constexpr EnumNames<GaussSeidelSolver::Ordering, 2> kOrderingNames = {{
 }  // namespace
 
 GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(const ConfigNode& node) {
-  Options options;
-  iterative::ReadIterationLimits(node, "sweep", options.limits);
-  options.sweep = node.GetEnum("sweep", options.sweep, kSweepNames,
-                               "forward = rows in order; symmetric = forward then backward "
-                               "(SGS/SSOR, one iteration costs about two forward sweeps)");
-  options.ordering =
-      node.GetEnum("ordering", options.ordering, kOrderingNames,
-                   "colored = rows grouped by a greedy graph colouring, each colour updated in "
-                   "parallel; natural = rows in order, sequential");
-  options.relaxation = node.Get("relaxation", options.relaxation,
-                                "over-relaxation factor ω: 1 = Gauss–Seidel, > 1 = SOR (which "
-                                "diverges outside (0, 2))",
-                                Range::Open(0.0, 2.0));
-  node.RejectUnknownKeys();
-  return options;
+  return iterative::ReadIterativeOptions<Options>(node, "sweep", [&](Options& options) {
+    options.sweep = node.GetEnum("sweep", options.sweep, kSweepNames,
+                                 "forward = rows in order; symmetric = forward then backward "
+                                 "(SGS/SSOR, one iteration costs about two forward sweeps)");
+    options.ordering =
+        node.GetEnum("ordering", options.ordering, kOrderingNames,
+                     "colored = rows grouped by a greedy graph colouring, each colour updated in "
+                     "parallel; natural = rows in order, sequential");
+    options.relaxation = node.Get("relaxation", options.relaxation,
+                                  "over-relaxation factor ω: 1 = Gauss–Seidel, > 1 = SOR (which "
+                                  "diverges outside (0, 2))",
+                                  Range::Open(0.0, 2.0));
+  });
 }
 
 void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& context) {

@@ -29,6 +29,7 @@
 #include "framework/error.h"
 #include "framework/linear_solver.h"
 #include "framework/types.h"
+#include "solvers/linear/solver_checks.h"
 
 namespace harap::iterative {
 
@@ -208,6 +209,23 @@ struct IterationLimits {
 void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
                          IterationLimits& limits);
 
+/// Options::FromConfig() of an iterative solver, written once: Options' defaults, the shared
+/// limits (ReadIterationLimits into options.limits), the solver's own keys (read_own(options)),
+/// then RejectUnknownKeys().
+template <class Options, class ReadOwn>
+Options ReadIterativeOptions(const ConfigNode& node, std::string_view iteration,
+                             ReadOwn&& read_own) {
+  Options options;
+  ReadIterationLimits(node, iteration, options.limits);
+  read_own(options);
+  node.RejectUnknownKeys();
+  return options;
+}
+
+/// The compressed copy of `a` the solvers iterate with (Eigen's uncompressed storage has gaps
+/// between columns that the kernels would have to skip).
+SparseMatrix CompressedCopy(const SparseMatrix& a);
+
 /// The message for an iteration that diverged (residual grew by kDivergenceFactor, or NaN).
 std::string DivergenceMessage(std::string_view solver, int iteration, std::string_view cause);
 
@@ -248,22 +266,7 @@ class BlockIterativeSolver : public LinearSolver {
  protected:
   using LinearSolver::LinearSolver;
 
-  /// Columns [first, first + K) of b and x copied into the row-major work blocks the kernels
-  /// iterate on, `rows` rows in the matrix's own row order, pointed to by b_block and x_block
-  /// (valid until the next call). gauss_seidel gathers in its colour order and keeps its own.
-  template <int K>
-  void GatherBlock(const Eigen::Ref<const Eigen::MatrixXd>& b,
-                   const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::Index first, Index rows,
-                   double*& b_block, double*& x_block) {
-    b_block = b_block_.Reserve(rows, K);
-    x_block = x_block_.Reserve(rows, K);
-    GatherColumns<K>(b, first, b_block);
-    GatherColumns<K>(x, first, x_block);
-  }
-
  private:
-  Block b_block_, x_block_;
-
   SolveSummary SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
                          const Context& /*context*/) final {
     return SolveByBlocks(b, [&](Eigen::Index first, auto width) {
@@ -272,14 +275,55 @@ class BlockIterativeSolver : public LinearSolver {
   }
 };
 
+/// The base of the iterative solvers that iterate on A in its own row order, with D⁻¹ at hand
+/// (cg, chebyshev; gauss_seidel reorders the rows and keeps its own copy). Factorize() keeps a
+/// compressed copy of A and its inverse diagonal (a NumericalError naming Derived::kName if an
+/// entry of the diagonal is not positive) and then calls Derived::Prepare(context) for the
+/// solver's own setup. A block's columns [first, first + K) of b and x are copied into row-major
+/// work blocks for Derived::SolveGathered<K>(b, x, first) (x updated in place) and x's columns
+/// copied back. Derived befriends this class.
+template <class Derived>
+class MatrixIterativeSolver : public BlockIterativeSolver<Derived> {
+ public:
+  /// The matrix of the last Factorize() (a compressed copy).
+  const SparseMatrix& matrix() const { return a_; }
+
+ protected:
+  using BlockIterativeSolver<Derived>::BlockIterativeSolver;
+
+  SparseMatrix a_;
+  Eigen::VectorXd inverse_diagonal_;  ///< D⁻¹ of a_
+
+ private:
+  friend class BlockIterativeSolver<Derived>;
+
+  void FactorizeImpl(const SparseMatrix& a, const Context& context) final {
+    a_ = CompressedCopy(a);
+    inverse_diagonal_ = solver_checks::PositiveDiagonal(a_, Derived::kName).cwiseInverse();
+    static_cast<Derived&>(*this).Prepare(context);
+  }
+
+  template <int K>
+  SolveSummary SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b, Eigen::Ref<Eigen::MatrixXd> x,
+                          Eigen::Index first) {
+    const Index rows = static_cast<Index>(a_.rows());
+    double* b_block = b_block_.Reserve(rows, K);
+    double* x_block = x_block_.Reserve(rows, K);
+    GatherColumns<K>(b, first, b_block);
+    GatherColumns<K>(x, first, x_block);
+    const SolveSummary summary =
+        static_cast<Derived&>(*this).template SolveGathered<K>(b_block, x_block, first);
+    ScatterColumns<K>(x_block, first, x);
+    return summary;
+  }
+
+  Block b_block_, x_block_;
+};
+
 /// The outcome of a block that did not fail: kConverged if no column of `convergence` is still
 /// active, else kIterationLimit.
 inline SolveOutcome BlockOutcome(const ColumnConvergence& convergence) {
   return convergence.any_active() ? SolveOutcome::kIterationLimit : SolveOutcome::kConverged;
 }
-
-/// The compressed copy of `a` the solvers iterate with (Eigen's uncompressed storage has gaps
-/// between columns that the kernels would have to skip).
-SparseMatrix CompressedCopy(const SparseMatrix& a);
 
 }  // namespace harap::iterative

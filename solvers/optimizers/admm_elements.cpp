@@ -270,21 +270,14 @@ ConstrainSummary AdmmLevelSolver::Constrain(const LevelConstraints& constraints,
   constraints_ = constraints;
   if (constraints_.follow_rotations()) FindIncidentElements(*mesh_, constraints_);
   system_ = std::make_unique<ConstrainedSystem>(a0_, constraints_.vertices);
-  solver_ = factory.MakeLinearSolver(level_, system_->num_free());
-  if (system_->num_free() > 0) solver_->Factorize(system_->reduced_matrix(), context);
-  constrain_seconds_ = clock.Seconds();
-  if (context.system_callback) context.system_callback(level_, system_->reduced_matrix());
-  reduced_rhs_.resize(system_->num_free(), 3);
-  reduced_x_.resize(system_->num_free(), 3);
-  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system_->num_free(),
-                          constrain_seconds_};
+  const ConstrainSummary summary = FactorGlobalStep(*system_, level_, factory, context, clock,
+                                                    solver_, reduced_rhs_, reduced_x_);
+  constrain_seconds_ = summary.seconds;
+  return summary;
 }
 
 void AdmmLevelSolver::MoveTargets(const Positions& mean_target) {
-  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
-              "{} targets for {} constrained vertices", mean_target.rows(),
-              constraints_.mean_target.rows());
-  constraints_.mean_target = mean_target;
+  MoveMeanTargets(constraints_, mean_target);
 }
 
 LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveRequest& request,

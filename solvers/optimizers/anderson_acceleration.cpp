@@ -13,8 +13,14 @@ void AndersonAcceleration::Reset(Eigen::Index rows, int history) {
   residual_.resize(rows, 3);
   previous_residual_.resize(rows, 3);
   previous_image_.resize(rows, 3);
-  residual_differences_.assign(history, Eigen::MatrixXd(rows, 3));
-  image_differences_.assign(history, Eigen::MatrixXd(rows, 3));
+  // Sized in place, not copied from one prototype: a copy writes every page of every slot, while
+  // a slot never written (a level that stops after two iterations uses one of five) then costs
+  // address space only (issue 23: peak memory per vertex).
+  residual_differences_.resize(history);
+  image_differences_.resize(history);
+  for (auto* slots : {&residual_differences_, &image_differences_}) {
+    for (Eigen::MatrixXd& slot : *slots) slot.resize(rows, 3);
+  }
   gram_.setZero(history, history);
   rhs_.resize(history);
   theta_.resize(history);

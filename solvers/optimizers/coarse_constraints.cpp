@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/coarse_constraints.h"
 
+#include "framework/error.h"
 #include "framework/rotation.h"
 
 namespace harap {
@@ -82,6 +83,26 @@ LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
     for (Index& e : elements) e = new_element[e];
   }
   return renumbered;
+}
+
+void MoveMeanTargets(LevelConstraints& constraints, const Positions& mean_target) {
+  HARAP_CHECK(mean_target.rows() == constraints.mean_target.rows(),
+              "{} targets for {} constrained vertices", mean_target.rows(),
+              constraints.mean_target.rows());
+  constraints.mean_target = mean_target;
+}
+
+ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
+                                  const ComponentFactory& factory, const Context& context,
+                                  const Stopwatch& clock, std::unique_ptr<LinearSolver>& solver,
+                                  Eigen::MatrixXd& rhs, Eigen::MatrixXd& x) {
+  solver = factory.MakeLinearSolver(level, system.num_free());
+  if (system.num_free() > 0) solver->Factorize(system.system_matrix(), context);
+  const double seconds = clock.Seconds();
+  if (context.system_callback) context.system_callback(level, system.system_matrix());
+  rhs.resize(system.num_unknowns(), 3);
+  x.resize(system.num_unknowns(), 3);
+  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system.num_unknowns(), seconds};
 }
 
 }  // namespace harap

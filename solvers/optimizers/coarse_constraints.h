@@ -1,11 +1,15 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <memory>
 #include <vector>
 
+#include "framework/constrained_system.h"
+#include "framework/context.h"
 #include "framework/energy.h"
 #include "framework/hierarchy.h"
 #include "framework/level_solver.h"
+#include "framework/optimizer.h"
 
 namespace harap {
 
@@ -31,5 +35,20 @@ void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite 
 LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
                                        const std::vector<Index>& new_vertex,
                                        const std::vector<Index>& new_element);
+
+/// Replaces the mean targets of `constraints` by `mean_target`, which must have one row per
+/// constrained vertex (InternalError otherwise): a level solver's MoveTargets().
+void MoveMeanTargets(LevelConstraints& constraints, const Positions& mean_target);
+
+/// The factorization of a level solver's Constrain() for a new eliminated system (local_global
+/// and the ADMM level solvers alike): `solver` becomes a new linear solver from `factory` for
+/// level `level`, which factors system.system_matrix() (unless there are no unknowns); `rhs` and
+/// `x` are sized num_unknowns()×3 for the solves, and the context's system callback sees the
+/// matrix. Returns the summary of a full factorization with the seconds since `clock` started
+/// (read before the callback).
+ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
+                                  const ComponentFactory& factory, const Context& context,
+                                  const Stopwatch& clock, std::unique_ptr<LinearSolver>& solver,
+                                  Eigen::MatrixXd& rhs, Eigen::MatrixXd& x);
 
 }  // namespace harap

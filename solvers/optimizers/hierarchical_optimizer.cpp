@@ -127,27 +127,44 @@ struct Cascade {
           const Context& context)
       : options(options), problem(problem), context(context) {}
 
+  // Level 0 is the input mesh itself (the hierarchy's levels[0] equals it), so that its setup
+  // can start before the hierarchy is built.
   const Mesh& LevelMesh(int l) const {
-    return options.hierarchical ? hierarchy.levels[l].mesh : *problem.mesh;
+    return options.hierarchical && l > 0 ? hierarchy.levels[l].mesh : *problem.mesh;
   }
   int num_levels() const { return options.hierarchical ? hierarchy.num_levels() : 1; }
 
+  // What setting up one level made.
+  struct Setup {
+    std::unique_ptr<LevelSolver> solver;
+    double precompute_seconds = 0.0, constrain_seconds = 0.0, seconds = 0.0;
+  };
+
   // P and C of level l (from whichever thread gets there first; see LevelSetupPipeline).
-  void SetUp(int l, const ComponentFactory& factory) {
+  Setup MakeSetup(int l, const ComponentFactory& factory) const {
     Stopwatch clock;
     const Mesh& mesh = *problem.mesh;
     const LevelConstraints constraints =
         l == 0 ? LevelConstraints::Exact(problem.constraints, mesh.planar)
                : MapConstraints(hierarchy, l, problem.constraints);
-    auto solver = options.level_solver->CreateAnother();
+    Setup setup;
+    setup.solver = options.level_solver->CreateAnother();
     // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-    solver->Precompute(LevelSetup{&LevelMesh(l), l > 0 ? &mesh : nullptr, l, false}, factory,
-                       context);
-    solver->Constrain(constraints, factory, context);
-    precompute_seconds[l] = solver->precompute_seconds();
-    constrain_seconds[l] = solver->constrain_seconds();
-    solvers[l] = std::move(solver);
-    level_seconds[l] = clock.Seconds();
+    setup.solver->Precompute(LevelSetup{&LevelMesh(l), l > 0 ? &mesh : nullptr, l, false},
+                             factory, context);
+    setup.solver->Constrain(constraints, factory, context);
+    setup.precompute_seconds = setup.solver->precompute_seconds();
+    setup.constrain_seconds = setup.solver->constrain_seconds();
+    setup.seconds = clock.Seconds();
+    return setup;
+  }
+
+  // Stores level l's setup (the caller's thread, or level > 0 after the vectors are sized).
+  void Store(int l, Setup&& setup) {
+    precompute_seconds[l] = setup.precompute_seconds;
+    constrain_seconds[l] = setup.constrain_seconds;
+    solvers[l] = std::move(setup.solver);
+    level_seconds[l] = setup.seconds;
   }
 
   // The state of level l from the state of level l + 1 (Section 5.1).
@@ -178,11 +195,37 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   const Positions initial = InitialPositions(problem);  // validates the constraints
   Cascade cascade(options_, problem, context);
 
-  // H: the hierarchy.
+  // P and C of every solved level (Algorithm 2, first loop). With overlap_setup, a background
+  // task sets the levels up from fine to coarse while the caller's thread sets up and solves the
+  // coarse levels, from the coarsest down: the finest level's setup (its ordering and
+  // factorization alone take about half of the run, and are sequential) then runs from the
+  // start beside everything else (armadillo-bend, 1e-6: 0.9 s instead of 1.2 s,
+  // docs/results.md). It needs no hierarchy, so it starts before the hierarchy is built
+  // (dragon-lift: 0.17 s earlier); the coarse levels join once the hierarchy is there. Each level
+  // is set up by whichever thread reaches it first; creating components reads config tables, so
+  // the two threads take turns at the factory. Level 0's setup is kept aside until the caller
+  // waits for it: the per-level vectors are sized only after the hierarchy is built.
+  const SerializedFactory serialized_factory(factory);
+  const bool overlap = options_.overlap_setup && context.arena->max_concurrency() >= 2;
+  Cascade::Setup finest_setup;
+  LevelSetupPipeline setup(
+      {0},
+      [&](int l) {
+        if (l == 0) {
+          finest_setup = cascade.MakeSetup(0, serialized_factory);
+        } else {
+          cascade.Store(l, cascade.MakeSetup(l, serialized_factory));
+        }
+      },
+      overlap, context, /*more_levels=*/true);
+
+  // H: the hierarchy (isolated: the caller's thread must not pick up the background setup
+  // while it waits for the hierarchy's parallel loops).
   Stopwatch clock;
   if (options_.hierarchical) {
     context.ReportPhase("building the hierarchy");
-    cascade.hierarchy = factory.MakeHierarchy()->Build(*problem.mesh, context);
+    cascade.hierarchy = setup.Isolated(
+        context, [&] { return factory.MakeHierarchy()->Build(*problem.mesh, context); });
     cascade.upsampler = factory.MakeUpsampler();
   }
   result.timings.hierarchy = clock.Seconds();
@@ -192,28 +235,22 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   cascade.level_seconds.assign(levels, 0.0);
   cascade.precompute_seconds.assign(levels, 0.0);
   cascade.constrain_seconds.assign(levels, 0.0);
-
-  // P and C of every solved level (Algorithm 2, first loop). With overlap_setup, a background
-  // task sets the levels up from fine to coarse while the caller's thread sets up and solves the
-  // coarse levels, from the coarsest down: the finest level's setup (its ordering and
-  // factorization alone take about half of the run, and are sequential) then runs from the
-  // start beside everything else (armadillo-bend, 1e-6: 0.9 s instead of 1.2 s,
-  // docs/results.md). Each level is set up by whichever thread reaches it first; creating
-  // components reads config tables, so the two threads take turns at the factory.
   const std::vector<int> solved_levels = options_.SolvedLevels(levels);
-  const SerializedFactory serialized_factory(factory);
-  LevelSetupPipeline setup(
-      std::vector<int>(solved_levels.rbegin(), solved_levels.rend()),
-      [&](int l) { cascade.SetUp(l, serialized_factory); },
-      options_.overlap_setup && context.arena->max_concurrency() >= 2, context);
+  std::vector<int> coarse_levels(solved_levels.rbegin() + 1, solved_levels.rend());
+  setup.AddLevels(coarse_levels);  // fine to coarse, after level 0
 
   // S: solve from the coarsest level down.
   Stopwatch solve_clock;
   const double diagonal = BoundingBoxDiagonal(*problem.mesh);
   double waiting_seconds = 0.0;  // waiting for a level's setup belongs to P and C, not to S
+  bool finest_stored = false;
   const auto wait_for = [&](int l) {
     Stopwatch wait_clock;
     setup.WaitFor(l);
+    if (l == 0 && !finest_stored) {
+      cascade.Store(0, std::move(finest_setup));
+      finest_stored = true;
+    }
     waiting_seconds += wait_clock.Seconds();
   };
   wait_for(coarsest);

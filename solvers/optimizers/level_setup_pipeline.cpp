@@ -56,7 +56,9 @@ struct LevelSetupPipeline::State {
 
   std::mutex mutex;
   std::condition_variable changed;
-  std::map<int, Level> levels;
+  std::map<int, Level> levels;  // (entries stay in place when levels are added)
+  std::vector<int> order;       // the background task's
+  bool closed = true;           // no more levels will be added
   std::function<void(int)> setup;
   bool cancelled = false;
   bool background_running = false;
@@ -94,22 +96,26 @@ struct LevelSetupPipeline::State {
 };
 
 LevelSetupPipeline::LevelSetupPipeline(std::vector<int> levels, std::function<void(int)> setup,
-                                       bool overlap, const Context& context)
-    : state_(std::make_shared<State>()), levels_(std::move(levels)) {
-  for (int level : levels_) state_->levels[level];
+                                       bool overlap, const Context& context, bool more_levels)
+    : state_(std::make_shared<State>()) {
+  for (int level : levels) state_->levels[level];
+  state_->order = std::move(levels);
+  state_->closed = !more_levels;
   state_->setup = std::move(setup);
   if (!overlap) return;
   State* state = state_.get();  // outlives the task: the destructor waits for the group
-  std::vector<int> order = levels_;
   state_->arena = context.arena;
   context.arena->execute([&] {
-    state->group.run([state, order] {
+    state->group.run([state] {
       std::unique_lock lock(state->mutex);
       if (state->cancelled) return;
       state->background_running = true;
-      for (int level : order) {
-        if (state->cancelled) break;
-        state->TryRun(level, lock);
+      for (size_t i = 0;; ++i) {
+        // Levels still to be added (AddLevels) are waited for here.
+        state->changed.wait(
+            lock, [&] { return state->cancelled || i < state->order.size() || state->closed; });
+        if (state->cancelled || i >= state->order.size()) break;
+        state->TryRun(state->order[i], lock);
       }
       state->background_running = false;
       state->changed.notify_all();
@@ -117,10 +123,23 @@ LevelSetupPipeline::LevelSetupPipeline(std::vector<int> levels, std::function<vo
   });
 }
 
+void LevelSetupPipeline::AddLevels(const std::vector<int>& levels) {
+  const std::lock_guard lock(state_->mutex);
+  HARAP_CHECK(!state_->closed, "AddLevels: the pipeline's levels were already complete");
+  for (int level : levels) {
+    HARAP_CHECK(state_->levels.count(level) == 0, "level {} added twice", level);
+    state_->levels[level];
+    state_->order.push_back(level);
+  }
+  state_->closed = true;
+  state_->changed.notify_all();
+}
+
 LevelSetupPipeline::~LevelSetupPipeline() {
   {
     std::unique_lock lock(state_->mutex);
     state_->cancelled = true;
+    state_->changed.notify_all();  // a background task waiting for AddLevels() stops
     state_->changed.wait(lock, [&] { return !state_->background_running; });
   }
   if (state_->arena) state_->arena->execute([&] { state_->group.wait(); });

@@ -42,13 +42,19 @@ class SerializedFactory final : public ComponentFactory {
 /// demand, in the caller's thread. Levels must be independent of each other's setup.
 class LevelSetupPipeline {
  public:
-  /// `levels` in the order the background task should take them.
+  /// `levels` in the order the background task should take them. With `more_levels`, AddLevels()
+  /// appends the rest later (e.g. once the hierarchy is built), and the background task waits
+  /// for them after the first ones.
   LevelSetupPipeline(std::vector<int> levels, std::function<void(int)> setup, bool overlap,
-                     const Context& context);
+                     const Context& context, bool more_levels = false);
   /// Stops the background task after its current level and waits for it.
   ~LevelSetupPipeline();
   LevelSetupPipeline(const LevelSetupPipeline&) = delete;
   LevelSetupPipeline& operator=(const LevelSetupPipeline&) = delete;
+
+  /// Appends `levels` to the background task's order (after those given so far) and closes the
+  /// list; only once, and only if constructed with more_levels.
+  void AddLevels(const std::vector<int>& levels);
 
   /// Returns once `level` is set up; rethrows what its setup threw.
   void WaitFor(int level);
@@ -63,7 +69,6 @@ class LevelSetupPipeline {
  private:
   struct State;
   std::shared_ptr<State> state_;
-  std::vector<int> levels_;
 };
 
 }  // namespace harap

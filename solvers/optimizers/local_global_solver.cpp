@@ -94,10 +94,7 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
 }
 
 void LocalGlobalSolver::MoveTargets(const Positions& mean_target) {
-  HARAP_CHECK(mean_target.rows() == constraints_.mean_target.rows(),
-              "{} targets for {} constrained vertices", mean_target.rows(),
-              constraints_.mean_target.rows());
-  constraints_.mean_target = mean_target;
+  MoveMeanTargets(constraints_, mean_target);
   internal_.mean_target = mean_target;
 }
 
@@ -109,15 +106,11 @@ ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>
   masked_ = nullptr;
   auto system = std::make_unique<ConstrainedSystem>(energy_->system_matrix(),
                                                     Renumbered(constrained, ordering_));
-  solver_ = factory.MakeLinearSolver(level_, system->num_free());
-  if (system->num_free() > 0) solver_->Factorize(system->reduced_matrix(), context);
+  const ConstrainSummary summary =
+      FactorGlobalStep(*system, level_, factory, context, clock, solver_, reduced_rhs_, reduced_x_);
   system_ = std::move(system);
-  constrain_seconds_ = clock.Seconds();
-  if (context.system_callback) context.system_callback(level_, system_->system_matrix());
-  reduced_rhs_.resize(system_->num_unknowns(), 3);
-  reduced_x_.resize(system_->num_unknowns(), 3);
-  return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system_->num_unknowns(),
-                          constrain_seconds_};
+  constrain_seconds_ = summary.seconds;
+  return summary;
 }
 
 ConstrainSummary LocalGlobalSolver::ConstrainMasked(

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/vertex_ordering.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -31,41 +33,52 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff();
   const Eigen::RowVector3d extent = mesh.vertices.colwise().maxCoeff() - lo;
   const double scale = extent.maxCoeff() > 0.0 ? ((1 << 21) - 1) / extent.maxCoeff() : 0.0;
+  // The loops below are independent per vertex / element (the sorts are parallel already): in
+  // parallel, the same permutation.
+  const auto for_each = [](Index count, auto&& body) {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, count, 8192),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index k = range.begin(); k != range.end(); ++k) body(k);
+                      });
+  };
   std::vector<std::pair<uint64_t, Index>> keys(n);
-  for (Index v = 0; v < n; ++v) {
+  for_each(n, [&](Index v) {
     const Eigen::RowVector3d q = (mesh.vertices.row(v) - lo) * scale;
     keys[v] = {Spread(static_cast<uint64_t>(q(0))) | Spread(static_cast<uint64_t>(q(1))) << 1 |
                    Spread(static_cast<uint64_t>(q(2))) << 2,
                v};
-  }
+  });
   tbb::parallel_sort(keys.begin(), keys.end());  // ties broken by input index: deterministic
   ordering.old_vertex.resize(n);
   ordering.new_vertex.resize(n);
-  for (Index k = 0; k < n; ++k) {
+  for_each(n, [&](Index k) {
     ordering.old_vertex[k] = keys[k].second;
     ordering.new_vertex[keys[k].second] = k;
-  }
+  });
   ordering.mesh.planar = mesh.planar;
-  ordering.mesh.vertices = ordering.ToNew(mesh.vertices);
+  ordering.mesh.vertices.resize(n, 3);
+  for_each(n, [&](Index k) {
+    ordering.mesh.vertices.row(k) = mesh.vertices.row(ordering.old_vertex[k]);
+  });
 
   const Index m = mesh.num_elements();
   const int size = mesh.simplex_size();
   std::vector<std::pair<Index, Index>> element_keys(m);
-  for (Index e = 0; e < m; ++e) {
+  for_each(m, [&](Index e) {
     Index smallest = n;
     for (int a = 0; a < size; ++a) smallest = std::min(smallest, ordering.new_vertex[mesh.elements(e, a)]);
     element_keys[e] = {smallest, e};
-  }
+  });
   tbb::parallel_sort(element_keys.begin(), element_keys.end());
   ordering.old_element.resize(m);
   ordering.new_element.resize(m);
   ordering.mesh.elements.resize(m, size);
-  for (Index k = 0; k < m; ++k) {
+  for_each(m, [&](Index k) {
     const Index e = element_keys[k].second;
     ordering.old_element[k] = e;
     ordering.new_element[e] = k;
     for (int a = 0; a < size; ++a) ordering.mesh.elements(k, a) = ordering.new_vertex[mesh.elements(e, a)];
-  }
+  });
   return ordering;
 }
 

@@ -288,3 +288,28 @@ TEST_CASE("smooth_arap normalizes coarse levels like the input mesh", "[energies
   CHECK(std::abs(consistent / reference - 1.0) < 0.15);
   CHECK(per_level / reference > 3.0);
 }
+
+TEST_CASE("smooth_arap takes the scale of the input mesh it is given", "[energies]") {
+  // Coarse levels are normalized by the input mesh's mass scale: alternating inputs, and an
+  // input edited in place, must each get their own scale.
+  const Mesh coarse = Icosphere(1);
+  Mesh a = Icosphere(3), b = Icosphere(3);
+  b.vertices *= 2.0;  // same connectivity, 4× the area
+  const Context context;
+  auto coarse_energy = [&](const Mesh& input) {
+    SmoothArapEnergy energy{SmoothArapEnergy::Options{}};
+    energy.SetInputMesh(input, context);
+    energy.Precompute(coarse, context);
+    Rotations rotations(coarse.num_vertices(), Rotation::Identity());
+    return energy.FitRotations(SmoothlyDeformed(coarse.vertices, 1.0), rotations, context);
+  };
+  const double with_a = coarse_energy(a);
+  const double with_b = coarse_energy(b);
+  CHECK(with_a != with_b);
+  CHECK(coarse_energy(a) == with_a);
+  CHECK(coarse_energy(b) == with_b);
+  a.vertices *= 2.0;  // edited in place: now b's geometry
+  CHECK(coarse_energy(a) == with_b);
+  a.vertices(0, 0) += 1e-3;  // one coordinate: a different mesh again
+  CHECK(coarse_energy(a) != with_b);
+}

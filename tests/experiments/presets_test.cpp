@@ -28,6 +28,9 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
   const ConfigNode level0 = config.Child("solver").Child("level_0");
   CHECK(level0.Get("type", std::string(), "") == "adaptive");
   CHECK(level0.Get("expected_solves", 0.0, "") == 4.0);
+  // Fixed coarse targets, so that Anderson acceleration takes effect on the coarse levels.
+  CHECK_FALSE(config.Child("optimizer").Get("update_constraints", true, ""));
+  CHECK(config.Child("optimizer").Get("anderson", 0, "") == 5);
   // The factory then gives level 0 the adaptive solver and the other levels [solver]'s.
   const Registries registries = MakeBuiltinRegistries();
   const RegistryComponentFactory factory(registries, flags.BuildConfig());
@@ -55,6 +58,11 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   CHECK_FALSE(cg.Child("solver").Child("level_0").Has("expected_solves"));
   const Registries registries = MakeBuiltinRegistries();
   CHECK_NOTHROW(RegistryComponentFactory(registries, flags.BuildConfig()));
+  // Another level solver: local_global's options (anderson) are left out, the rest stays.
+  flags.settings = {"optimizer.inner=\"admm_pd\""};
+  const ConfigNode admm = flags.BuildConfig();
+  CHECK_FALSE(admm.Child("optimizer").Has("anderson"));
+  CHECK_FALSE(admm.Child("optimizer").Get("update_constraints", true, ""));
 }
 
 TEST_CASE("presets: unknown names are rejected, the config's preset key is read",

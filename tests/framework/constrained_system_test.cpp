@@ -144,3 +144,34 @@ TEST_CASE("MaskedSystem solves the eliminated system with one pattern for every 
     }
   }
 }
+
+TEST_CASE("ConstrainedSystem builds A_ff compressed and sorted, A_fc in the fixed order",
+          "[framework]") {
+  // Constrained vertices out of order: A_fc's columns follow fixed_vertices(), not the index.
+  const Mesh mesh = Tube(5, 6);
+  SpokesAndRimsEnergy energy({});
+  energy.Precompute(mesh, Context());
+  const SparseMatrix& a = energy.system_matrix();
+  ConstrainedSystem system(a, {17, 3, 9});
+  const SparseMatrix& a_ff = system.reduced_matrix();
+  REQUIRE(a_ff.isCompressed());
+  for (Index c = 0; c < a_ff.outerSize(); ++c) {
+    for (Index p = a_ff.outerIndexPtr()[c] + 1; p < a_ff.outerIndexPtr()[c + 1]; ++p) {
+      CHECK(a_ff.innerIndexPtr()[p - 1] < a_ff.innerIndexPtr()[p]);
+    }
+  }
+  CHECK(a_ff.nonZeros() == (Eigen::MatrixXd(a_ff).array() != 0.0).count());
+  // A_fc through the reduced right-hand side: b = 0 leaves −A_fc U_c.
+  const Eigen::MatrixXd dense_a = Eigen::MatrixXd(a);
+  const Positions u = Positions::Random(mesh.num_vertices(), 3);
+  system.SetFixedPositions(u);
+  Eigen::MatrixXd rhs_f;
+  system.ReducedRhs(Positions::Zero(mesh.num_vertices(), 3), rhs_f);
+  for (Index r = 0; r < system.num_free(); ++r) {
+    Eigen::RowVector3d expected = Eigen::RowVector3d::Zero();
+    for (Index f : system.fixed_vertices()) {
+      expected -= dense_a(system.free_vertices()[r], f) * u.row(f);
+    }
+    CHECK((rhs_f.row(r) - expected).norm() < 1e-12);
+  }
+}

@@ -26,9 +26,7 @@ class UniformSpokesEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "uniform_spokes";
 
-  /// No options (NoOptions::FromConfig still rejects every key, so a typo fails loudly).
-  using Options = NoOptions;
-
+  /// Options: none (CoupledQuadraticEnergy's NoOptions).
   explicit UniformSpokesEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
 
  private:
