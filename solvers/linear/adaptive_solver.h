@@ -35,10 +35,12 @@ namespace harap {
 /// (per level through the factory's `[solver.level_<l>]` tables).
 ///
 /// When it iterates by the arithmetic rule (not for memory) and the matrix then serves more
-/// solves than expected, it factors after all — before the solve at which the CG iterations
-/// so far have cost flops(L) — and solves directly from then on (chosen() = "cg>cholmod"): at
-/// most about twice the arithmetic of the better choice in hindsight (the ski-rental argument),
-/// however wrong expected_solves was.
+/// solves than expected, it factors after all and solves directly from then on (chosen() =
+/// "cg>cholmod"): before the solve at which the CG iterations so far have cost flops(L) (at
+/// most about twice the arithmetic of the better choice in hindsight, the ski-rental argument,
+/// however wrong expected_solves was), or before solve number expected_solves + 1, whichever
+/// comes first (the premise of the choice no longer holds; CG's inexact steps also cost the
+/// caller extra global steps, which the arithmetic count does not see).
 ///
 /// The direct solver is "cholmod" with the options of the `direct` table, the iterative one
 /// "cg" with those of the `iterative` table. chosen() names the one in use.
@@ -111,6 +113,7 @@ class AdaptiveSolver final : public LinearSolver {
   bool may_switch_ = false;
   bool switched_ = false;
   double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
+  int iterative_solves_ = 0;     // CG solves since Factorize()
   std::function<void(std::string_view, bool)> on_choice_;
 };
 

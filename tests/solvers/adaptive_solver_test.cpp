@@ -128,6 +128,29 @@ TEST_CASE("adaptive: factors after all once the iterations cost as much as the f
   CHECK(no_room.chosen() == "cg");
 }
 
+TEST_CASE("adaptive: factors after all once it served more solves than expected",
+          "[solvers][adaptive]") {
+  const Context context;
+  // A cube's factor fills in (nested separators of side², flops ~ n²), while 2 CG iterations per
+  // solve are cheap: it iterates for 2 expected solves, and the arithmetic rule alone would keep
+  // iterating long after; the count rule factors before the third solve.
+  const SparseMatrix a = PinnedCubeLaplacian(16);
+  const Eigen::MatrixXd b = RightHandSide(a.rows());
+  AdaptiveSolver adaptive(Parse("expected_solves = 2\niterative = { max_iterations = 2 }"));
+  adaptive.Factorize(a, context);
+  REQUIRE(adaptive.chosen() == "cg");
+  const double per_solve = 2.0 * 3 * (2.0 * a.nonZeros() + 12.0 * a.rows());
+  REQUIRE(3 * per_solve < adaptive.decision().estimate.flops);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+  for (int k = 0; k < 2; ++k) {
+    CHECK(adaptive.Solve(b, x, context).iterations == 2);
+    CHECK(adaptive.chosen() == "cg");
+  }
+  CHECK(adaptive.Solve(b, x, context).iterations == 0);
+  CHECK(adaptive.chosen() == "cg>cholmod");
+  CHECK((Eigen::MatrixXd(a) * x - b).norm() <= 1e-10 * b.norm());
+}
+
 TEST_CASE("adaptive: a refactorization keeps the direct choice", "[solvers][adaptive]") {
   const Context context;
   SparseMatrix a = PinnedGridLaplacian(30, 30, 5);
