@@ -32,7 +32,6 @@ double ScatterRows(const std::vector<Index>& free_vertices, const Eigen::MatrixX
       [](double a, double b) { return std::max(a, b); });
 }
 
-
 // The rows of the free vertices (renumbered by `free_index`, kNoVertex for fixed ones) of the
 // given columns of `a`, column k of the result being column columns[k] of `a`: A_ff or A_fc.
 // Written straight into compressed storage: `free_index` is increasing on the free vertices, so
@@ -40,19 +39,16 @@ double ScatterRows(const std::vector<Index>& free_vertices, const Eigen::MatrixX
 SparseMatrix FreeRowsOfColumns(const SparseMatrix& a, const std::vector<Index>& free_index,
                                const std::vector<Index>& columns, Index num_free) {
   const Index m = static_cast<Index>(columns.size());
-  const Index* outer = a.outerIndexPtr();
   const Index* inner = a.innerIndexPtr();
   const double* values = a.valuePtr();
-  const auto end_of = [&](Index col) {
-    return a.isCompressed() ? outer[col + 1] : outer[col] + a.innerNonZeroPtr()[col];
-  };
   SparseMatrix result(num_free, m);
   Index* result_outer = result.outerIndexPtr();
   result_outer[0] = 0;
   tbb::parallel_for(tbb::blocked_range<Index>(0, m, 4096), [&](const tbb::blocked_range<Index>& r) {
     for (Index k = r.begin(); k != r.end(); ++k) {
       Index count = 0;
-      for (Index p = outer[columns[k]]; p < end_of(columns[k]); ++p) {
+      const auto [begin, end] = ColumnRange(a, columns[k]);
+      for (Index p = begin; p < end; ++p) {
         count += free_index[inner[p]] != kNoVertex;
       }
       result_outer[k + 1] = count;
@@ -65,7 +61,8 @@ SparseMatrix FreeRowsOfColumns(const SparseMatrix& a, const std::vector<Index>& 
   tbb::parallel_for(tbb::blocked_range<Index>(0, m, 4096), [&](const tbb::blocked_range<Index>& r) {
     for (Index k = r.begin(); k != r.end(); ++k) {
       Index out = result_outer[k];
-      for (Index p = outer[columns[k]]; p < end_of(columns[k]); ++p) {
+      const auto [begin, end] = ColumnRange(a, columns[k]);
+      for (Index p = begin; p < end; ++p) {
         const Index row = free_index[inner[p]];
         if (row == kNoVertex) continue;
         result_inner[out] = row;

@@ -5,6 +5,7 @@
 #include <Eigen/SparseCore>
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace harap {
@@ -26,6 +27,14 @@ using Rotations = std::vector<Rotation>;
 
 /// Column-major sparse matrix, full symmetric storage unless stated otherwise.
 using SparseMatrix = Eigen::SparseMatrix<double>;
+
+/// The entries of column j of `a` (compressed or not): [begin, end) into its index and value
+/// arrays.
+inline std::pair<Index, Index> ColumnRange(const SparseMatrix& a, Index j) {
+  const Index begin = a.outerIndexPtr()[j];
+  const Index end = a.isCompressed() ? a.outerIndexPtr()[j + 1] : begin + a.innerNonZeroPtr()[j];
+  return {begin, end};
+}
 
 /// #F×3 triangles or #T×4 tetrahedra, row-major so one element is contiguous.
 using Elements = Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;

@@ -37,16 +37,14 @@ std::vector<Index> TransposePositions(const SparseMatrix& a) {
   const Index n = static_cast<Index>(a.outerSize());
   const Index* outer = a.outerIndexPtr();
   const Index* inner = a.innerIndexPtr();
-  const auto end_of = [&](Index col) {
-    return a.isCompressed() ? outer[col + 1] : outer[col] + a.innerNonZeroPtr()[col];
-  };
   std::vector<Index> mirror(a.nonZeros(), 0);
   std::vector<Index> cursor(outer, outer + n);
   for (Index col = 0; col < n; ++col) {
-    for (Index p = outer[col]; p < end_of(col); ++p) {
+    const auto [begin, end] = ColumnRange(a, col);
+    for (Index p = begin; p < end; ++p) {
       const Index row = inner[p];
       Index& q = cursor[row];
-      HARAP_CHECK(q < end_of(row) && inner[q] == col,
+      HARAP_CHECK(q < ColumnRange(a, row).second && inner[q] == col,
                   "entry ({}, {}) is not in the sparsity pattern", col, row);
       mirror[p] = q++;
     }

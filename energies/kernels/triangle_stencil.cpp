@@ -13,7 +13,6 @@ namespace harap {
 std::vector<std::array<Index, 9>> TriangleEntryPositions(const SparseMatrix& pattern,
                                                          const Elements& triangles) {
   std::vector<std::array<Index, 9>> positions(triangles.rows());
-  const Index* outer = pattern.outerIndexPtr();
   const Index* inner = pattern.innerIndexPtr();
   // One pass over each corner's column finds the face's three rows in it (the same positions as
   // EntryPosition per pair, a third of the column walks).
@@ -24,10 +23,8 @@ std::vector<std::array<Index, 9>> TriangleEntryPositions(const SparseMatrix& pat
                         auto& at = positions[f];
                         at.fill(-1);
                         for (int b = 0; b < 3; ++b) {
-                          const Index end = pattern.isCompressed()
-                                                ? outer[v[b] + 1]
-                                                : outer[v[b]] + pattern.innerNonZeroPtr()[v[b]];
-                          for (Index p = outer[v[b]]; p < end; ++p) {
+                          const auto [begin, end] = ColumnRange(pattern, v[b]);
+                          for (Index p = begin; p < end; ++p) {
                             for (int a = 0; a < 3; ++a) {
                               if (inner[p] == v[a]) at[3 * a + b] = p;
                             }

@@ -310,13 +310,6 @@ class ScopedNativeThreads {
   int saved_threads_ = 0;  // 0: nothing to restore
 };
 
-// The entries of column j of `a` (compressed or not): [begin, end) into its index/value arrays.
-std::pair<Index, Index> ColumnRange(const SparseMatrix& a, Index j) {
-  const Index begin = a.outerIndexPtr()[j];
-  const Index end = a.isCompressed() ? a.outerIndexPtr()[j + 1] : begin + a.innerNonZeroPtr()[j];
-  return {begin, end};
-}
-
 bool SamePattern(const SparseMatrix& x, const SparseMatrix& y) {
   if (x.rows() != y.rows() || x.cols() != y.cols()) return false;
   for (Index j = 0; j < x.cols(); ++j) {
@@ -422,7 +415,6 @@ struct CholmodSolver::Impl {
   void FreeFactor() {
     if (factor) cholmod_free_factor(&factor, &common);
     factor = nullptr;
-    rows_released = false;
   }
   void FreeSymbolic() {
     if (symbolic) cholmod_free_factor(&symbolic, &common);
@@ -444,10 +436,9 @@ struct CholmodSolver::Impl {
   }
 
   // The analysis (ordering, symbolic factor) of `a`, timed: Analyze()'s kept one if it was made
-  // for this very matrix (same arrays and size), else a new one.
+  // for this very pattern, else a new one.
   cholmod_factor* TakeOrMakeAnalysis(const SparseMatrix& a) {
-    if (analysis != nullptr && analysis_of.rows == a.rows() && analysis_of.nnz == a.nonZeros() &&
-        a.isCompressed() && IsAnalysisPattern(a)) {
+    if (analysis != nullptr && a.isCompressed() && IsAnalysisPattern(a)) {
       cholmod_factor* kept = analysis;
       analysis = nullptr;
       analysis_outer = {};
@@ -676,9 +667,13 @@ struct CholmodSolver::Impl {
     cholmod_free_work(&common);
     info.released_bytes = static_cast<double>(in_use - common.memory_inuse);
     tree_view.row = nullptr;  // same_arrays never matches a factor without rows
-    rows_released = true;
   }
-  bool rows_released = false;
+  // Whether ReleaseRowsOfOneShotFactor() freed the rows of the current numeric factor (a
+  // numeric simplicial factor has them otherwise).
+  bool rows_released() const {
+    return factor != nullptr && !factor->is_super && factor->xtype != CHOLMOD_PATTERN &&
+           factor->i == nullptr;
+  }
 
   // Throws for every failure status of the last CHOLMOD call; warnings other than NOT_POSDEF
   // (e.g. DSMALL) are left to the pivot check.
@@ -752,8 +747,6 @@ struct CholmodSolver::Impl {
   cholmod_factor* analysis = nullptr;
   std::vector<int> analysis_outer, analysis_inner;  // its pattern, compressed (no values)
   struct {
-    Eigen::Index rows = 0;
-    Eigen::Index nnz = 0;
     double lnz = 0.0, fl = 0.0, seconds = 0.0;
   } analysis_of;
   // With keeps_super(): the numeric supernodal LLᵀ factor `factor` was made from (current: no
@@ -964,8 +957,7 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
                           (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) *
                               sizeof(int) +
                           static_cast<double>(a.rows()) * 4 * sizeof(int);
-  impl.analysis_of = {a.rows(), a.nonZeros(), impl.common.lnz, impl.common.fl,
-                      estimate.analysis_seconds};
+  impl.analysis_of = {impl.common.lnz, impl.common.fl, estimate.analysis_seconds};
   // The pattern, to recognize the matrix (or a copy of it) in Factorize(); without the values
   // (a third of a copy of `a`).
   SparseMatrix compressed;
@@ -1286,7 +1278,7 @@ SolveSummary CholmodSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b
     return impl.FinishSolve(b, x);
   }
 
-  HARAP_CHECK(!impl.rows_released, "cholmod: the factor's rows were released for the tree solve");
+  HARAP_CHECK(!impl.rows_released(), "cholmod: the factor's rows were released for the tree solve");
   // B wraps b's memory; cholmod_solve2 only reads it (permuting it into the Y workspace).
   cholmod_dense rhs{};
   rhs.nrow = static_cast<size_t>(b.rows());

@@ -159,20 +159,13 @@ bool MeshOrdering::IsToNew(const Positions& input, const Positions& renumbered) 
 bool MeshOrdering::IsToNew(const Rotations& input, bool per_element,
                            const Rotations& renumbered) const {
   const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  // ToNew passes a rotation list of another size through unchanged.
-  if (input.size() != old.size()) {
-    if (renumbered.size() != input.size()) return false;
-    for (size_t k = 0; k < input.size(); ++k) {
-      for (int e = 0; e < 9; ++e) {
-        if (!SameBits(renumbered[k].data()[e], input[k].data()[e])) return false;
-      }
-    }
-    return true;
-  }
-  if (renumbered.size() != old.size()) return false;
-  for (size_t k = 0; k < old.size(); ++k) {
+  // ToNew passes a rotation list of another size through unchanged; else both have old's size.
+  const bool passed_through = input.size() != old.size();
+  if (renumbered.size() != input.size()) return false;
+  for (size_t k = 0; k < renumbered.size(); ++k) {
+    const Rotation& source = passed_through ? input[k] : input[old[k]];
     for (int e = 0; e < 9; ++e) {
-      if (!SameBits(renumbered[k].data()[e], input[old[k]].data()[e])) return false;
+      if (!SameBits(renumbered[k].data()[e], source.data()[e])) return false;
     }
   }
   return true;
