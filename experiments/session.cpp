@@ -119,10 +119,8 @@ DeformOutcome SessionOutcome(const ConfiguredSession& session, const Scenario& s
   if (factory.made_hierarchy()) outcome.hierarchy = factory.hierarchy_name();
   if (factory.made_upsampler()) outcome.upsampler = factory.upsampler_name();
   for (const LevelResult& level : result.levels) {
-    outcome.level_solvers.push_back(factory.solver_name_for(level.unknowns));
-    // Creating a solver is cheap (no factorization); it knows whether it is direct.
-    outcome.level_solver_direct.push_back(
-        factory.MakeLinearSolver(level.level, level.unknowns)->is_direct());
+    outcome.level_solvers.push_back(factory.solver_used(level.level, level.unknowns));
+    outcome.level_solver_direct.push_back(factory.solver_direct(level.level, level.unknowns));
   }
   outcome.threads = session.threads();
   outcome.result = std::move(result);

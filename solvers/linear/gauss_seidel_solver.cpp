@@ -71,40 +71,39 @@ GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(const ConfigNo
 void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& context) {
   const SparseMatrix a = iterative::CompressedCopy(a_in);
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "gauss_seidel");
-  rows_ = static_cast<Index>(a.rows());
 
   // Sweep order: by colour, and by row within a colour (keeps the rows' memory locality).
-  order_.resize(rows_);
+  order_.resize(rows());
   color_begin_.assign(1, 0);
-  if (options_.ordering == Ordering::kColored && rows_ > 0) {
+  if (options_.ordering == Ordering::kColored && rows() > 0) {
     int num_colors = 0;
     const std::vector<int> color = GreedyColoring(a, num_colors);
     color_begin_.assign(num_colors + 1, 0);
-    for (Index i = 0; i < rows_; ++i) ++color_begin_[color[i] + 1];
+    for (Index i = 0; i < rows(); ++i) ++color_begin_[color[i] + 1];
     for (int c = 0; c < num_colors; ++c) color_begin_[c + 1] += color_begin_[c];
     std::vector<Index> next(color_begin_.begin(), color_begin_.end() - 1);
-    for (Index i = 0; i < rows_; ++i) order_[next[color[i]]++] = i;
+    for (Index i = 0; i < rows(); ++i) order_[next[color[i]]++] = i;
   } else {
-    for (Index i = 0; i < rows_; ++i) order_[i] = i;
-    color_begin_.push_back(rows_);
+    for (Index i = 0; i < rows(); ++i) order_[i] = i;
+    color_begin_.push_back(rows());
   }
-  std::vector<Index> position(rows_);
-  for (Index k = 0; k < rows_; ++k) position[order_[k]] = k;
+  std::vector<Index> position(rows());
+  for (Index k = 0; k < rows(); ++k) position[order_[k]] = k;
 
   // Off-diagonal rows in sweep order (row i of A is column i: A is symmetric).
-  offsets_.assign(rows_ + 1, 0);
-  for (Index k = 0; k < rows_; ++k) {
+  offsets_.assign(rows() + 1, 0);
+  for (Index k = 0; k < rows(); ++k) {
     const Index i = order_[k];
     Index count = 0;
     for (SparseMatrix::InnerIterator it(a, i); it; ++it) count += it.row() != i ? 1 : 0;
     offsets_[k + 1] = offsets_[k] + count;
   }
-  columns_.resize(offsets_[rows_]);
-  values_.resize(offsets_[rows_]);
-  diagonal_.resize(rows_);
-  inverse_diagonal_.resize(rows_);
+  columns_.resize(offsets_[rows()]);
+  values_.resize(offsets_[rows()]);
+  diagonal_.resize(rows());
+  inverse_diagonal_.resize(rows());
   context.Run([&] {
-    ForRows(rows_, [&](Index k) {
+    ForRows(rows(), [&](Index k) {
       const Index i = order_[k];
       Index p = offsets_[k];
       for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
@@ -144,9 +143,9 @@ void GaussSeidelSolver::RunSweep(const double* b, double* x, const std::array<bo
                                  bool backward) const {
   if (options_.ordering == Ordering::kNatural) {
     if (!backward) {
-      UpdateRows<K>(0, rows_, b, x, active);
+      UpdateRows<K>(0, rows(), b, x, active);
     } else {
-      for (Index k = rows_ - 1; k >= 0; --k) UpdateRows<K>(k, k + 1, b, x, active);
+      for (Index k = rows() - 1; k >= 0; --k) UpdateRows<K>(k, k + 1, b, x, active);
     }
     return;
   }
@@ -175,7 +174,7 @@ void GaussSeidelSolver::RunSweep(const double* b, double* x, const std::array<bo
 
 template <int K>
 ColumnValues GaussSeidelSolver::SquaredResidual(const double* b, const double* x) const {
-  return SumRows<1>(rows_, [&](Index k, auto& sums) {
+  return SumRows<1>(rows(), [&](Index k, auto& sums) {
     double r[K];
     for (int c = 0; c < K; ++c) r[c] = b[k * K + c] - diagonal_[k] * x[k * K + c];
     for (Index p = offsets_[k]; p < offsets_[k + 1]; ++p) {
@@ -189,9 +188,9 @@ ColumnValues GaussSeidelSolver::SquaredResidual(const double* b, const double* x
 template <int K>
 SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixXd>& b_in,
                                            Eigen::Ref<Eigen::MatrixXd> x_out, Eigen::Index first) {
-  double* b = b_.Reserve(rows_, K);
-  double* x = x_.Reserve(rows_, K);
-  const ColumnValues squared_b = SumRows<1>(rows_, [&](Index k, auto& sums) {
+  double* b = b_.Reserve(rows(), K);
+  double* x = x_.Reserve(rows(), K);
+  const ColumnValues squared_b = SumRows<1>(rows(), [&](Index k, auto& sums) {
     for (int c = 0; c < K; ++c) {
       b[k * K + c] = b_in(order_[k], first + c);
       x[k * K + c] = x_out(order_[k], first + c);
@@ -231,7 +230,7 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
                     solver_checks::kNotPositiveDefiniteAdvice));
   }
   summary.relative_residual = convergence.max_relative_residual();
-  ForRows(rows_, [&](Index k) {
+  ForRows(rows(), [&](Index k) {
     for (int c = 0; c < K; ++c) x_out(order_[k], first + c) = x[k * K + c];
   });
   return summary;

@@ -69,7 +69,6 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
   iterative::ColumnValues SquaredResidual(const double* b, const double* x) const;
 
   Options options_;
-  Index rows_ = 0;
   // The matrix in sweep order: row k of the stored matrix is row order_[k] of A.
   std::vector<Index> order_;
   std::vector<Index> color_begin_;  ///< Rows [color_begin_[c], color_begin_[c+1]) share colour c.

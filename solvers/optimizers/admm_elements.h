@@ -113,9 +113,6 @@ class AdmmLevelSolver final : public LevelSolver {
   /// Σ_t vol_t ‖F_t − R_t‖² of `u` (weight-0 elements left out) and the inverted-element count.
   double Evaluate(const Positions& u, Index& inverted, const Context& context) const;
 
-  const ConstrainedSystem& system() const { return *system_; }
-  Index dropped_elements() const { return dropped_; }
-
  private:
   /// The P phase's per-element part: gradients of the barycentric coordinates, rest volumes and
   /// weights (degenerate and, with `drop_misoriented`, misoriented elements get weight 0).

@@ -2,8 +2,6 @@
 #include "solvers/optimizers/deformation_session.h"
 
 #include <fmt/format.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -55,10 +53,9 @@ std::string_view SessionOptions::FrameStartName(FrameStart start) {
 
 struct DeformationSession::Level {
   std::unique_ptr<LevelSolver> solver;
-  LevelConstraints constraints;  ///< coarse levels (the mesh's numbering)
-  LevelState state;              ///< the last solution, in the mesh's numbering
+  LevelState state;  ///< the last solution, in the mesh's numbering
   bool has_solution = false;
-  /// Coarse levels: `constraints.mean_target` is not yet mapped from the current targets.
+  /// Coarse levels: the solver's mean targets are not yet mapped from the current targets.
   bool targets_stale = false;
   /// The session's problem version `state` solves (DeformationSession::version_).
   long long version = -1;
@@ -267,10 +264,10 @@ HandleEditResult DeformationSession::ConstrainLevels() {
       summary = solver.Constrain(LevelConstraints::Exact(finest, mesh_.planar), factory, context_);
     } else {
       // As the hierarchical optimizer's level setup: clusters holding a handle are constrained.
-      level.constraints = MapConstraints(hierarchy_, l, finest);
+      const LevelConstraints mapped = MapConstraints(hierarchy_, l, finest);
       level.targets_stale = false;
-      constrained = static_cast<Index>(level.constraints.vertices.size());
-      summary = solver.Constrain(level.constraints, factory, context_);
+      constrained = static_cast<Index>(mapped.vertices.size());
+      summary = solver.Constrain(mapped, factory, context_);
     }
     done[l] = HandleEditResult::Level{
         l, constrained, summary.changed_rows, summary.factored, summary.route, summary.seconds};
@@ -327,9 +324,8 @@ void DeformationSession::UpdateCoarseTargets(int l) {
   Level& level = *levels_[l];
   if (l == 0 || !level.targets_stale) return;
   // The constrained vertices are the same (same handles): only the mean targets move.
-  level.constraints.mean_target =
-      MapConstraints(hierarchy_, l, Constraints{handles_, targets_}).mean_target;
-  level.solver->MoveTargets(level.constraints.mean_target);
+  level.solver->MoveTargets(
+      MapConstraints(hierarchy_, l, Constraints{handles_, targets_}).mean_target);
   level.targets_stale = false;
 }
 
@@ -421,16 +417,8 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
     preview_coarse_rotations_ = cur->rotations;
     return true;
   } else if (straight && l == 0) {
-    const Rotations& coarse = cur->rotations;
     if (work.positions.rows() != mesh_.num_vertices()) work.positions = start_positions_;
-    work.rotations.resize(preview_map_.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, preview_map_.size(), 4096),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t v = range.begin(); v != range.end(); ++v) {
-                          const Index c = preview_map_[v];
-                          work.rotations[v] = c == kNoVertex ? Rotation::Identity() : coarse[c];
-                        }
-                      });
+    GatherRotations(preview_map_, cur->rotations, work.rotations, context);
     return true;
   } else if (l == top) {
     Level* level = levels_[l].get();

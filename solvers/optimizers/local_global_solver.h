@@ -177,10 +177,6 @@ class LocalGlobalSolver final : public LevelSolver {
   /// The level's energy; it works in the internal numbering of ordering().
   const Energy& energy() const { return *energy_; }
   const MeshOrdering& ordering() const { return ordering_; }
-  /// The constrained system (Constrain() must have been called).
-  const GlobalStepSystem& system() const { return *system_; }
-  bool constrained() const { return system_ != nullptr; }
-  const LocalGlobalOptions& options() const { return options_; }
 
  private:
   RunResult Iterate(LevelState& state, bool start_with_global_step,
