@@ -43,13 +43,16 @@ const std::vector<Preset>& Presets() {
        "the fastest configuration measured at tolerance 1e-6: the hierarchical optimizer with "
        "the adaptive solver on the input mesh's level, expecting 4 global steps there (from the "
        "up-sampled start), so that CHOLMOD's analysis picks warm-started CG where factoring "
-       "costs more than that; Cholesky on the coarse levels, whose solutions must be accurate "
-       "(paper Section 5.2); fixed coarse constraint targets and Anderson acceleration (5), "
+       "costs more than that, and if it factors, solves with the supernodal factor itself "
+       "(converting it for faster solves does not pay off in so few); Cholesky on the coarse "
+       "levels, whose solutions must be accurate (paper Section 5.2); fixed coarse constraint "
+       "targets and Anderson acceleration (5), "
        "which then takes effect and halves the coarse levels' iterations (docs/results.md, "
        "issue 23)",
        {{"optimizer.type", "\"hierarchical\""}},
        {{"solver.level_0.type", "\"adaptive\""},
         {"solver.level_0.expected_solves", "4"},
+        {"solver.level_0.direct.mode", "\"supernodal\""},
         {"optimizer.update_constraints", "false"}},
        {{"optimizer.anderson", "5"}}},
       {"hierarchical",
@@ -89,10 +92,15 @@ std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
   const auto apply = [&](const std::vector<std::pair<std::string, std::string>>& settings) {
     for (const auto& [key, value] : settings) {
       if (Sets(config, key)) continue;
-      // An option of a table whose type the preset chose applies only to that type: another
-      // type chosen by the user would reject it.
-      const std::string table = key.substr(0, key.rfind('.'));
-      const std::string type = preset_type(table);
+      // An option in a table whose type the preset chose (or in a subtable of it, e.g.
+      // solver.level_0.direct) applies only to that type: another type chosen by the user would
+      // reject it.
+      std::string table = key.substr(0, key.rfind('.'));
+      std::string type = preset_type(table);
+      while (type.empty() && table.find('.') != std::string::npos) {
+        table.resize(table.rfind('.'));
+        type = preset_type(table);
+      }
       if (!type.empty() && key != table + ".type" &&
           fmt::format("\"{}\"", TableAt(config, table).Get("type", std::string(),
                                                              "which piece to use")) != type) {

@@ -28,6 +28,8 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
   const ConfigNode level0 = config.Child("solver").Child("level_0");
   CHECK(level0.Get("type", std::string(), "") == "adaptive");
   CHECK(level0.Get("expected_solves", 0.0, "") == 4.0);
+  // If it factors, it solves with the supernodal factor (few solves: no conversion).
+  CHECK(level0.Child("direct").Get("mode", std::string(), "") == "supernodal");
   // Fixed coarse targets, so that Anderson acceleration takes effect on the coarse levels.
   CHECK_FALSE(config.Child("optimizer").Get("update_constraints", true, ""));
   CHECK(config.Child("optimizer").Get("anderson", 0, "") == 5);
@@ -56,6 +58,7 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   flags.settings = {"solver.level_0.type=\"cg\""};
   const ConfigNode cg = flags.BuildConfig();
   CHECK_FALSE(cg.Child("solver").Child("level_0").Has("expected_solves"));
+  CHECK_FALSE(cg.Child("solver").Child("level_0").Has("direct"));  // nor its subtables
   const Registries registries = MakeBuiltinRegistries();
   CHECK_NOTHROW(RegistryComponentFactory(registries, flags.BuildConfig()));
   // Another level solver: local_global's options (anderson) are left out, the rest stays.

@@ -3,6 +3,9 @@
 // final state from the level's kept internal copy instead of making another one.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -29,6 +32,63 @@ Rotations RandomRotations(size_t count, unsigned seed) {
 }
 
 }  // namespace
+
+TEST_CASE("vertex ordering: a Morton order of the vertices, elements by their first vertex",
+          "[optimizers]") {
+  // Vertices along the z-order curve, ties (equal positions) in input order; elements by their
+  // smallest new vertex index, ties in input order (the radix and counting sorts must give
+  // what sorting the (key, index) pairs gave).
+  Mesh mesh = Jittered(Grid(13, 11), 13, 0.3, 7);
+  {  // in a random order, so that locality has something to improve
+    std::vector<Index> to(mesh.num_vertices());
+    std::iota(to.begin(), to.end(), Index{0});
+    std::shuffle(to.begin(), to.end(), std::mt19937(3));
+    Positions shuffled(mesh.num_vertices(), 3);
+    for (Index v = 0; v < mesh.num_vertices(); ++v) shuffled.row(to[v]) = mesh.vertices.row(v);
+    mesh.vertices = shuffled;
+    for (Index e = 0; e < mesh.num_elements(); ++e) {
+      for (int a = 0; a < 3; ++a) mesh.elements(e, a) = to[mesh.elements(e, a)];
+    }
+  }
+  mesh.vertices.row(5) = mesh.vertices.row(40);  // ties
+  mesh.vertices.row(77) = mesh.vertices.row(40);
+  const MeshOrdering ordering = LocalityOrdering(mesh);
+  const Index n = mesh.num_vertices();
+  REQUIRE(static_cast<Index>(ordering.old_vertex.size()) == n);
+  std::vector<Index> seen(n, 0);
+  for (Index k = 0; k < n; ++k) {
+    ++seen[ordering.old_vertex[k]];
+    CHECK(ordering.new_vertex[ordering.old_vertex[k]] == k);
+    CHECK(ordering.mesh.vertices.row(k) == mesh.vertices.row(ordering.old_vertex[k]));
+  }
+  CHECK(std::count(seen.begin(), seen.end(), 1) == n);
+  // The tied vertices are consecutive, in input order.
+  CHECK(ordering.new_vertex[40] == ordering.new_vertex[5] + 1);
+  CHECK(ordering.new_vertex[77] == ordering.new_vertex[40] + 1);
+  // Neighbours in the mesh are nearer in the new numbering than in the shuffled one.
+  double old_span = 0.0, new_span = 0.0;
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < 3; ++a) {
+      const Index v = mesh.elements(e, a), w = mesh.elements(e, (a + 1) % 3);
+      old_span += std::abs(v - w);
+      new_span += std::abs(ordering.new_vertex[v] - ordering.new_vertex[w]);
+    }
+  }
+  CHECK(new_span < old_span);
+  Index previous_first = -1, previous_element = -1;
+  for (Index k = 0; k < mesh.num_elements(); ++k) {
+    const Index e = ordering.old_element[k];
+    CHECK(ordering.new_element[e] == k);
+    const Index first = ordering.mesh.elements.row(k).minCoeff();
+    CHECK(first >= previous_first);
+    if (first == previous_first) CHECK(e > previous_element);
+    previous_first = first;
+    previous_element = e;
+    for (int a = 0; a < 3; ++a) {
+      CHECK(ordering.mesh.elements(k, a) == ordering.new_vertex[mesh.elements(e, a)]);
+    }
+  }
+}
 
 TEST_CASE("vertex ordering: IsToNew recognizes exactly the renumbered copy", "[optimizers]") {
   const Mesh mesh = Jittered(Grid(9, 7), 9, 0.2, 3);
