@@ -146,19 +146,23 @@ void RotationDerivativeProduct(benchmark::State& state, std::string key) {
 }
 
 ConfigNode SolverOptions(const std::string& mode, const std::string& ordering,
-                         bool parallel_solve = true, int native_threads = 1) {
+                         bool parallel_solve = true, int native_threads = 1,
+                         const std::string& numeric = "parallel") {
   ConfigNode options;
   options.Set("mode", fmt::format("\"{}\"", mode));
   options.Set("ordering", fmt::format("\"{}\"", ordering));
   options.Set("parallel_solve", parallel_solve ? "true" : "false");
   options.Set("native_threads", std::to_string(native_threads));
+  options.Set("numeric", fmt::format("\"{}\"", numeric));
   return options;
 }
 
 void Factorization(benchmark::State& state, std::string key, std::string mode,
-                   std::string ordering, bool parallel_solve, int native_threads) {
+                   std::string ordering, bool parallel_solve, int native_threads,
+                   std::string numeric) {
   Fixture& f = Get(key);
-  const ConfigNode options = SolverOptions(mode, ordering, parallel_solve, native_threads);
+  const ConfigNode options =
+      SolverOptions(mode, ordering, parallel_solve, native_threads, numeric);
   for (auto _ : state) {
     auto solver = f.registries.linear_solvers.Create("cholmod", options);
     solver->Factorize(f.system->reduced_matrix(), f.context);
@@ -367,29 +371,35 @@ void RegisterAll(const std::string& key) {
     for (const char* mode : {"auto", "simplicial", "supernodal"}) {
       const std::string suffix = std::string(mode) + "_" + ordering;
       add("Factorization_" + suffix, Factorization, key, std::string(mode), std::string(ordering),
-          true, 1);
+          true, 1, std::string("parallel"));
       add("Solve3_" + suffix, Solve, key, std::string(mode), std::string(ordering), true);
       if (std::string_view(mode) != "supernodal") {
         // CHOLMOD's own sequential solve with the same factor, for the side-by-side ratio.
         add("Factorization_" + suffix + "_sequential", Factorization, key, std::string(mode),
-            std::string(ordering), false, 1);
+            std::string(ordering), false, 1, std::string("parallel"));
         add("Solve3_" + suffix + "_sequential", Solve, key, std::string(mode),
             std::string(ordering), false);
       }
     }
   }
+  // CHOLMOD's own numeric factorization (cholmod_factorize) beside harap's (numeric =
+  // "parallel", the default: the same values, no permuted copies of A, subtrees on the threads).
+  for (const char* mode : {"auto", "supernodal"}) {
+    add("Factorization_" + std::string(mode) + "_amd_cholmod_numeric", Factorization, key,
+        std::string(mode), std::string("amd"), true, 1, std::string("cholmod"));
+  }
   // CHOLMOD's own threads (OpenMP, OpenBLAS) on, beside the default native_threads = 1.
   add("Factorization_auto_amd_native_threads", Factorization, key, std::string("auto"),
-      std::string("amd"), true, 0);
+      std::string("amd"), true, 0, std::string("parallel"));
   add("Factorization_supernodal_amd_native_threads", Factorization, key,
-      std::string("supernodal"), std::string("amd"), true, 0);
+      std::string("supernodal"), std::string("amd"), true, 0, std::string("parallel"));
   // Two native threads (OpenMP and OpenBLAS on both cores of the 2-core VM), for a factorization
   // that has the machine to itself (classic's one level), and CHOLMOD's default ordering choice.
   for (const char* mode : {"auto", "supernodal"}) {
     add("Factorization_" + std::string(mode) + "_amd_2_native_threads", Factorization, key,
-        std::string(mode), std::string("amd"), true, 2);
+        std::string(mode), std::string("amd"), true, 2, std::string("parallel"));
     add("Factorization_" + std::string(mode) + "_best", Factorization, key, std::string(mode),
-        std::string("best"), true, 1);
+        std::string("best"), true, 1, std::string("parallel"));
   }
   add("ConcurrentFactorizations", ConcurrentFactorizations, key, 1);
   add("ConcurrentFactorizations_native_threads", ConcurrentFactorizations, key, 0);

@@ -396,15 +396,66 @@ struct CholmodSolver::Impl {
     cholmod_finish(&common);
   }
 
-  // Numeric supernodal factorization of `view` into the kept `super` (its analysis), left as
-  // the supernodal LLᵀ (final_asis) for partial refactorization; on failure `super` becomes
-  // `factor` so ThrowOnFailure reports the failed pivot.
-  void FactorizeKeptSupernodal(cholmod_sparse& view, const SparseMatrix& a) {
-    const int final_asis = common.final_asis;
-    common.final_asis = 1;  // keep the supernodal LLᵀ factor
-    cholmod_factorize(&view, super, &common);
-    common.final_asis = final_asis;
-    if (common.status != CHOLMOD_OK && common.status != CHOLMOD_DSMALL) {
+  // The numeric supernodal LLᵀ factorization of `a` into `f` (a supernodal analysis, or a
+  // numeric supernodal factor of the same analysis), as cholmod_factorize's supernodal step
+  // computes it: PartialSupernodalFactor::FactorAll runs the same left-looking algorithm
+  // (bit-identical values) with independent subtrees on the context's threads, and reads A
+  // through the permutation instead of making the permuted copies of A that cholmod_factorize
+  // makes first (dragon-lift's finest level: 0.26 s instead of 0.59 s, one thread; see
+  // docs/results.md). With native_threads ≠ 1 the BLAS has threads of its own: one thread here.
+  // numeric = "cholmod": cholmod_factorize itself. False, with common.status and f->minor set as
+  // CHOLMOD sets them, on failure.
+  bool FactorSupernodal(cholmod_factor* f, cholmod_sparse& view, const SparseMatrix& a,
+                        const Context& context) {
+    if (options.numeric == Numeric::kCholmod) {
+      const int final_asis = common.final_asis;
+      common.final_asis = 1;  // keep the supernodal LLᵀ factor
+      cholmod_factorize(&view, f, &common);
+      common.final_asis = final_asis;
+      return common.status == CHOLMOD_OK || common.status == CHOLMOD_DSMALL;
+    }
+    if (f->xtype == CHOLMOD_PATTERN &&
+        !cholmod_change_factor(CHOLMOD_REAL, /*to_ll=*/1, /*to_super=*/1, /*to_packed=*/1,
+                               /*to_monotonic=*/1, f, &common)) {
+      return false;  // out of memory (common.status says so)
+    }
+    const int n = static_cast<int>(f->n);
+    const auto* perm = static_cast<const int*>(f->Perm);
+    std::vector<int> inverse(n);
+    for (int j = 0; j < n; ++j) inverse[perm ? perm[j] : j] = j;
+    SupernodalFactorView layout;
+    layout.n = n;
+    layout.num_supernodes = static_cast<int>(f->nsuper);
+    layout.first = static_cast<const int*>(f->super);
+    layout.row_start = static_cast<const int*>(f->pi);
+    layout.value_start = static_cast<const int*>(f->px);
+    layout.row = static_cast<const int*>(f->s);
+    layout.value = static_cast<double*>(f->x);
+    layout.permutation = perm;
+    const int threads = options.native_threads == 1 ? context.arena->max_concurrency() : 1;
+    PartialSupernodalFactor numeric;
+    // Each thread needs its own BLAS work buffer (see EnsureBlasWorkBuffer).
+    const int bad_column = context.Run(
+        [&] { return numeric.FactorAll(layout, a, inverse, threads, &EnsureBlasWorkBuffer); });
+    info.numeric_subtrees = numeric.subtrees();
+    info.numeric_subtree_work = numeric.subtree_work_fraction();
+    info.numeric_largest_subtree = numeric.largest_subtree_fraction();
+    if (bad_column >= 0) {
+      f->minor = static_cast<size_t>(bad_column);
+      common.status = CHOLMOD_NOT_POSDEF;
+      return false;
+    }
+    f->minor = f->n;
+    common.status = CHOLMOD_OK;
+    return true;
+  }
+
+  // Numeric supernodal factorization of `a` into the kept `super` (its analysis), left as the
+  // supernodal LLᵀ for partial refactorization; on failure `super` becomes `factor` so
+  // ThrowOnFailure reports the failed pivot.
+  void FactorizeKeptSupernodal(cholmod_sparse& view, const SparseMatrix& a,
+                               const Context& context) {
+    if (!FactorSupernodal(super, view, a, context)) {
       FreeFactor();
       factor = super;
       super = nullptr;
@@ -488,23 +539,17 @@ struct CholmodSolver::Impl {
   // factorization into `super` (a copy of the analysis), then `factor` made from a copy of it as
   // cholmod_factorize makes it (cholmod_change_factor to a packed simplicial LDLᵀ, then
   // cholmod_resymbol to drop the relaxed supernodes' zeros): the same values.
-  void FactorNumericKeepingSuper(cholmod_sparse& view, const SparseMatrix& a) {
+  void FactorNumericKeepingSuper(cholmod_sparse& view, const SparseMatrix& a,
+                                 const Context& context) {
     const Stopwatch clock;
     FreeSuper();
     super = cholmod_copy_factor(factor, &common);
     ThrowOnFailure("copy of the analysis", a);
-    FactorizeKeptSupernodal(view, a);
+    FactorizeKeptSupernodal(view, a, context);
     FreeFactor();
     factor = cholmod_copy_factor(super, &common);
     ThrowOnFailure("copy of the factor", a);
-    if (!cholmod_change_factor(CHOLMOD_REAL, common.final_ll, common.final_super, common.final_pack,
-                               common.final_monotonic, factor, &common)) {
-      ThrowOnFailure("conversion of the factor", a);
-    }
-    if (common.final_resymbol && !factor->is_super &&
-        !cholmod_resymbol(&view, nullptr, 0, common.final_pack, factor, &common)) {
-      ThrowOnFailure("symbolic refactorization", a);
-    }
+    ConvertToFinal(view, a);
     super_current = true;
     partial.Setup(SuperView());
     info.numeric_seconds = clock.Seconds();
@@ -555,12 +600,35 @@ struct CholmodSolver::Impl {
   }
   bool prepared_for_refactor = false;
 
-  // The numeric factorization of `view` into `factor` (symbolic on entry), timed.
-  void FactorNumeric(cholmod_sparse& view, const SparseMatrix& a) {
+  // The numeric factorization of `view` into `factor` (symbolic on entry), timed: a supernodal
+  // analysis by FactorSupernodal(), then converted to the final kind as cholmod_factorize
+  // converts it (mode auto: a packed simplicial LDLᵀ without the relaxed supernodes' zeros), a
+  // simplicial one by cholmod_factorize.
+  void FactorNumeric(cholmod_sparse& view, const SparseMatrix& a, const Context& context) {
     const Stopwatch clock;
-    cholmod_factorize(&view, factor, &common);
-    ThrowOnFailure("factorization", a);
+    if (factor->is_super) {
+      FactorSupernodal(factor, view, a, context);
+      ThrowOnFailure("factorization", a);
+      ConvertToFinal(view, a);
+    } else {
+      cholmod_factorize(&view, factor, &common);
+      ThrowOnFailure("factorization", a);
+    }
     info.numeric_seconds = clock.Seconds();
+  }
+
+  // What cholmod_factorize does after a supernodal factorization unless final_asis: the
+  // conversion to the final kind of factor, and the re-symbolic pass of a simplicial one.
+  void ConvertToFinal(cholmod_sparse& view, const SparseMatrix& a) {
+    if (common.final_asis) return;
+    if (!cholmod_change_factor(CHOLMOD_REAL, common.final_ll, common.final_super, common.final_pack,
+                               common.final_monotonic, factor, &common)) {
+      ThrowOnFailure("conversion of the factor", a);
+    }
+    if (common.final_resymbol && !factor->is_super &&
+        !cholmod_resymbol(&view, nullptr, 0, common.final_pack, factor, &common)) {
+      ThrowOnFailure("symbolic refactorization", a);
+    }
   }
 
   // Mode auto's numeric refactorization into the current simplicial LDLᵀ factor's own arrays:
@@ -571,7 +639,8 @@ struct CholmodSolver::Impl {
   // analysis, so neither the conversion's copy nor the re-symbolic pass is needed, and the
   // solve's plan stays valid. Returns false, before changing anything, if the factor is not
   // such a factor; throws like Factorize() (leaving the supernodal factor for the message).
-  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a) {
+  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a,
+                            const Context& context) {
     if (options.mode != Mode::kAuto || symbolic == nullptr || !symbolic->is_super ||
         factor == nullptr || factor->is_super || factor->is_ll || factor->n != symbolic->n) {
       return false;
@@ -588,7 +657,7 @@ struct CholmodSolver::Impl {
       }
     }
     super_current = false;
-    FactorizeKeptSupernodal(view, a);
+    FactorizeKeptSupernodal(view, a, context);
     const bool matches = CopySuperToSimplicial(/*all=*/true);
     if (keeps_super() && matches) {
       super_current = true;
@@ -799,6 +868,10 @@ constexpr EnumNames<CholmodSolver::Ordering, 3> kOrderingNames = {{
     {CholmodSolver::Ordering::kAmd, "amd"},
     {CholmodSolver::Ordering::kBest, "best"},
 }};
+constexpr EnumNames<CholmodSolver::Numeric, 2> kNumericNames = {{
+    {CholmodSolver::Numeric::kParallel, "parallel"},
+    {CholmodSolver::Numeric::kCholmod, "cholmod"},
+}};
 constexpr EnumNames<CholmodSolver::RefactorChoice, 5> kRefactorNames = {{
     {CholmodSolver::RefactorChoice::kAuto, "auto"},
     {CholmodSolver::RefactorChoice::kFull, "full"},
@@ -832,6 +905,11 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
       "(mode auto; keeps the supernodal factor); auto = the cheapest of these by estimates from "
       "the factor's elimination tree and measured times; full = factor from scratch (keeps no "
       "copies)");
+  options.numeric = node.GetEnum(
+      "numeric", options.numeric, kNumericNames,
+      "who computes a supernodal numeric factorization: parallel = harap's left-looking "
+      "factorization (CHOLMOD's algorithm and values, independent subtrees on the run's threads, "
+      "no permuted copies of A); cholmod = cholmod_factorize");
   options.native_threads = node.Get(
       "native_threads", options.native_threads,
       "threads for CHOLMOD's OpenMP loops and its BLAS (0: as the environment sets them; harap's "
@@ -923,10 +1001,10 @@ void CholmodSolver::FactorizeImpl(const SparseMatrix& a, const Context& context)
     impl.info.analysis_seconds += copy_clock.Seconds();
   }
   if (impl.keeps_super() && impl.factor->is_super) {
-    impl.FactorNumericKeepingSuper(view, a);
+    impl.FactorNumericKeepingSuper(view, a, context);
     impl.info.refactor_bytes += static_cast<double>(impl.super->xsize) * sizeof(double);
   } else {
-    impl.FactorNumeric(view, a);
+    impl.FactorNumeric(view, a, context);
   }
   impl.FinishFactor(a, diagonal, context);
 }
@@ -1126,7 +1204,7 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
     if (impl.options.mode != Mode::kSimplicial && !EnsureBlasWorkBuffer()) return full();
     const ScopedNativeThreads native_threads(impl.options.native_threads);
     cholmod_sparse view = LowerTriangleView(a);
-    if (impl.FactorNumericInPlace(view, a)) {
+    if (impl.FactorNumericInPlace(view, a, context)) {
       impl.FinishFactor(a, diagonal, context, /*same_arrays=*/true);
     } else {
       // E.g. a factor whose pattern updates changed: factored from a copy of the analysis
@@ -1135,10 +1213,10 @@ LinearSolver::RefactorSummary CholmodSolver::RefactorImpl(const SparseMatrix& a,
       impl.factor = cholmod_copy_factor(impl.symbolic, &impl.common);
       impl.ThrowOnFailure("copy of the analysis", a);
       if (impl.keeps_super()) {
-        impl.FactorNumericKeepingSuper(view, a);
+        impl.FactorNumericKeepingSuper(view, a, context);
       } else {
         impl.FreeSuper();
-        impl.FactorNumeric(view, a);
+        impl.FactorNumeric(view, a, context);
       }
       impl.FinishFactor(a, diagonal, context, /*same_arrays=*/false, /*same_pattern=*/true);
     }

@@ -5,7 +5,12 @@
 
 #include "solvers/linear/partial_supernodal_factor.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <utility>
 
 #include "framework/error.h"
 
@@ -96,89 +101,245 @@ int PartialSupernodalFactor::Refactor(const SupernodalFactorView& f, const Spars
                                       const std::vector<int>& inverse_permutation) {
   HARAP_CHECK(f.n == n_ && f.num_supernodes == num_supernodes_,
               "the factor's structure changed since Setup()");
+  head_.assign(num_supernodes_, -1);
+  next_.resize(num_supernodes_);
+  position_.resize(num_supernodes_);
+  workspace_.map.resize(n_);
+  above_pieces_.clear();
+  for (int s = 0; s < num_supernodes_; ++s) {
+    const int bad = FactorSupernode(s, marked_[s] != 0, f, a, inverse_permutation, workspace_,
+                                    nullptr);
+    if (bad >= 0) return bad;
+  }
+  return -1;
+}
+
+void PartialSupernodalFactor::Link(int d, int ancestor, Piece* piece) {
+  if (piece != nullptr && above_pieces_[ancestor]) {
+    // Replayed in this order when the piece is spliced in (FactorAll): the same pushes, so the
+    // same list, as if made now.
+    piece->links.emplace_back(ancestor, d);
+  } else {
+    next_[d] = head_[ancestor];
+    head_[ancestor] = d;
+  }
+}
+
+int PartialSupernodalFactor::FactorSupernode(int s, bool recompute, const SupernodalFactorView& f,
+                                             const SparseMatrix& a,
+                                             const std::vector<int>& inverse_permutation,
+                                             Workspace& workspace, Piece* piece) {
   const int* first = f.first;
   const int* row_start = f.row_start;
   const int* value_start = f.value_start;
   const int* row = f.row;
   double* value = f.value;
+  std::vector<int>& map = workspace.map;
+  std::vector<double>& update = workspace.update;
+  const char lower = 'L', no = 'N', transposed = 'T', right = 'R';
+  const double one = 1.0, zero = 0.0;
+  const int k1 = first[s], k2 = first[s + 1];
+  const int columns = k2 - k1;
+  const int rows = row_start[s + 1] - row_start[s];
+  const int* s_row = row + row_start[s];
+  double* block = value + value_start[s];
+  if (recompute) {
+    for (int q = 0; q < rows; ++q) map[s_row[q]] = q;
+    std::fill(block, block + static_cast<size_t>(rows) * columns, 0.0);
+    // Column k of P A Pᵀ on and below the diagonal: column permutation[k] of A (both
+    // triangles stored), rows mapped to the factor's order.
+    for (int k = k1; k < k2; ++k) {
+      const Index column = f.permutation ? f.permutation[k] : k;
+      double* target = block + static_cast<size_t>(k - k1) * rows;
+      for (SparseMatrix::InnerIterator it(a, column); it; ++it) {
+        const int i = inverse_permutation[it.row()];
+        if (i >= k) target[map[i]] += it.value();
+      }
+    }
+  }
+  // Every descendant with rows in this supernode's columns: its update (if recomputing), then
+  // it moves on to the next ancestor it has rows in (CHOLMOD's left-looking lists).
+  for (int d = head_[s]; d != -1;) {
+    const int d_next = next_[d];
+    const int d_columns = first[d + 1] - first[d];
+    const int d_rows = row_start[d + 1] - row_start[d];
+    const int* d_row = row + row_start[d];
+    const int p1 = position_[d];
+    int p2 = p1;
+    while (p2 < d_rows && d_row[p2] < k2) ++p2;
+    if (recompute) {
+      // C = L_d(p1:end, :) · L_d(p1:p2, :)ᵀ, lower part of the top square by dsyrk.
+      const int m1 = p2 - p1, m2 = d_rows - p1;
+      update.resize(static_cast<size_t>(m2) * m1);
+      const double* ld = value + value_start[d];
+      dsyrk_(&lower, &no, &m1, &d_columns, &one, ld + p1, &d_rows, &zero, update.data(), &m2);
+      if (m2 > m1) {
+        const int below = m2 - m1;
+        dgemm_(&no, &transposed, &below, &m1, &d_columns, &one, ld + p2, &d_rows, ld + p1,
+               &d_rows, &zero, update.data() + m1, &m2);
+      }
+      for (int j = 0; j < m1; ++j) {
+        double* target = block + static_cast<size_t>(d_row[p1 + j] - k1) * rows;
+        const double* c = update.data() + static_cast<size_t>(j) * m2;
+        for (int i = j; i < m2; ++i) target[map[d_row[p1 + i]]] -= c[i];
+      }
+    }
+    position_[d] = p2;
+    if (p2 < d_rows) Link(d, supernode_of_[d_row[p2]], piece);
+    d = d_next;
+  }
+  if (recompute) {
+    int info = 0;
+    dpotrf_(&lower, &columns, block, &rows, &info);
+    if (info != 0) return k1 + info - 1;
+    if (rows > columns) {
+      const int below = rows - columns;
+      dtrsm_(&right, &lower, &transposed, &no, &below, &columns, &one, block, &rows,
+             block + columns, &rows);
+    }
+  }
+  position_[s] = columns;
+  if (rows > columns) Link(s, supernode_of_[s_row[columns]], piece);
+  return -1;
+}
+
+std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPieces(
+    int threads) {
+  above_pieces_.clear();
+  if (threads <= 1 || num_supernodes_ < 2) return {};
+  // Subtree work and size (children come before their parent: the tree is postordered).
+  std::vector<double> subtree_work(work_);
+  std::vector<int> subtree_size(num_supernodes_, 1);
+  std::vector<int> child_start(num_supernodes_ + 1, 0), children(num_supernodes_);
+  for (int s = 0; s < num_supernodes_; ++s) {
+    const int p = parent_[s];
+    if (p < 0) continue;
+    if (p <= s) return {};  // not postordered: no pieces (factored in order)
+    subtree_work[p] += subtree_work[s];
+    subtree_size[p] += subtree_size[s];
+    ++child_start[p + 1];
+  }
+  for (int s = 0; s < num_supernodes_; ++s) child_start[s + 1] += child_start[s];
+  {
+    std::vector<int> fill(child_start.begin(), child_start.end() - 1);
+    for (int s = 0; s < num_supernodes_; ++s) {
+      if (parent_[s] >= 0) children[fill[parent_[s]]++] = s;
+    }
+  }
+  // From the roots down: split the heaviest subtree (its root goes above the pieces, its
+  // children become candidates) until none has more than a quarter of a thread's share. The
+  // number of splits is capped (each puts a supernode in the sequential part), not the number
+  // of candidates: a mesh in many pieces (dragon-lift: 151 components, one of them almost all
+  // of the work) has many roots and still needs its large tree split.
+  const double limit = total_work_ / (4.0 * threads);
+  const auto lighter = [&](int x, int y) { return subtree_work[x] < subtree_work[y]; };
+  std::vector<int> candidates;
+  for (int s = 0; s < num_supernodes_; ++s) {
+    if (parent_[s] < 0) candidates.push_back(s);
+  }
+  std::make_heap(candidates.begin(), candidates.end(), lighter);
+  std::vector<char> above(num_supernodes_, 0);
+  int splits = 0;
+  const int max_splits = 64 * threads;
+  while (!candidates.empty() && splits < max_splits) {
+    const int r = candidates.front();
+    if (subtree_work[r] <= limit || child_start[r] == child_start[r + 1]) break;
+    std::pop_heap(candidates.begin(), candidates.end(), lighter);
+    candidates.pop_back();
+    above[r] = 1;
+    ++splits;
+    for (int c = child_start[r]; c < child_start[r + 1]; ++c) {
+      candidates.push_back(children[c]);
+      std::push_heap(candidates.begin(), candidates.end(), lighter);
+    }
+  }
+  if (candidates.size() < 2) return {};
+  above_pieces_ = std::move(above);
+  std::vector<Piece> pieces(candidates.size());
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    pieces[k].end = candidates[k] + 1;
+    pieces[k].begin = pieces[k].end - subtree_size[candidates[k]];
+    pieces[k].work = subtree_work[candidates[k]];
+  }
+  std::sort(pieces.begin(), pieces.end(),
+            [](const Piece& x, const Piece& y) { return x.begin < y.begin; });
+  return pieces;
+}
+
+int PartialSupernodalFactor::FactorAll(const SupernodalFactorView& f, const SparseMatrix& a,
+                                       const std::vector<int>& inverse_permutation, int threads,
+                                       bool (*thread_ready)()) {
+  Setup(f);
+  std::fill(marked_.begin(), marked_.end(), 1);
+  marked_count_ = num_supernodes_;
+  marked_work_ = total_work_;
   head_.assign(num_supernodes_, -1);
   next_.resize(num_supernodes_);
   position_.resize(num_supernodes_);
-  map_.resize(n_);
-  const char lower = 'L', no = 'N', transposed = 'T', right = 'R';
-  const double one = 1.0, zero = 0.0;
-  for (int s = 0; s < num_supernodes_; ++s) {
-    const int k1 = first[s], k2 = first[s + 1];
-    const int columns = k2 - k1;
-    const int rows = row_start[s + 1] - row_start[s];
-    const int* s_row = row + row_start[s];
-    double* block = value + value_start[s];
-    const bool recompute = marked_[s] != 0;
-    if (recompute) {
-      for (int q = 0; q < rows; ++q) map_[s_row[q]] = q;
-      std::fill(block, block + static_cast<size_t>(rows) * columns, 0.0);
-      // Column k of P A Pᵀ on and below the diagonal: column permutation[k] of A (both
-      // triangles stored), rows mapped to the factor's order.
-      for (int k = k1; k < k2; ++k) {
-        const Index column = f.permutation ? f.permutation[k] : k;
-        double* target = block + static_cast<size_t>(k - k1) * rows;
-        for (SparseMatrix::InnerIterator it(a, column); it; ++it) {
-          const int i = inverse_permutation[it.row()];
-          if (i >= k) target[map_[i]] += it.value();
-        }
-      }
+  workspace_.map.resize(n_);
+  std::vector<Piece> pieces = SplitIntoPieces(threads);
+  subtrees_ = static_cast<int>(pieces.size());
+  subtree_work_fraction_ = 0.0;
+  largest_subtree_fraction_ = 0.0;
+  for (const Piece& piece : pieces) {
+    subtree_work_fraction_ += piece.work;
+    largest_subtree_fraction_ = std::max(largest_subtree_fraction_, piece.work);
+  }
+  if (total_work_ > 0.0) {
+    subtree_work_fraction_ /= total_work_;
+    largest_subtree_fraction_ /= total_work_;
+  }
+  if (!pieces.empty()) {
+    // The pieces, heaviest first, on the arena's threads (each thread its own workspace).
+    std::vector<std::pair<double, size_t>> by_work;
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      by_work.emplace_back(-pieces[k].work, k);
     }
-    // Every descendant with rows in this supernode's columns: its update (if recomputing), then
-    // it moves on to the next ancestor it has rows in (CHOLMOD's left-looking lists).
-    for (int d = head_[s]; d != -1;) {
-      const int d_next = next_[d];
-      const int d_columns = first[d + 1] - first[d];
-      const int d_rows = row_start[d + 1] - row_start[d];
-      const int* d_row = row + row_start[d];
-      const int p1 = position_[d];
-      int p2 = p1;
-      while (p2 < d_rows && d_row[p2] < k2) ++p2;
-      if (recompute) {
-        // C = L_d(p1:end, :) · L_d(p1:p2, :)ᵀ, lower part of the top square by dsyrk.
-        const int m1 = p2 - p1, m2 = d_rows - p1;
-        update_.resize(static_cast<size_t>(m2) * m1);
-        const double* ld = value + value_start[d];
-        dsyrk_(&lower, &no, &m1, &d_columns, &one, ld + p1, &d_rows, &zero, update_.data(), &m2);
-        if (m2 > m1) {
-          const int below = m2 - m1;
-          dgemm_(&no, &transposed, &below, &m1, &d_columns, &one, ld + p2, &d_rows, ld + p1,
-                 &d_rows, &zero, update_.data() + m1, &m2);
-        }
-        for (int j = 0; j < m1; ++j) {
-          double* target = block + static_cast<size_t>(d_row[p1 + j] - k1) * rows;
-          const double* c = update_.data() + static_cast<size_t>(j) * m2;
-          for (int i = j; i < m2; ++i) target[map_[d_row[p1 + i]]] -= c[i];
-        }
-      }
-      position_[d] = p2;
-      if (p2 < d_rows) {
-        const int ancestor = supernode_of_[d_row[p2]];
+    std::sort(by_work.begin(), by_work.end());
+    tbb::enumerable_thread_specific<Workspace> workspaces([&] {
+      Workspace workspace;
+      workspace.map.resize(n_);
+      return workspace;
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, by_work.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        if (thread_ready != nullptr && !thread_ready()) return;
+                        Workspace& workspace = workspaces.local();
+                        for (size_t k = range.begin(); k != range.end(); ++k) {
+                          Piece& piece = pieces[by_work[k].second];
+                          piece.factored = true;
+                          for (int s = piece.begin; s < piece.end; ++s) {
+                            const int bad = FactorSupernode(s, true, f, a, inverse_permutation,
+                                                            workspace, &piece);
+                            if (bad >= 0) {
+                              piece.failed_column = bad;
+                              break;
+                            }
+                          }
+                        }
+                      });
+  }
+  // In postorder: each piece's links spliced in where the sequential loop made them, the
+  // supernodes above the pieces factored in between.
+  size_t next_piece = 0;
+  for (int s = 0; s < num_supernodes_;) {
+    if (next_piece < pieces.size() && pieces[next_piece].begin == s &&
+        pieces[next_piece].factored) {
+      const Piece& piece = pieces[next_piece++];
+      if (piece.failed_column >= 0) return piece.failed_column;
+      for (const auto& [ancestor, d] : piece.links) {
         next_[d] = head_[ancestor];
         head_[ancestor] = d;
       }
-      d = d_next;
+      s = piece.end;
+      continue;
     }
-    if (recompute) {
-      int info = 0;
-      dpotrf_(&lower, &columns, block, &rows, &info);
-      if (info != 0) return k1 + info - 1;
-      if (rows > columns) {
-        const int below = rows - columns;
-        dtrsm_(&right, &lower, &transposed, &no, &below, &columns, &one, block, &rows,
-               block + columns, &rows);
-      }
-    }
-    position_[s] = columns;
-    if (rows > columns) {
-      const int ancestor = supernode_of_[s_row[columns]];
-      next_[s] = head_[ancestor];
-      head_[ancestor] = s;
-    }
+    // A supernode above the pieces, or one of a piece no thread took: in order, as the
+    // sequential loop factors it.
+    if (next_piece < pieces.size() && pieces[next_piece].begin == s) ++next_piece;
+    const int bad = FactorSupernode(s, true, f, a, inverse_permutation, workspace_, nullptr);
+    if (bad >= 0) return bad;
+    ++s;
   }
   return -1;
 }

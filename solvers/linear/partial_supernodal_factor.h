@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "framework/types.h"
@@ -50,6 +51,11 @@ class PartialSupernodalFactor {
   /// work (flops of the left-looking factorization counted per target supernode).
   double Mark(const SupernodalFactorView& factor, const std::vector<int>& changed);
   int marked_supernodes() const { return marked_count_; }
+  /// The last FactorAll()'s independent subtrees (0: factored in order), their share of the
+  /// work and the heaviest one's share.
+  int subtrees() const { return subtrees_; }
+  double subtree_work_fraction() const { return subtree_work_fraction_; }
+  double largest_subtree_fraction() const { return largest_subtree_fraction_; }
   /// The marked supernodes' flops (as counted for Mark()).
   double marked_work() const { return marked_work_; }
   const std::vector<char>& marked() const { return marked_; }
@@ -61,7 +67,49 @@ class PartialSupernodalFactor {
   int Refactor(const SupernodalFactorView& factor, const SparseMatrix& a,
                const std::vector<int>& inverse_permutation);
 
+  /// The whole numeric factorization of `factor` (a supernodal analysis whose values need not be
+  /// initialized) for `a`, arguments as Refactor()'s; runs Setup() first. Independent subtrees
+  /// of the supernodal elimination tree are factored on up to `threads` threads of the calling
+  /// arena, the supernodes above them in order afterwards.
+  ///
+  /// Bit-identical for every thread count, and to the sequential left-looking order (which is
+  /// CHOLMOD's cholmod_super_numeric's: same values, tested): a supernode receives its
+  /// descendants' updates in the order of the lists the sequential loop builds, because the
+  /// subtrees keep their links to the supernodes above them in lists of their own that are
+  /// spliced in where the sequential loop would have made them. Returns what Refactor() returns
+  /// (the first failing column in that order).
+  ///
+  /// `thread_ready` (if set) is asked on each thread before its first dense kernel call and may
+  /// say no (e.g. no memory left for the BLAS's per-thread buffer): that thread's subtrees are
+  /// then factored by the calling thread, in order.
+  int FactorAll(const SupernodalFactorView& factor, const SparseMatrix& a,
+                const std::vector<int>& inverse_permutation, int threads,
+                bool (*thread_ready)() = nullptr);
+
  private:
+  // Per thread: the row map of the supernode being computed and the update block.
+  struct Workspace {
+    std::vector<int> map;
+    std::vector<double> update;
+  };
+  // A subtree factored on its own (FactorAll): supernodes [begin, end) in postorder, and its
+  // links to supernodes above the pieces (ancestor, descendant) in the order it made them.
+  struct Piece {
+    int begin = 0, end = 0;
+    double work = 0.0;  ///< flops, as work_ counts them
+    std::vector<std::pair<int, int>> links;
+    bool factored = false;  ///< on its own (else by the calling thread, in order)
+    int failed_column = -1;
+  };
+  // Factors (if `recompute`) supernode s after its descendants: what one step of the
+  // left-looking loop does. Links into supernodes above the pieces go to `piece`'s own list.
+  int FactorSupernode(int s, bool recompute, const SupernodalFactorView& f, const SparseMatrix& a,
+                      const std::vector<int>& inverse_permutation, Workspace& workspace,
+                      Piece* piece);
+  void Link(int d, int ancestor, Piece* piece);
+  // Subtrees of at most about total/(4 threads) work each (fewer, larger ones for one thread).
+  std::vector<Piece> SplitIntoPieces(int threads);
+
   int n_ = 0;
   int num_supernodes_ = 0;
   std::vector<int> parent_;        ///< supernodal elimination tree (-1: root)
@@ -71,9 +119,13 @@ class PartialSupernodalFactor {
   std::vector<char> marked_;
   int marked_count_ = 0;
   double marked_work_ = 0.0;
-  // Refactor() workspaces.
+  // Refactor() workspaces; head_ of a supernode above the pieces is spliced (FactorAll).
   std::vector<int> head_, next_, position_, map_;
-  std::vector<double> update_;
+  Workspace workspace_;
+  std::vector<char> above_pieces_;  ///< per supernode: 1 if above the pieces (FactorAll)
+  int subtrees_ = 0;
+  double subtree_work_fraction_ = 0.0;
+  double largest_subtree_fraction_ = 0.0;
 };
 
 }  // namespace harap

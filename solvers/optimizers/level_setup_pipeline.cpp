@@ -93,6 +93,17 @@ struct LevelSetupPipeline::State {
     changed.notify_all();
     return true;
   }
+
+  // Whether the background task will end once its current level is set up: all levels are
+  // known and none is left pending (it skips the ones others have set up). Called with the
+  // mutex held.
+  bool BackgroundEndsAfterRun() const {
+    if (!closed) return false;
+    for (const auto& [level, entry] : levels) {
+      if (entry.phase == Phase::kPending) return false;
+    }
+    return true;
+  }
 };
 
 LevelSetupPipeline::LevelSetupPipeline(std::vector<int> levels, std::function<void(int)> setup,
@@ -150,6 +161,16 @@ void LevelSetupPipeline::WaitFor(int level) {
   HARAP_CHECK(state_->levels.count(level) == 1, "level {} is not set up by this pipeline", level);
   state_->TryRun(level, lock);
   State::Level& entry = state_->levels.at(level);
+  if (entry.phase == State::Phase::kRunning && state_->arena && state_->BackgroundEndsAfterRun()) {
+    // The background task is setting `level` up and has nothing after it: waiting for the task
+    // is waiting for the level, and a task_group wait lets this thread run the setup's parallel
+    // work (its loops, its factorization's subtrees) instead of blocking while the background
+    // thread does it alone (classic runs; dragon-lift's finest level, whose setup outlasts the
+    // coarse levels' solves).
+    lock.unlock();
+    state_->arena->execute([&] { state_->group.wait(); });
+    lock.lock();
+  }
   state_->changed.wait(lock, [&] { return entry.phase == State::Phase::kDone; });
   if (entry.error) std::rethrow_exception(entry.error);
 }

@@ -8,6 +8,8 @@
 #include <thread>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 #include "framework/error.h"
 #include "solvers/optimizers/level_setup_pipeline.h"
 
@@ -50,4 +52,38 @@ TEST_CASE("LevelSetupPipeline stops a background task still waiting for levels",
     pipeline.WaitFor(0);
   }
   CHECK(calls == 1);
+}
+
+TEST_CASE("LevelSetupPipeline: a caller waiting for the last level helps with its parallel work",
+          "[optimizers]") {
+  // The background task sets level 0 up with a parallel loop; the caller, waiting for it with
+  // nothing else left to set up, must run part of that loop (not block beside it: classic runs
+  // and dragon-lift's finest level wait so).
+  const Context context = Context::WithThreads(2);
+  std::atomic<bool> started{false};
+  std::mutex mutex;
+  std::vector<std::thread::id> workers;
+  {
+    LevelSetupPipeline pipeline(
+        {0},
+        [&](int) {
+          started = true;
+          context.Run([&] {
+            tbb::parallel_for(0, 400, [&](int) {
+              std::this_thread::sleep_for(std::chrono::milliseconds(1));
+              const std::lock_guard lock(mutex);
+              workers.push_back(std::this_thread::get_id());
+            });
+          });
+        },
+        /*overlap=*/true, context);
+    // Wait until a worker has taken the background task (else WaitFor() runs the level itself).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (!started && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+    REQUIRE(started);
+    pipeline.WaitFor(0);
+  }
+  const std::thread::id caller = std::this_thread::get_id();
+  CHECK(workers.size() == 400);
+  CHECK(std::count(workers.begin(), workers.end(), caller) > 0);
 }

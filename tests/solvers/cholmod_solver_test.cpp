@@ -313,6 +313,105 @@ TEST_CASE("cholmod: a one-shot factor frees CHOLMOD's row indices, a refactorabl
   }
 }
 
+TEST_CASE("cholmod: the parallel supernodal factorization equals cholmod_factorize bit for bit",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  // A grid (one tree, heavy separators at the top), a forest (two grids), a mesh in many pieces
+  // (one grid and 300 tiny ones: more roots than the split ever makes pieces, as dragon-lift's
+  // 151 components), a cube (3D, denser supernodes): numeric = "parallel" must give CHOLMOD's
+  // own factor (same solutions to the last bit, which only the same factor values give) for
+  // every thread count.
+  const SparseMatrix grid = PinnedGridLaplacian(120, 90, 41);
+  const auto block_diagonal = [](const std::vector<SparseMatrix>& blocks) {
+    std::vector<Eigen::Triplet<double>> entries;
+    Index offset = 0;
+    for (const SparseMatrix& block : blocks) {
+      for (Index j = 0; j < block.outerSize(); ++j) {
+        for (SparseMatrix::InnerIterator it(block, j); it; ++it) {
+          entries.emplace_back(offset + it.row(), offset + it.col(), it.value());
+        }
+      }
+      offset += block.rows();
+    }
+    SparseMatrix both(offset, offset);
+    both.setFromTriplets(entries.begin(), entries.end());
+    return both;
+  };
+  const SparseMatrix forest =
+      block_diagonal({PinnedGridLaplacian(30, 40, 42), PinnedGridLaplacian(25, 20, 43)});
+  std::vector<SparseMatrix> pieces = {PinnedGridLaplacian(100, 80, 46)};
+  for (unsigned k = 0; k < 300; ++k) pieces.push_back(PinnedGridLaplacian(3, 3, 100 + k));
+  const SparseMatrix many_pieces = block_diagonal(pieces);
+  const SparseMatrix cube = PinnedCubeLaplacian(16);
+  const std::vector<std::pair<std::string, const SparseMatrix*>> matrices = {
+      {"grid", &grid}, {"forest", &forest}, {"many pieces", &many_pieces}, {"cube", &cube}};
+  for (const auto& [name, a] : matrices) {
+    for (const std::string mode : {"auto", "supernodal"}) {
+      DYNAMIC_SECTION(name << ", mode " << mode) {
+        const Eigen::MatrixXd b = RandomRhs(a->rows(), 3, 44);
+        const Context one_thread = Context::WithThreads(1);
+        auto reference_solver =
+            MakeSolver(registry, "cholmod", Options(mode, "amd") + "numeric = \"cholmod\"\n");
+        reference_solver->Factorize(*a, one_thread);
+        Eigen::MatrixXd reference = Eigen::MatrixXd::Zero(a->rows(), 3);
+        REQUIRE(reference_solver->Solve(b, reference, one_thread).success());
+        REQUIRE(RelativeResidual(*a, b, reference) < 1e-10);
+        for (const int threads : {1, 2, 3, 8}) {
+          INFO(threads << " threads");
+          const Context context = Context::WithThreads(threads);
+          auto solver = MakeSolver(registry, "cholmod", Options(mode, "amd"));
+          solver->Factorize(*a, context);
+#ifdef HARAP_HAVE_CHOLMOD
+          // Really split into subtrees (else this test proves nothing).
+          const auto& info = dynamic_cast<const CholmodSolver&>(*solver).factor_info();
+          CHECK((threads == 1) == (info.numeric_subtrees == 0));
+          if (threads > 1) {
+            CHECK(info.numeric_subtree_work > 0.1);
+            // The large tree was split too, not only the forest into its trees.
+            CHECK(info.numeric_largest_subtree < 0.5);
+          }
+#endif
+          // Solved on one thread as the reference was (the parallel solve sums differently).
+          Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a->rows(), 3);
+          REQUIRE(solver->Solve(b, x, one_thread).success());
+          CHECK((x.array() == reference.array()).all());
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("cholmod: the parallel factorization reports the first failing pivot in order",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  // Indefinite 2×2 blocks (positive diagonal, a coupling larger than it) in several places, so
+  // that several independent subtrees fail at once: the error must name the column the
+  // sequential order meets first, whatever the thread count, and the same as
+  // cholmod_factorize's.
+  SparseMatrix a = PinnedGridLaplacian(100, 80, 45);
+  for (const int row : {1234, 4321, 7000}) {
+    const double coupling = 3.0 * std::max(a.coeff(row, row), a.coeff(row + 1, row + 1));
+    a.coeffRef(row, row + 1) = a.coeffRef(row + 1, row) = coupling;
+  }
+  const auto message = [&](const std::string& options, int threads) {
+    auto solver = MakeSolver(registry, "cholmod", Options("supernodal", "amd") + options);
+    try {
+      solver->Factorize(a, Context::WithThreads(threads));
+    } catch (const NumericalError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  const std::string expected = message("numeric = \"cholmod\"\n", 1);
+  CHECK_THAT(expected, Catch::Contains("not positive definite") && Catch::Contains("column"));
+  for (const int threads : {1, 2, 4}) {
+    INFO(threads << " threads");
+    CHECK(message("", threads) == expected);
+  }
+}
+
 TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matrices",
           "[solvers][cholmod]") {
   const auto registry = LinearSolverRegistry();
