@@ -40,6 +40,11 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& no
       "expected_solves", options.expected_solves,
       "global steps the matrix is expected to serve (weighs the factorization against solves)",
       Range::Above(0.0));
+  options.max_unresolved = node.Get(
+      "max_unresolved", options.max_unresolved,
+      "while it iterates: factor before the next solve once a CG solve left more than this share "
+      "of its correction undone (CG's own estimate, A-norm squared; 1: never)",
+      Range::Closed(0.0, 1.0));
   options.direct = CholmodSolver::Options::FromConfig(
       node.Child("direct", "table: the cholmod options used when it factors"));
   options.iterative = ConjugateGradientSolver::Options::FromConfig(
@@ -88,6 +93,7 @@ void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context
   }
   iterated_flops_ = 0.0;
   iterative_solves_ = 0;
+  stalled_ = false;
   // Iterating because it looked cheaper (not because the factor does not fit): if the matrix
   // then serves more solves than expected, factor once the iterations have cost as much as the
   // factorization (below, in Solve()).
@@ -118,7 +124,7 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
                                        Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   HARAP_CHECK(chosen_ != nullptr, "adaptive: Solve() needs a successful Factorize() first");
   if (may_switch_ && (iterated_flops_ >= decision_.estimate.flops ||
-                      iterative_solves_ >= options_.expected_solves)) {
+                      iterative_solves_ >= options_.expected_solves || stalled_)) {
     // Factor (with the kept analysis) and solve directly from here on, as soon as either
     // - the iterations have cost as much arithmetic as the factorization: like renting until the
     //   rent paid equals the price, this costs at most about twice what the better choice made
@@ -127,7 +133,9 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     //   flops alone underrates CG: its sparse products run at a fraction of the factorization's
     //   dense-kernel speed, and its inexact steps cost the caller extra global steps, each with
     //   its own local step (dragon-lift refined to 1.75M/7M vertices iterated 17/38 steps at
-    //   level 0 before the flops caught up; docs/results.md, issue 23).
+    //   level 0 before the flops caught up; docs/results.md, issue 23); or
+    // - the last CG solve left more than max_unresolved of its correction undone: its steps are
+    //   too inexact for the premise (dragon-lift's second step, from 437K vertices up).
     may_switch_ = false;
     direct_->Factorize(iterative_->matrix(), context);
     chosen_ = direct_.get();
@@ -141,6 +149,7 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     const double n = static_cast<double>(b.rows());
     const double nnz = static_cast<double>(iterative_->matrix().nonZeros());
     iterated_flops_ += summary.iterations * static_cast<double>(b.cols()) * (2.0 * nnz + 12.0 * n);
+    stalled_ = iterative_->unresolved_fraction() > options_.max_unresolved;
   }
   return summary;
 }

@@ -38,9 +38,14 @@ namespace harap {
 /// solves than expected, it factors after all and solves directly from then on (chosen() =
 /// "cg>cholmod"): before the solve at which the CG iterations so far have cost flops(L) (at
 /// most about twice the arithmetic of the better choice in hindsight, the ski-rental argument,
-/// however wrong expected_solves was), or before solve number expected_solves + 1, whichever
-/// comes first (the premise of the choice no longer holds; CG's inexact steps also cost the
-/// caller extra global steps, which the arithmetic count does not see).
+/// however wrong expected_solves was), or before solve number expected_solves + 1 (the premise
+/// of the choice no longer holds), or after a CG solve that left more than max_unresolved of its
+/// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first.
+/// The last two see what the arithmetic count does not: CG's inexact steps cost the caller extra
+/// global steps, and where the up-sampled start misses smooth components of the solution
+/// (dragon-lift from 437K vertices up: a second step as large as the first, its CG terms
+/// decaying by 1–2% per iteration), 20 Jacobi-preconditioned iterations per step resolve them
+/// only over dozens of steps.
 ///
 /// The direct solver is "cholmod" with the options of the `direct` table, the iterative one
 /// "cg" with those of the `iterative` table. chosen() names the one in use.
@@ -58,6 +63,9 @@ class AdaptiveSolver final : public LinearSolver {
     /// Global steps (3-column solves) the matrix is expected to serve: hierarchical levels take
     /// 5–15 on armadillo-bend at tolerance 1e-6 (docs/results.md), classic runs 20–200.
     double expected_solves = 10.0;
+    /// Factor before the next solve once a CG solve left more than this share of its
+    /// correction (A-norm squared) undone; 1 never does.
+    double max_unresolved = 0.5;
     CholmodSolver::Options direct;
     ConjugateGradientSolver::Options iterative;
 
@@ -114,6 +122,7 @@ class AdaptiveSolver final : public LinearSolver {
   bool switched_ = false;
   double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
   int iterative_solves_ = 0;     // CG solves since Factorize()
+  bool stalled_ = false;         // the last CG solve left more than max_unresolved undone
   std::function<void(std::string_view, bool)> on_choice_;
 };
 

@@ -423,15 +423,7 @@ struct CholmodSolver::Impl {
     const auto* perm = static_cast<const int*>(f->Perm);
     std::vector<int> inverse(n);
     for (int j = 0; j < n; ++j) inverse[perm ? perm[j] : j] = j;
-    SupernodalFactorView layout;
-    layout.n = n;
-    layout.num_supernodes = static_cast<int>(f->nsuper);
-    layout.first = static_cast<const int*>(f->super);
-    layout.row_start = static_cast<const int*>(f->pi);
-    layout.value_start = static_cast<const int*>(f->px);
-    layout.row = static_cast<const int*>(f->s);
-    layout.value = static_cast<double*>(f->x);
-    layout.permutation = perm;
+    const SupernodalFactorView layout = SupernodalView(*f);
     const int threads = options.native_threads == 1 ? context.arena->max_concurrency() : 1;
     PartialSupernodalFactor numeric;
     // Each thread needs its own BLAS work buffer (see EnsureBlasWorkBuffer).
@@ -521,19 +513,20 @@ struct CholmodSolver::Impl {
     return options.mode == Mode::kAuto && options.refactor != RefactorChoice::kFull &&
            (options.refactor == RefactorChoice::kPartial || prepared_for_refactor);
   }
-  // `super` as PartialSupernodalFactor reads it.
-  SupernodalFactorView SuperView() const {
+  // A numeric supernodal factor as PartialSupernodalFactor reads it.
+  static SupernodalFactorView SupernodalView(const cholmod_factor& f) {
     SupernodalFactorView view;
-    view.n = static_cast<int>(super->n);
-    view.num_supernodes = static_cast<int>(super->nsuper);
-    view.first = static_cast<const int*>(super->super);
-    view.row_start = static_cast<const int*>(super->pi);
-    view.value_start = static_cast<const int*>(super->px);
-    view.row = static_cast<const int*>(super->s);
-    view.value = static_cast<double*>(super->x);
-    view.permutation = static_cast<const int*>(super->Perm);
+    view.n = static_cast<int>(f.n);
+    view.num_supernodes = static_cast<int>(f.nsuper);
+    view.first = static_cast<const int*>(f.super);
+    view.row_start = static_cast<const int*>(f.pi);
+    view.value_start = static_cast<const int*>(f.px);
+    view.row = static_cast<const int*>(f.s);
+    view.value = static_cast<double*>(f.x);
+    view.permutation = static_cast<const int*>(f.Perm);
     return view;
   }
+  SupernodalFactorView SuperView() const { return SupernodalView(*super); }
 
   // Factorize()'s numeric factorization when the supernodal factor is kept: the supernodal
   // factorization into `super` (a copy of the analysis), then `factor` made from a copy of it as

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/linear/conjugate_gradient_solver.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include <string>
@@ -139,6 +143,9 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
   iterative::ColumnConvergence convergence(K, start[0], start[1], options_.limits.tolerance);
 
   SolveSummary summary;
+  // Per column: Σ α_j r_jᵀz_j so far (‖x_k − x₀‖²_A) and the last terms (unresolved_fraction()).
+  ColumnValues step_energy{};
+  std::array<std::array<double, kUnresolvedWindow + 1>, K> last_terms{};
   while (convergence.any_active() && summary.iterations < options_.limits.max_iterations) {
     // q = A p and pᵀq, one pass over A for all columns.
     const ColumnValues pq = SumRows<1>(n, [&](Index i, auto& sums) {
@@ -157,6 +164,9 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
         break;
       }
       alpha[c] = rz[c] / pq[c];
+      const double term = alpha[c] * rz[c];
+      step_energy[c] += term;
+      last_terms[c][summary.iterations % (kUnresolvedWindow + 1)] = term;
     }
     if (!summary.success()) break;
 
@@ -204,6 +214,21 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
   }
   // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report
   // the true one, for one more pass over A per solve.
+  if (first == 0) unresolved_fraction_ = 0.0;
+  const int m = summary.iterations;
+  if (summary.success() && m > kUnresolvedWindow) {
+    for (int c = 0; c < K; ++c) {
+      if (!convergence.active(c) || !(step_energy[c] > 0.0)) continue;
+      const double newest = last_terms[c][(m - 1) % (kUnresolvedWindow + 1)];
+      const double oldest = last_terms[c][m % (kUnresolvedWindow + 1)];  // iteration m − 1 − d
+      const double decay = std::pow(newest / oldest, 1.0 / kUnresolvedWindow);
+      const double fraction =
+          decay < 1.0 ? newest * decay / (1.0 - decay) /
+                            (newest * decay / (1.0 - decay) + step_energy[c])
+                      : 1.0;
+      unresolved_fraction_ = std::max(unresolved_fraction_, fraction);
+    }
+  }
   if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = iterative::MaxRelativeResidual<K>(a_, b, x, start[0]);
   return summary;

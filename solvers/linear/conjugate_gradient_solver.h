@@ -52,6 +52,17 @@ class ConjugateGradientSolver final
 
   const Options& options() const { return options_; }
 
+  /// The estimated share of the last Solve()'s correction x* − x₀ that its iterations left
+  /// undone, in the A-norm squared, max over columns (0 for columns the tolerance stopped, and
+  /// when too few iterations ran to tell). CG's terms α_j r_jᵀz_j sum to ‖x_k − x₀‖²_A (the
+  /// search directions are A-conjugate) and, continued to convergence, to ‖x* − x₀‖²_A; the
+  /// terms not computed are extrapolated from the geometric decay of the last
+  /// kUnresolvedWindow ones (1 if they do not decay). Strakoš & Tichý, "On error estimation in
+  /// the conjugate gradient method and why it works in finite precision computations" (2002),
+  /// estimate the error the same way from terms computed d iterations ahead.
+  double unresolved_fraction() const { return unresolved_fraction_; }
+  static constexpr int kUnresolvedWindow = 5;
+
  private:
   friend class iterative::MatrixIterativeSolver<ConjugateGradientSolver>;
   /// Builds the incomplete Cholesky preconditioner if it is the one chosen (Factorize()).
@@ -67,6 +78,7 @@ class ConjugateGradientSolver final
       Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>;
 
   Options options_;
+  double unresolved_fraction_ = 0.0;
   std::unique_ptr<IncompleteCholesky> incomplete_cholesky_;
   // Row-major work blocks (r, z, p, A p, the IC workspace), kept between solves.
   iterative::Block r_, z_, p_, q_, w_;

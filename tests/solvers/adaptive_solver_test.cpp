@@ -2,6 +2,7 @@
 // AdaptiveSolver: factor or iterate, chosen from CHOLMOD's analysis before factoring.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -151,6 +152,52 @@ TEST_CASE("adaptive: factors after all once it served more solves than expected"
   CHECK((Eigen::MatrixXd(a) * x - b).norm() <= 1e-10 * b.norm());
 }
 
+TEST_CASE("adaptive: factors after all once a CG solve left most of its correction undone",
+          "[solvers][adaptive]") {
+  const Context context;
+  // A pinned 160×160 grid whose solution is smooth, solved from zero: 20 Jacobi-preconditioned
+  // CG iterations leave most of it undone (about 70% in the A-norm², see the cg test), as on
+  // dragon-lift's finest level from 437K vertices up. A cube beside it (another component) makes
+  // the factor expensive, so the arithmetic rule iterates for 3 expected solves; the count and
+  // the flops rules would switch before solve 4 at the earliest, the stall rule does before the
+  // second solve, unless max_unresolved = 1.
+  const SparseMatrix grid = PinnedGridLaplacian(160, 160, 9);
+  const SparseMatrix a = BlockDiagonal({grid, PinnedCubeLaplacian(24)});
+  Eigen::MatrixXd solution = Eigen::MatrixXd::Zero(a.rows(), 3);
+  for (Index i = 0; i < grid.rows(); ++i) {
+    const double u = static_cast<double>(i % 158) / 157.0, v = static_cast<double>(i / 158) / 157.0;
+    solution.row(i) << std::sin(3.1 * u) * std::sin(3.1 * v), u * (1.0 - u), v * (1.0 - v);
+  }
+  const Eigen::MatrixXd b = Eigen::MatrixXd(a * solution);
+  for (const std::string limit : {"0.5", "1"}) {
+    INFO("max_unresolved = " << limit);
+    AdaptiveSolver adaptive(Parse("expected_solves = 3\nmax_unresolved = " + limit));
+    adaptive.Factorize(a, context);
+    REQUIRE(adaptive.chosen() == "cg");
+    // Neither the flops nor the count rule would switch before the fourth solve.
+    const double per_solve = 20.0 * 3 * (2.0 * a.nonZeros() + 12.0 * a.rows());
+    REQUIRE(3 * per_solve < adaptive.decision().estimate.flops);
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    CHECK(adaptive.Solve(b, x, context).iterations == 20);
+    const SolveSummary second = adaptive.Solve(b, x, context);
+    if (limit == "1") {
+      CHECK(second.iterations == 20);
+      CHECK(adaptive.chosen() == "cg");
+    } else {
+      CHECK(second.iterations == 0);
+      CHECK(adaptive.chosen() == "cg>cholmod");
+      CHECK((x - solution).norm() <= 1e-8 * solution.norm());
+    }
+  }
+  // A start that misses only a rough part: 20 iterations resolve it, no switch.
+  AdaptiveSolver adaptive(Parse("expected_solves = 3"));
+  adaptive.Factorize(a, context);
+  Eigen::MatrixXd x = solution;
+  for (Index i = 0; i < a.rows(); i += 3) x(i, 0) += 1e-3;
+  for (int k = 0; k < 2; ++k) CHECK(adaptive.Solve(b, x, context).iterations == 20);
+  CHECK(adaptive.chosen() == "cg");
+}
+
 TEST_CASE("adaptive: a refactorization keeps the direct choice", "[solvers][adaptive]") {
   const Context context;
   SparseMatrix a = PinnedGridLaplacian(30, 30, 5);
@@ -176,6 +223,7 @@ TEST_CASE("adaptive: a refactorization keeps the direct choice", "[solvers][adap
 TEST_CASE("adaptive: options are checked", "[solvers][adaptive]") {
   CHECK_THROWS_WITH(Parse("max_factor_megabytes = -1"), Catch::Contains("max_factor_megabytes"));
   CHECK_THROWS_WITH(Parse("expected_solves = 0"), Catch::Contains("expected_solves"));
+  CHECK_THROWS_WITH(Parse("max_unresolved = 1.5"), Catch::Contains("max_unresolved"));
   CHECK_THROWS_AS(Parse("choose = \"sometimes\""), ConfigError);
   CHECK_THROWS_AS(Parse("[direct]\nmode = \"fast\""), ConfigError);
   CHECK_THROWS_AS(Parse("[iterative]\nmax_iterations = -3"), ConfigError);

@@ -323,26 +323,11 @@ TEST_CASE("cholmod: the parallel supernodal factorization equals cholmod_factori
   // own factor (same solutions to the last bit, which only the same factor values give) for
   // every thread count.
   const SparseMatrix grid = PinnedGridLaplacian(120, 90, 41);
-  const auto block_diagonal = [](const std::vector<SparseMatrix>& blocks) {
-    std::vector<Eigen::Triplet<double>> entries;
-    Index offset = 0;
-    for (const SparseMatrix& block : blocks) {
-      for (Index j = 0; j < block.outerSize(); ++j) {
-        for (SparseMatrix::InnerIterator it(block, j); it; ++it) {
-          entries.emplace_back(offset + it.row(), offset + it.col(), it.value());
-        }
-      }
-      offset += block.rows();
-    }
-    SparseMatrix both(offset, offset);
-    both.setFromTriplets(entries.begin(), entries.end());
-    return both;
-  };
   const SparseMatrix forest =
-      block_diagonal({PinnedGridLaplacian(30, 40, 42), PinnedGridLaplacian(25, 20, 43)});
+      BlockDiagonal({PinnedGridLaplacian(30, 40, 42), PinnedGridLaplacian(25, 20, 43)});
   std::vector<SparseMatrix> pieces = {PinnedGridLaplacian(100, 80, 46)};
   for (unsigned k = 0; k < 300; ++k) pieces.push_back(PinnedGridLaplacian(3, 3, 100 + k));
-  const SparseMatrix many_pieces = block_diagonal(pieces);
+  const SparseMatrix many_pieces = BlockDiagonal(pieces);
   const SparseMatrix cube = PinnedCubeLaplacian(16);
   const std::vector<std::pair<std::string, const SparseMatrix*>> matrices = {
       {"grid", &grid}, {"forest", &forest}, {"many pieces", &many_pieces}, {"cube", &cube}};

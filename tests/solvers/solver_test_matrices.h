@@ -132,6 +132,23 @@ inline SparseMatrix PinnedCubeLaplacian(int side) {
   return a;
 }
 
+/// The block-diagonal matrix of `blocks` (independent components, a forest of elimination trees).
+inline SparseMatrix BlockDiagonal(const std::vector<SparseMatrix>& blocks) {
+  std::vector<Eigen::Triplet<double>> entries;
+  Index offset = 0;
+  for (const SparseMatrix& block : blocks) {
+    for (Index j = 0; j < block.outerSize(); ++j) {
+      for (SparseMatrix::InnerIterator it(block, j); it; ++it) {
+        entries.emplace_back(offset + it.row(), offset + it.col(), it.value());
+      }
+    }
+    offset += block.rows();
+  }
+  SparseMatrix matrix(offset, offset);
+  matrix.setFromTriplets(entries.begin(), entries.end());
+  return matrix;
+}
+
 inline SparseMatrix FromDense(const Eigen::MatrixXd& dense) { return dense.sparseView(); }
 
 /// Indefinite 12×12 arrow matrix with a positive diagonal: vertex 0 is coupled to the 11 others
