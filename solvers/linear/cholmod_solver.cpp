@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -426,9 +427,23 @@ struct CholmodSolver::Impl {
     const SupernodalFactorView layout = SupernodalView(*f);
     const int threads = options.native_threads == 1 ? context.arena->max_concurrency() : 1;
     PartialSupernodalFactor numeric;
-    // Each thread needs its own BLAS work buffer (see EnsureBlasWorkBuffer).
-    const int bad_column = context.Run(
-        [&] { return numeric.FactorAll(layout, a, inverse, threads, &EnsureBlasWorkBuffer); });
+    // Each thread needs its own BLAS work buffer (see EnsureBlasWorkBuffer), the one that
+    // Run() runs this on too (an arena worker if the caller's thread could not join the arena).
+    // Out of memory in harap's own buffers is reported as CHOLMOD reports its own.
+    constexpr int kNoMemory = -2;
+    int bad_column = -1;
+    try {
+      bad_column = context.Run([&] {
+        if (!EnsureBlasWorkBuffer()) return kNoMemory;
+        return numeric.FactorAll(layout, a, inverse, threads, &EnsureBlasWorkBuffer);
+      });
+    } catch (const std::bad_alloc&) {
+      bad_column = kNoMemory;
+    }
+    if (bad_column == kNoMemory) {
+      common.status = CHOLMOD_OUT_OF_MEMORY;
+      return false;
+    }
     info.numeric_subtrees = numeric.subtrees();
     info.numeric_subtree_work = numeric.subtree_work_fraction();
     info.numeric_largest_subtree = numeric.largest_subtree_fraction();

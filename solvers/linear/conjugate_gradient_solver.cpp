@@ -145,7 +145,7 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
   SolveSummary summary;
   // Per column: Σ α_j r_jᵀz_j so far (‖x_k − x₀‖²_A) and the last terms (unresolved_fraction()).
   ColumnValues step_energy{};
-  std::array<std::array<double, kUnresolvedWindow + 1>, K> last_terms{};
+  std::array<std::array<double, 2 * kUnresolvedWindow>, K> last_terms{};
   while (convergence.any_active() && summary.iterations < options_.limits.max_iterations) {
     // q = A p and pᵀq, one pass over A for all columns.
     const ColumnValues pq = SumRows<1>(n, [&](Index i, auto& sums) {
@@ -166,7 +166,7 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
       alpha[c] = rz[c] / pq[c];
       const double term = alpha[c] * rz[c];
       step_energy[c] += term;
-      last_terms[c][summary.iterations % (kUnresolvedWindow + 1)] = term;
+      last_terms[c][summary.iterations % (2 * kUnresolvedWindow)] = term;
     }
     if (!summary.success()) break;
 
@@ -212,23 +212,28 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
       }
     });
   }
-  // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report
-  // the true one, for one more pass over A per solve.
+  // unresolved_fraction(): the terms after the last ones, extrapolated as a geometric series of
+  // blocks of kUnresolvedWindow terms whose ratio is that of the last two blocks' sums (sums,
+  // not single terms: CG's terms are not monotone).
   if (first == 0) unresolved_fraction_ = 0.0;
   const int m = summary.iterations;
-  if (summary.success() && m > kUnresolvedWindow) {
+  constexpr int kRing = 2 * kUnresolvedWindow;
+  if (summary.success() && m >= kRing) {
     for (int c = 0; c < K; ++c) {
       if (!convergence.active(c) || !(step_energy[c] > 0.0)) continue;
-      const double newest = last_terms[c][(m - 1) % (kUnresolvedWindow + 1)];
-      const double oldest = last_terms[c][m % (kUnresolvedWindow + 1)];  // iteration m − 1 − d
-      const double decay = std::pow(newest / oldest, 1.0 / kUnresolvedWindow);
-      const double fraction =
-          decay < 1.0 ? newest * decay / (1.0 - decay) /
-                            (newest * decay / (1.0 - decay) + step_energy[c])
-                      : 1.0;
+      double recent = 0.0, previous = 0.0;
+      for (int j = 0; j < kUnresolvedWindow; ++j) {
+        recent += last_terms[c][(m - 1 - j) % kRing];
+        previous += last_terms[c][(m - 1 - kUnresolvedWindow - j) % kRing];
+      }
+      const double ratio = recent / previous;
+      const double tail = ratio < 1.0 ? recent * ratio / (1.0 - ratio) : 0.0;
+      const double fraction = ratio < 1.0 ? tail / (tail + step_energy[c]) : 1.0;
       unresolved_fraction_ = std::max(unresolved_fraction_, fraction);
     }
   }
+  // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report
+  // the true one, for one more pass over A per solve.
   if (summary.success()) summary.outcome = iterative::BlockOutcome(convergence);
   summary.relative_residual = iterative::MaxRelativeResidual<K>(a_, b, x, start[0]);
   return summary;

@@ -56,8 +56,9 @@ class ConjugateGradientSolver final
   /// undone, in the A-norm squared, max over columns (0 for columns the tolerance stopped, and
   /// when too few iterations ran to tell). CG's terms α_j r_jᵀz_j sum to ‖x_k − x₀‖²_A (the
   /// search directions are A-conjugate) and, continued to convergence, to ‖x* − x₀‖²_A; the
-  /// terms not computed are extrapolated from the geometric decay of the last
-  /// kUnresolvedWindow ones (1 if they do not decay). Strakoš & Tichý, "On error estimation in
+  /// terms not computed are extrapolated as a geometric series from the ratio of the sums of
+  /// the last two blocks of kUnresolvedWindow terms (1 if they do not decay; 0 with fewer than
+  /// two blocks of iterations). Strakoš & Tichý, "On error estimation in
   /// the conjugate gradient method and why it works in finite precision computations" (2002),
   /// estimate the error the same way from terms computed d iterations ahead.
   double unresolved_fraction() const { return unresolved_fraction_; }

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <numeric>
 #include <utility>
 
 #include "framework/error.h"
@@ -147,13 +148,21 @@ int PartialSupernodalFactor::FactorSupernode(int s, bool recompute, const Supern
     for (int q = 0; q < rows; ++q) map[s_row[q]] = q;
     std::fill(block, block + static_cast<size_t>(rows) * columns, 0.0);
     // Column k of P A Pᵀ on and below the diagonal: column permutation[k] of A (both
-    // triangles stored), rows mapped to the factor's order.
+    // triangles stored), rows mapped to the factor's order. An entry outside the supernode's
+    // rows can only come from a matrix that is not symmetric in its pattern (the analysis saw
+    // the lower triangle): rejected, not written out of bounds (CHOLMOD skips such entries).
     for (int k = k1; k < k2; ++k) {
       const Index column = f.permutation ? f.permutation[k] : k;
       double* target = block + static_cast<size_t>(k - k1) * rows;
       for (SparseMatrix::InnerIterator it(a, column); it; ++it) {
         const int i = inverse_permutation[it.row()];
-        if (i >= k) target[map[i]] += it.value();
+        if (i < k) continue;
+        const int q = map[i];
+        HARAP_CHECK(q >= 0 && q < rows && s_row[q] == i,
+                    "entry ({}, {}) of the matrix is not in its factor's pattern: the matrix "
+                    "must be symmetric, stored in both triangles",
+                    it.row(), column);
+        target[q] += it.value();
       }
     }
   }
@@ -210,14 +219,21 @@ std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPi
   // Subtree work and size (children come before their parent: the tree is postordered).
   std::vector<double> subtree_work(work_);
   std::vector<int> subtree_size(num_supernodes_, 1);
+  std::vector<int> first_descendant(num_supernodes_);
+  std::iota(first_descendant.begin(), first_descendant.end(), 0);
   std::vector<int> child_start(num_supernodes_ + 1, 0), children(num_supernodes_);
   for (int s = 0; s < num_supernodes_; ++s) {
-    const int p = parent_[s];
+    const int p = parent_[s];  // > s: the parent is the supernode of a later row
     if (p < 0) continue;
-    if (p <= s) return {};  // not postordered: no pieces (factored in order)
     subtree_work[p] += subtree_work[s];
     subtree_size[p] += subtree_size[s];
+    first_descendant[p] = std::min(first_descendant[p], first_descendant[s]);
     ++child_start[p + 1];
+  }
+  // A piece is the range [r − size + 1, r] of its root r: the tree must be postordered (CHOLMOD
+  // postorders its analysis; common.postorder = 1), else no pieces (factored in order).
+  for (int s = 0; s < num_supernodes_; ++s) {
+    if (first_descendant[s] != s - subtree_size[s] + 1) return {};
   }
   for (int s = 0; s < num_supernodes_; ++s) child_start[s + 1] += child_start[s];
   {
@@ -239,13 +255,18 @@ std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPi
   }
   std::make_heap(candidates.begin(), candidates.end(), lighter);
   std::vector<char> above(num_supernodes_, 0);
+  std::vector<int> unsplittable;  // heavy leaves: pieces as they are
   int splits = 0;
   const int max_splits = 64 * threads;
   while (!candidates.empty() && splits < max_splits) {
     const int r = candidates.front();
-    if (subtree_work[r] <= limit || child_start[r] == child_start[r + 1]) break;
+    if (subtree_work[r] <= limit) break;
     std::pop_heap(candidates.begin(), candidates.end(), lighter);
     candidates.pop_back();
+    if (child_start[r] == child_start[r + 1]) {
+      unsplittable.push_back(r);
+      continue;
+    }
     above[r] = 1;
     ++splits;
     for (int c = child_start[r]; c < child_start[r + 1]; ++c) {
@@ -253,6 +274,7 @@ std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPi
       std::push_heap(candidates.begin(), candidates.end(), lighter);
     }
   }
+  candidates.insert(candidates.end(), unsplittable.begin(), unsplittable.end());
   if (candidates.size() < 2) return {};
   above_pieces_ = std::move(above);
   std::vector<Piece> pieces(candidates.size());

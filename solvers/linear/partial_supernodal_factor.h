@@ -79,9 +79,9 @@ class PartialSupernodalFactor {
   /// spliced in where the sequential loop would have made them. Returns what Refactor() returns
   /// (the first failing column in that order).
   ///
-  /// `thread_ready` (if set) is asked on each thread before its first dense kernel call and may
-  /// say no (e.g. no memory left for the BLAS's per-thread buffer): that thread's subtrees are
-  /// then factored by the calling thread, in order.
+  /// `thread_ready` (if set) is asked before each range of subtrees a thread takes, and may say
+  /// no (e.g. no memory left for the BLAS's per-thread buffer): those subtrees are then factored
+  /// by the calling thread, in order. The calling thread itself must be ready (the caller asks).
   int FactorAll(const SupernodalFactorView& factor, const SparseMatrix& a,
                 const std::vector<int>& inverse_permutation, int threads,
                 bool (*thread_ready)() = nullptr);

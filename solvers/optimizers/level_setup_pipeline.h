@@ -56,7 +56,10 @@ class LevelSetupPipeline {
   /// list; only once, and only if constructed with more_levels.
   void AddLevels(const std::vector<int>& levels);
 
-  /// Returns once `level` is set up; rethrows what its setup threw.
+  /// Returns once `level` is set up; rethrows what its setup threw. Called from one thread (the
+  /// caller's): when the background task is setting `level` up and has nothing after it, the
+  /// wait is a wait on its task group, which runs part of that setup's parallel work on this
+  /// thread (a task group is waited on from one thread at a time).
   void WaitFor(int level);
 
   /// Runs `f` in the context's arena such that, while it waits for its own parallel work, the

@@ -371,30 +371,59 @@ TEST_CASE("cholmod: the parallel factorization reports the first failing pivot i
           "[solvers][cholmod]") {
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
-  // Indefinite 2×2 blocks (positive diagonal, a coupling larger than it) in several places, so
-  // that several independent subtrees fail at once: the error must name the column the
-  // sequential order meets first, whatever the thread count, and the same as
-  // cholmod_factorize's.
-  SparseMatrix a = PinnedGridLaplacian(100, 80, 45);
-  for (const int row : {1234, 4321, 7000}) {
-    const double coupling = 3.0 * std::max(a.coeff(row, row), a.coeff(row + 1, row + 1));
-    a.coeffRef(row, row + 1) = a.coeffRef(row + 1, row) = coupling;
+  // Four components (independent subtrees, so pieces of their own), three of them with an
+  // indefinite 2×2 block (positive diagonal, a coupling larger than it): several pieces fail at
+  // once, and the error must name the column the sequential order meets first, whatever the
+  // thread count, the same as cholmod_factorize's.
+  std::vector<SparseMatrix> components;
+  for (unsigned k = 0; k < 4; ++k) {
+    SparseMatrix grid = PinnedGridLaplacian(60, 50, 45 + k);
+    if (k > 0) {
+      const int row = 500 * static_cast<int>(k);
+      const double coupling = 3.0 * std::max(grid.coeff(row, row), grid.coeff(row + 1, row + 1));
+      grid.coeffRef(row, row + 1) = grid.coeffRef(row + 1, row) = coupling;
+    }
+    components.push_back(grid);
   }
-  const auto message = [&](const std::string& options, int threads) {
+  const SparseMatrix a = BlockDiagonal(components);
+  const auto factorize = [&](const std::string& options, int threads, int* subtrees) {
     auto solver = MakeSolver(registry, "cholmod", Options("supernodal", "amd") + options);
+    std::string outcome = "no error";
     try {
       solver->Factorize(a, Context::WithThreads(threads));
     } catch (const NumericalError& error) {
-      return std::string(error.what());
+      outcome = error.what();
     }
-    return std::string("no error");
+#ifdef HARAP_HAVE_CHOLMOD
+    *subtrees = dynamic_cast<const CholmodSolver&>(*solver).factor_info().numeric_subtrees;
+#endif
+    return outcome;
   };
-  const std::string expected = message("numeric = \"cholmod\"\n", 1);
+  int subtrees = 0;
+  const std::string expected = factorize("numeric = \"cholmod\"\n", 1, &subtrees);
   CHECK_THAT(expected, Catch::Contains("not positive definite") && Catch::Contains("column"));
   for (const int threads : {1, 2, 4}) {
     INFO(threads << " threads");
-    CHECK(message("", threads) == expected);
+    CHECK(factorize("", threads, &subtrees) == expected);
+#ifdef HARAP_HAVE_CHOLMOD
+    CHECK((subtrees >= 4) == (threads > 1));  // the components were factored apart
+#endif
   }
+}
+
+TEST_CASE("cholmod: a matrix whose pattern is not symmetric is rejected, not read out of bounds",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  // Entries stored above the diagonal only: CHOLMOD's analysis sees the lower triangle, the
+  // numeric factorization reads both; an entry outside the analysed pattern must not be
+  // written into another supernode's rows.
+  SparseMatrix a = PinnedGridLaplacian(40, 40, 48);
+  for (int k = 0; k < 40; ++k) a.coeffRef(k, a.cols() - 1 - k) = -0.01;
+  a.makeCompressed();
+  auto solver = MakeSolver(registry, "cholmod", Options("supernodal", "amd"));
+  CHECK_THROWS_WITH(solver->Factorize(a, Context::WithThreads(2)),
+                    Catch::Contains("symmetric"));
 }
 
 TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matrices",
