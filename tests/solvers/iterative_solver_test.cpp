@@ -157,7 +157,8 @@ TEST_CASE("cg: estimates the share of the correction its iterations left undone"
   for (Index i = 0; i < n; ++i) {
     const double u = static_cast<double>(i % 158) / 157.0, v = static_cast<double>(i / 158) / 157.0;
     smooth.row(i) << std::sin(3.1 * u) * std::sin(3.1 * v), u * (1.0 - u) * v, v * (1.0 - v);
-    rough.row(i) << ((i * 7919) % 13) / 13.0, ((i * 104729) % 17) / 17.0, ((i % 5) - 2) / 5.0;
+    const long long k = i;  // (products beyond int)
+    rough.row(i) << ((k * 7919) % 13) / 13.0, ((k * 104729) % 17) / 17.0, ((i % 5) - 2) / 5.0;
   }
   const auto a_norm2 = [&](const Eigen::VectorXd& e) { return e.dot(a * e); };
   const auto true_share = [&](const Eigen::MatrixXd& solution, const Eigen::MatrixXd& start,
