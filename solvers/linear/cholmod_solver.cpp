@@ -402,8 +402,8 @@ struct CholmodSolver::Impl {
   // computes it: PartialSupernodalFactor::FactorAll runs the same left-looking algorithm
   // (bit-identical values) with independent subtrees on the context's threads, and reads A
   // through the permutation instead of making the permuted copies of A that cholmod_factorize
-  // makes first (dragon-lift's finest level: 0.26 s instead of 0.59 s, one thread; see
-  // docs/results.md). With native_threads ≠ 1 the BLAS has threads of its own: one thread here.
+  // makes first (armadillo-bend's finest matrix: 0.093 s instead of 0.178 s; docs/solvers.md).
+  // With native_threads ≠ 1 the BLAS has threads of its own: one thread here.
   // numeric = "cholmod": cholmod_factorize itself. False, with common.status and f->minor set as
   // CHOLMOD sets them, on failure.
   bool FactorSupernodal(cholmod_factor* f, cholmod_sparse& view, const SparseMatrix& a,

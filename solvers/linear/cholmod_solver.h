@@ -48,7 +48,7 @@ class CholmodSolver final : public LinearSolver {
     /// PartialSupernodalFactor::FactorAll: CHOLMOD's left-looking supernodal algorithm with the
     /// same values (bit for bit), independent subtrees of the elimination tree on the run's
     /// threads, reading A through the permutation (cholmod_factorize first makes permuted
-    /// copies of A): dragon-lift's finest level 0.26 s vs 0.59 s on one thread.
+    /// copies of A): armadillo-bend's finest matrix 0.093 s vs 0.178 s (docs/solvers.md).
     kParallel,
     kCholmod,  ///< cholmod_factorize.
   };

@@ -227,9 +227,12 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
         previous += last_terms[c][(m - 1 - kUnresolvedWindow - j) % kRing];
       }
       const double ratio = recent / previous;
-      const double tail = ratio < 1.0 ? recent * ratio / (1.0 - ratio) : 0.0;
-      const double fraction = ratio < 1.0 ? tail / (tail + step_energy[c]) : 1.0;
-      unresolved_fraction_ = std::max(unresolved_fraction_, fraction);
+      if (!(ratio < 1.0)) {  // not decaying (or no terms to compare)
+        unresolved_fraction_ = 1.0;
+        continue;
+      }
+      const double tail = recent * ratio / (1.0 - ratio);
+      unresolved_fraction_ = std::max(unresolved_fraction_, tail / (tail + step_energy[c]));
     }
   }
   // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report

@@ -102,10 +102,7 @@ int PartialSupernodalFactor::Refactor(const SupernodalFactorView& f, const Spars
                                       const std::vector<int>& inverse_permutation) {
   HARAP_CHECK(f.n == n_ && f.num_supernodes == num_supernodes_,
               "the factor's structure changed since Setup()");
-  head_.assign(num_supernodes_, -1);
-  next_.resize(num_supernodes_);
-  position_.resize(num_supernodes_);
-  workspace_.map.resize(n_);
+  ResetLists();
   above_pieces_.clear();
   for (int s = 0; s < num_supernodes_; ++s) {
     const int bad = FactorSupernode(s, marked_[s] != 0, f, a, inverse_permutation, workspace_,
@@ -113,6 +110,13 @@ int PartialSupernodalFactor::Refactor(const SupernodalFactorView& f, const Spars
     if (bad >= 0) return bad;
   }
   return -1;
+}
+
+void PartialSupernodalFactor::ResetLists() {
+  head_.assign(num_supernodes_, -1);
+  next_.resize(num_supernodes_);
+  position_.resize(num_supernodes_);
+  workspace_.map.resize(n_);
 }
 
 void PartialSupernodalFactor::Link(int d, int ancestor, Piece* piece) {
@@ -295,10 +299,7 @@ int PartialSupernodalFactor::FactorAll(const SupernodalFactorView& f, const Spar
   std::fill(marked_.begin(), marked_.end(), 1);
   marked_count_ = num_supernodes_;
   marked_work_ = total_work_;
-  head_.assign(num_supernodes_, -1);
-  next_.resize(num_supernodes_);
-  position_.resize(num_supernodes_);
-  workspace_.map.resize(n_);
+  ResetLists();
   std::vector<Piece> pieces = SplitIntoPieces(threads);
   subtrees_ = static_cast<int>(pieces.size());
   subtree_work_fraction_ = 0.0;
@@ -349,10 +350,7 @@ int PartialSupernodalFactor::FactorAll(const SupernodalFactorView& f, const Spar
         pieces[next_piece].factored) {
       const Piece& piece = pieces[next_piece++];
       if (piece.failed_column >= 0) return piece.failed_column;
-      for (const auto& [ancestor, d] : piece.links) {
-        next_[d] = head_[ancestor];
-        head_[ancestor] = d;
-      }
+      for (const auto& [ancestor, d] : piece.links) Link(d, ancestor, nullptr);
       s = piece.end;
       continue;
     }

@@ -107,7 +107,9 @@ class PartialSupernodalFactor {
                       const std::vector<int>& inverse_permutation, Workspace& workspace,
                       Piece* piece);
   void Link(int d, int ancestor, Piece* piece);
-  // Subtrees of at most about total/(4 threads) work each (fewer, larger ones for one thread).
+  // Empty left-looking lists and the caller's workspace, for a pass over the supernodes.
+  void ResetLists();
+  // Subtrees of at most about total/(4 threads) work each (none for one thread).
   std::vector<Piece> SplitIntoPieces(int threads);
 
   int n_ = 0;
@@ -119,7 +121,7 @@ class PartialSupernodalFactor {
   std::vector<char> marked_;
   int marked_count_ = 0;
   double marked_work_ = 0.0;
-  // Refactor() workspaces; head_ of a supernode above the pieces is spliced (FactorAll).
+  // The left-looking lists and the caller's workspace (Refactor(), FactorAll(); ResetLists()).
   std::vector<int> head_, next_, position_, map_;
   Workspace workspace_;
   std::vector<char> above_pieces_;  ///< per supernode: 1 if above the pieces (FactorAll)
