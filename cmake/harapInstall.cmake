@@ -1,5 +1,5 @@
 # The installable package: `cmake --install build --prefix P` puts the `harap` command in P/bin,
-# the headers in P/include/harap (included as "framework/mesh.h", "experiments/deform.h", ...),
+# the headers in P/include/harap (included as "framework/mesh.h", "api/deform.h", ...),
 # the static libraries in P/lib, the Python package in P/${HARAP_PYTHON_INSTALL_DIR} and
 # P/lib/cmake/harap/harapConfig.cmake, so that a consumer's
 #
@@ -13,12 +13,12 @@ include(CMakePackageConfigHelpers)
 
 # harap::harap: everything (the composition root and every module it links).
 add_library(harap_library INTERFACE)
-target_link_libraries(harap_library INTERFACE harap::builtins)
+target_link_libraries(harap_library INTERFACE harap::api)
 set_target_properties(harap_library PROPERTIES EXPORT_NAME harap)
 add_library(harap::harap ALIAS harap_library)
 
 set(harap_exported_libraries harap_framework harap_io harap_energies harap_solvers
-    harap_optimizers harap_hierarchies harap_upsamplers harap_builtins)
+    harap_optimizers harap_hierarchies harap_upsamplers harap_api)
 foreach(library ${harap_exported_libraries})
   string(REPLACE "harap_" "" export_name ${library})
   set_target_properties(${library} PROPERTIES EXPORT_NAME ${export_name})
@@ -32,11 +32,9 @@ install(TARGETS ${harap_exported_libraries} harap_library harap_warnings harap_f
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/harap)
 install(TARGETS harap RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
-foreach(module framework energies solvers hierarchies experiments)
+foreach(module framework io energies solvers hierarchies api)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${module} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/harap
           FILES_MATCHING PATTERN "*.h"
-          PATTERN "benchmarks" EXCLUDE PATTERN "configs" EXCLUDE PATTERN "scripts" EXCLUDE
-          PATTERN "scenarios" EXCLUDE
           # Internal: exposes toml++, which the installed interface does not.
           PATTERN "toml_reading.h" EXCLUDE)
 endforeach()

@@ -3,8 +3,8 @@
 
 namespace harap {
 
-void SpokesAndRimsEnergy::AddFace(const Face& face, double* a_values,
-                                  Eigen::Vector3d* coefficients, double& constant) const {
+void SpokesAndRimsEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
+                                  double& constant) const {
   AddSpokesAndRimsFace(face, 1.0, a_values, coefficients, constant);
 }
 

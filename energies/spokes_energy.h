@@ -12,7 +12,8 @@ namespace harap {
 /// Spokes ARAP [Sorkine & Alexa 2007]:
 ///
 ///     E(U, R) = Σ_i Σ_{j ∈ N(i)} w_ij ‖(u_i − u_j) − R_i (v̄_i − v̄_j)‖²,
-///     w_ij = ½ (cot α_ij + cot β_ij)  (sum over the faces sharing edge ij; one term on a boundary).
+///     w_ij = ½ (cot α_ij + cot β_ij)  (sum over the faces sharing edge ij; one term on a
+///     boundary).
 ///
 /// One rotation per vertex over the edges of its 1-ring (the spokes). A = 2·L with L the
 /// cotangent Laplacian (each edge is seen by the rotations of both ends). Triangle meshes only.

@@ -3,12 +3,12 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <toml++/toml.h>
 
 #include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "framework/error.h"
 #include "framework/toml_reading.h"
@@ -119,9 +119,9 @@ T ReadValue(const ConfigNode::State& state, const toml::table* table, const std:
   const toml::node* node = table->get(key);
   if (!node) return default_value;
   auto fail = [&](std::string_view expected) -> T {
-    throw ConfigError(fmt::format("{}: option '{}' must be {}", DescribeSource(node->source(),
-                                                                               state.source),
-                                  JoinPath(path, key), expected));
+    throw ConfigError(fmt::format("{}: option '{}' must be {}",
+                                  DescribeSource(node->source(), state.source), JoinPath(path, key),
+                                  expected));
   };
   if constexpr (std::is_same_v<T, double>) {
     if (auto v = node->value<double>()) {
@@ -167,8 +167,7 @@ bool ConfigNode::Get(std::string_view key, bool default_value, std::string_view 
 std::string ConfigNode::Get(std::string_view key, const std::string& default_value,
                             std::string_view help) const {
   RecordOption(*state_, path_, key, DefaultText(default_value), help);
-  return ReadValue<std::string>(*state_, FindTable(state_->root, path_), path_, key,
-                                default_value);
+  return ReadValue<std::string>(*state_, FindTable(state_->root, path_), path_, key, default_value);
 }
 
 std::string ConfigNode::Get(std::string_view key, const char* default_value,
@@ -269,9 +268,10 @@ void ConfigNode::RejectUnknownKeys() const {
   std::vector<std::string> valid;
   for (const auto& option : state_->options[path_]) valid.push_back(option.key);
   std::string table = path_.empty() ? std::string("the top level") : fmt::format("[{}]", path_);
-  throw ConfigError(fmt::format("{}: unknown option '{}' in {}; valid options: {}",
-                                Where(unknown.front()), FullKey(unknown.front()), table,
-                                valid.empty() ? std::string("none") : fmt::format("{}", fmt::join(valid, ", "))));
+  throw ConfigError(
+      fmt::format("{}: unknown option '{}' in {}; valid options: {}", Where(unknown.front()),
+                  FullKey(unknown.front()), table,
+                  valid.empty() ? std::string("none") : fmt::format("{}", fmt::join(valid, ", "))));
 }
 
 std::vector<OptionInfo> ConfigNode::Options() const {

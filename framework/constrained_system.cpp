@@ -163,8 +163,7 @@ ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<In
 }
 
 void ConstrainedSystem::SetFixedPositions(const Positions& u) {
-  HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(),
-              num_vertices());
+  HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(), num_vertices());
   // Called before every global step when coarse targets follow the rotations: reuse the buffer.
   for (size_t k = 0; k < fixed_vertices_.size(); ++k) {
     fixed_positions_.row(k) = u.row(fixed_vertices_[k]);
@@ -260,8 +259,7 @@ std::vector<Index> MaskedSystem::SetConstrained(const std::vector<Index>& constr
 }
 
 void MaskedSystem::SetFixedPositions(const Positions& u) {
-  HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(),
-              num_vertices());
+  HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(), num_vertices());
   // Free rows: A_fc U_c, gathered column by column of the fixed vertices (A is symmetric).
   for (Index v : free_vertices_) fixed_coupling_.row(v).setZero();
   for (Index c : fixed_vertices_) {

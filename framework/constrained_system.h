@@ -122,8 +122,8 @@ class ConstrainedSystem final : public VertexSplitSystem {
  private:
   std::vector<Index> free_index_;  ///< vertex → row of A_ff, or kNoVertex if fixed
   SparseMatrix a_ff_;
-  SparseMatrix a_fc_;               ///< #free × #fixed
-  Eigen::MatrixXd fixed_coupling_;  ///< A_fc U_c
+  SparseMatrix a_fc_;                ///< #free × #fixed
+  Eigen::MatrixXd fixed_coupling_;   ///< A_fc U_c
   Eigen::MatrixXd fixed_positions_;  ///< U_c (scratch for SetFixedPositions)
 };
 
@@ -171,7 +171,7 @@ class MaskedSystem final : public VertexSplitSystem {
   SparseMatrix unmasked_;             ///< A on M's pattern (A's plus the diagonal)
   SparseMatrix masked_;               ///< M
   std::vector<unsigned char> fixed_;  ///< per vertex
-  Positions fixed_coupling_;   ///< A_fc U_c on free rows, U_c on fixed rows (#V×3)
+  Positions fixed_coupling_;          ///< A_fc U_c on free rows, U_c on fixed rows (#V×3)
 };
 
 }  // namespace harap

@@ -65,7 +65,7 @@ struct Context {
   }
 
   std::shared_ptr<tbb::task_arena> arena = std::make_shared<tbb::task_arena>();
-  Stopwatch run_clock;                 ///< Started when the run starts; trace times count from it.
+  Stopwatch run_clock;  ///< Started when the run starts; trace times count from it.
   IterationCallback iteration_callback;  ///< May be empty.
   SystemCallback system_callback;        ///< May be empty.
   PhaseCallback phase_callback;          ///< May be empty.

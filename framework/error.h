@@ -44,11 +44,10 @@ class InternalError : public Error {
 }  // namespace harap
 
 /// Checks a precondition in all build types (unlike assert) and throws harap::InternalError.
-#define HARAP_CHECK(condition, ...)                                                        \
-  do {                                                                                     \
-    if (!(condition)) {                                                                    \
-      throw ::harap::InternalError(fmt::format("{}:{}: check `{}` failed: {}", __FILE__, \
-                                               __LINE__, #condition,                       \
-                                               fmt::format(__VA_ARGS__)));                 \
-    }                                                                                      \
+#define HARAP_CHECK(condition, ...)                                                                \
+  do {                                                                                             \
+    if (!(condition)) {                                                                            \
+      throw ::harap::InternalError(fmt::format("{}:{}: check `{}` failed: {}", __FILE__, __LINE__, \
+                                               #condition, fmt::format(__VA_ARGS__)));             \
+    }                                                                                              \
   } while (false)

@@ -132,8 +132,7 @@ class LevelSolver {
   /// Constrains `constraints.vertices` and factors the level's system (a new linear solver from
   /// `factory` the first time).
   virtual ConstrainSummary Constrain(const LevelConstraints& constraints,
-                                     const ComponentFactory& factory,
-                                     const Context& context) = 0;
+                                     const ComponentFactory& factory, const Context& context) = 0;
   /// New `mean_target` rows for the same constrained vertices (no refactoring).
   virtual void MoveTargets(const Positions& mean_target) = 0;
 

@@ -47,7 +47,7 @@ struct SolveStatistics {
   long long iterations = 0;            ///< Sum of SolveSummary::iterations.
   double max_relative_residual = 0.0;  ///< Largest final relative residual of any solve.
   double last_relative_residual = 0.0;
-  double seconds = 0.0;                ///< Sum of SolveSummary::seconds.
+  double seconds = 0.0;  ///< Sum of SolveSummary::seconds.
   /// Solves whose residual was measured (the residuals above cover only those; 0: not computed).
   int residuals_computed = 0;
 

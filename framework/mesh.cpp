@@ -10,20 +10,21 @@ namespace harap {
 void ValidateMesh(const Mesh& mesh, std::string_view what) {
   const int size = mesh.simplex_size();
   if (mesh.num_elements() > 0 && size != 3 && size != 4) {
-    throw InputError(fmt::format("{}: elements have {} vertices; only triangles (3) and "
-                                 "tetrahedra (4) are supported",
-                                 what, size));
+    throw InputError(
+        fmt::format("{}: elements have {} vertices; only triangles (3) and "
+                    "tetrahedra (4) are supported",
+                    what, size));
   }
   if (mesh.num_vertices() == 0) throw InputError(fmt::format("{}: the mesh has no vertices", what));
   if (mesh.num_elements() == 0) {
-    throw InputError(fmt::format("{}: the mesh has no {}", what,
-                                 size == 4 ? "tetrahedra" : "faces"));
+    throw InputError(
+        fmt::format("{}: the mesh has no {}", what, size == 4 ? "tetrahedra" : "faces"));
   }
   for (Index v = 0; v < mesh.num_vertices(); ++v) {
     for (int d = 0; d < 3; ++d) {
       if (!std::isfinite(mesh.vertices(v, d))) {
-        throw InputError(fmt::format("{}: vertex {} has a non-finite coordinate ({}, {}, {})",
-                                     what, v, mesh.vertices(v, 0), mesh.vertices(v, 1),
+        throw InputError(fmt::format("{}: vertex {} has a non-finite coordinate ({}, {}, {})", what,
+                                     v, mesh.vertices(v, 0), mesh.vertices(v, 1),
                                      mesh.vertices(v, 2)));
       }
     }
@@ -33,9 +34,10 @@ void ValidateMesh(const Mesh& mesh, std::string_view what) {
     for (int a = 0; a < size; ++a) {
       const Index v = mesh.elements(e, a);
       if (v < 0 || v >= n) {
-        throw InputError(fmt::format("{}: element {} references vertex {}, but the mesh has {} "
-                                     "vertices (valid: 0..{})",
-                                     what, e, v, n, n - 1));
+        throw InputError(
+            fmt::format("{}: element {} references vertex {}, but the mesh has {} "
+                        "vertices (valid: 0..{})",
+                        what, e, v, n, n - 1));
       }
       for (int b = 0; b < a; ++b) {
         if (mesh.elements(e, b) == v) {

@@ -21,7 +21,8 @@ enum class ElementKind { kTriangle, kTetrahedron };
 struct Mesh {
   Positions vertices;  ///< #V×3 rest positions.
   Elements elements;   ///< #F×3 triangles or #T×4 tetrahedra, 0-based.
-  bool planar = false; ///< Triangles in the xy-plane, deformed in the plane (per-simplex 2D energies).
+  bool planar =
+      false;  ///< Triangles in the xy-plane, deformed in the plane (per-simplex 2D energies).
 
   Index num_vertices() const { return static_cast<Index>(vertices.rows()); }
   Index num_elements() const { return static_cast<Index>(elements.rows()); }

@@ -61,8 +61,8 @@ struct LevelResult {
   double energy = 0.0;   ///< At the end of the level, rotations fitted to the final positions.
   double seconds = 0.0;  ///< Wall time spent on the level (precompute, factor and iterations).
   bool converged = false;
-  Index unknowns = 0;              ///< Rows of the level's reduced global-step matrix A_ff.
-  SolveStatistics linear_solves;   ///< The level's global-step solves.
+  Index unknowns = 0;             ///< Rows of the level's reduced global-step matrix A_ff.
+  SolveStatistics linear_solves;  ///< The level's global-step solves.
   /// What the level's solver counted besides the above, by name (LevelSolveResult::measures):
   /// "inverted_elements" (ADMM: det F_t < 0 at the end), "accelerated_iterations" (Anderson:
   /// accelerated iterates kept), "newton_steps" and "hessian_products" (Newton steps). Absent
@@ -78,8 +78,8 @@ struct LevelResult {
 /// What the constraint handling did to keep the global system non-singular.
 struct ConstraintReport {
   Index constrained_vertices = 0;
-  Index isolated_vertices = 0;          ///< no element uses them: kept where they are
-  Index free_components = 0;            ///< connected components without any constraint
+  Index isolated_vertices = 0;  ///< no element uses them: kept where they are
+  Index free_components = 0;    ///< connected components without any constraint
   Index vertices_in_free_components = 0;
 };
 
@@ -88,7 +88,7 @@ struct OptimizeResult {
   double energy = 0.0;  ///< Final energy, rotations re-fitted to `positions`.
   /// Energy::AuxiliaryMeasures of the final state (e.g. "energy_wrapd"); empty for most energies.
   std::map<std::string, double> measures;
-  int iterations = 0;   ///< Iterations on the finest level.
+  int iterations = 0;  ///< Iterations on the finest level.
   int total_iterations = 0;
   bool converged = false;
   bool stopped_by_callback = false;

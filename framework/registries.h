@@ -12,7 +12,7 @@
 namespace harap {
 
 /// One registry per plug point. Filled by each module's register function, called only from the
-/// composition root (experiments/builtins.cpp); tests may build their own.
+/// composition root (api/builtins.cpp); tests may build their own.
 struct Registries {
   Registry<Optimizer> optimizers{"optimizer"};
   /// Per-level solvers of the optimizers (`optimizer.inner`). The optimizers keep a copy of it

@@ -65,8 +65,8 @@ class Registry {
 
   /// Creates the implementation named by the `type` key of `table` (`default_name` if absent).
   std::unique_ptr<Interface> Create(const ConfigNode& table, std::string_view default_name) const {
-    std::string name = table.Get("type", std::string(default_name),
-                                 fmt::format("which {} to use", kind_));
+    std::string name =
+        table.Get("type", std::string(default_name), fmt::format("which {} to use", kind_));
     return Create(name, table);
   }
 

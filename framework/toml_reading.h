@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The TOML toolkit of harap's three TOML readers: configurations (ConfigNode, config.cpp),
-// scenario files (io/scenario_reading.cpp) and experiment configs (experiments/experiment.cpp).
+// scenario files (io/scenario_reading.cpp) and experiment configs (runner/experiment.cpp).
 // One error style for all: every message is a ConfigError that starts with where the problem is
 // written, "file:line:column" (the file alone where no position is known), then the context
 // (e.g. "handle 'feet'") if any, then the problem naming the key.

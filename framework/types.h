@@ -3,7 +3,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
-
 #include <cstdint>
 #include <utility>
 #include <vector>

@@ -33,9 +33,9 @@ class Upsampler {
 
   virtual UpsampleOutput output() const = 0;
 
-  virtual void Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse,
-                        RotationSite site, const LevelState& coarse_state,
-                        LevelState& fine_state, const Context& context) const = 0;
+  virtual void Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse, RotationSite site,
+                        const LevelState& coarse_state, LevelState& fine_state,
+                        const Context& context) const = 0;
 
   /// True when the rotations Upsample() produces at `site` are exactly each fine vertex's
   /// coarse vertex's rotation (HierarchyLevel::coarse_vertex; the identity for kNoVertex): no

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The compiled part of the Python package `harap` (harap._harap): converts numpy arrays to and
-// from harap's types and calls the library (experiments/deform.h, experiments/library.h,
-// experiments/session.h, framework/io). No algorithm lives here; python/harap/__init__.py is the
+// from harap's types and calls the library (api/deform.h, api/library.h,
+// api/session.h, framework/io). No algorithm lives here; python/harap/__init__.py is the
 // public API.
 //
 // Threads and signals: a solve runs on a worker thread with the GIL released. The calling thread
@@ -22,15 +22,15 @@
 #include <optional>
 #include <thread>
 
-#include "experiments/builtins.h"
-#include "experiments/deform.h"
-#include "experiments/library.h"
-#include "experiments/session.h"
+#include "api/builtins.h"
+#include "api/deform.h"
+#include "api/library.h"
+#include "api/session.h"
 #include "framework/error.h"
-#include "framework/io/builtin_meshes.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/mesh_writers.h"
-#include "framework/io/scenario.h"
+#include "io/builtin_meshes.h"
+#include "io/mesh_io.h"
+#include "io/mesh_writers.h"
+#include "io/scenario.h"
 
 namespace py = pybind11;
 
@@ -81,19 +81,20 @@ std::string DtypeText(const py::array& array) { return py::str(array.dtype()).ca
 // An (n, 3) array of real numbers (any float or integer dtype, any memory layout: copied).
 Positions ToPositions(py::handle object, const std::string& name) {
   const py::array array = AsArray(object, name);
-  if (array.size() == 0 && array.ndim() <= 2 && (array.ndim() < 2 || array.shape(1) == 3 ||
-                                                  array.shape(1) == 0)) {
+  if (array.size() == 0 && array.ndim() <= 2 &&
+      (array.ndim() < 2 || array.shape(1) == 3 || array.shape(1) == 0)) {
     return Positions(0, 3);
   }
   const char kind = array.dtype().kind();
   if (kind != 'f' && kind != 'i' && kind != 'u') {
-    throw InputError(fmt::format("{} must hold real numbers (a float or integer dtype), got dtype "
-                                 "{}",
-                                 name, DtypeText(array)));
+    throw InputError(
+        fmt::format("{} must hold real numbers (a float or integer dtype), got dtype "
+                    "{}",
+                    name, DtypeText(array)));
   }
   if (array.ndim() != 2 || array.shape(1) != 3) {
-    throw InputError(fmt::format("{} must be an (n, 3) array, got shape {}", name,
-                                 ShapeText(array)));
+    throw InputError(
+        fmt::format("{} must be an (n, 3) array, got shape {}", name, ShapeText(array)));
   }
   if (array.shape(0) > INT_MAX) throw InputError(fmt::format("{}: too many rows", name));
   const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
@@ -121,9 +122,10 @@ py::array_t<long long, py::array::c_style | py::array::forcecast> ToIntegers(
 Elements ToElements(py::handle object, const std::string& name) {
   const py::array array = AsArray(object, name);
   if (array.ndim() != 2 || (array.shape(1) != 3 && array.shape(1) != 4)) {
-    throw InputError(fmt::format("{} must be an (m, 3) array of triangles or an (m, 4) array of "
-                                 "tetrahedra, got shape {}",
-                                 name, ShapeText(array)));
+    throw InputError(
+        fmt::format("{} must be an (m, 3) array of triangles or an (m, 4) array of "
+                    "tetrahedra, got shape {}",
+                    name, ShapeText(array)));
   }
   if (array.size() == 0) return Elements(0, array.shape(1));
   const auto values = ToIntegers(array, name);
@@ -133,8 +135,8 @@ Elements ToElements(py::handle object, const std::string& name) {
     for (py::ssize_t a = 0; a < view.shape(1); ++a) {
       const long long v = view(e, a);
       if (v < INT_MIN || v > INT_MAX) {
-        throw InputError(fmt::format("{}: element {} references vertex {}, which is out of range",
-                                     name, e, v));
+        throw InputError(
+            fmt::format("{}: element {} references vertex {}, which is out of range", name, e, v));
       }
       elements(static_cast<Index>(e), static_cast<Index>(a)) = static_cast<Index>(v);
     }
@@ -202,7 +204,8 @@ std::optional<Positions> ToOptionalPositions(py::handle object, const std::strin
 }
 
 void CheckThreads(int threads) {
-  if (threads < 0) throw ConfigError(fmt::format("threads must be >= 0 (0: all cores), got {}", threads));
+  if (threads < 0)
+    throw ConfigError(fmt::format("threads must be >= 0 (0: all cores), got {}", threads));
 }
 
 void CheckCallback(const py::object& callback) {
@@ -343,7 +346,7 @@ py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targ
                         outcome.result.stopped_by_callback);
 }
 
-// harap._harap.Session: a ConfiguredSession (experiments/session.h) driven from Python. The calls
+// harap._harap.Session: a ConfiguredSession (api/session.h) driven from Python. The calls
 // that compute (construction, handle edits, solves, the energy) run without the GIL; solves run
 // as WatchedSolve does for deform (signals and the callback on the calling thread). The C++
 // session checks every call before changing anything, so a call that raises leaves the session
@@ -536,9 +539,10 @@ void WriteMeshArrays(const std::string& path, py::handle V, py::handle F) {
   ValidateMesh(mesh, path);
   const std::string extension = std::filesystem::path(path).extension().string();
   if (extension != ".ply" && extension != ".PLY") {
-    throw InputError(fmt::format("{}: write_mesh writes binary PLY (double coordinates) only; "
-                                 "name the file .ply",
-                                 path));
+    throw InputError(
+        fmt::format("{}: write_mesh writes binary PLY (double coordinates) only; "
+                    "name the file .ply",
+                    path));
   }
   py::gil_scoped_release release;
   WritePly(path, mesh.vertices, mesh.elements);
@@ -598,8 +602,9 @@ py::list HierarchyLevels(py::handle V, py::handle F, const Settings& settings,
     py::dict entry;
     entry["vertices"] = FromPositions(level.mesh.vertices);
     entry["elements"] = FromElements(level.mesh.elements);
-    entry["coarse_vertex"] = level.coarse_vertex.empty() ? py::object(py::none())
-                                                         : py::object(FromVector(level.coarse_vertex));
+    entry["coarse_vertex"] = level.coarse_vertex.empty()
+                                 ? py::object(py::none())
+                                 : py::object(FromVector(level.coarse_vertex));
     entry["in_cluster"] = level.in_cluster.empty() ? py::object(py::none())
                                                    : py::object(FromVector(level.in_cluster));
     levels.append(entry);
@@ -621,12 +626,13 @@ py::tuple EnergyValue(py::handle V, py::handle F, py::handle U, const Settings& 
     py::gil_scoped_release release;
     evaluation = EvaluateEnergy(BuiltinRegistries(), scenario.mesh, u, config, threads);
   }
-  py::array_t<double> rotations({static_cast<py::ssize_t>(evaluation.rotations.size()),
-                                 py::ssize_t{3}, py::ssize_t{3}});
+  py::array_t<double> rotations(
+      {static_cast<py::ssize_t>(evaluation.rotations.size()), py::ssize_t{3}, py::ssize_t{3}});
   auto view = rotations.mutable_unchecked<3>();
   for (size_t s = 0; s < evaluation.rotations.size(); ++s) {
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) view(static_cast<py::ssize_t>(s), i, j) = evaluation.rotations[s](i, j);
+      for (int j = 0; j < 3; ++j)
+        view(static_cast<py::ssize_t>(s), i, j) = evaluation.rotations[s](i, j);
     }
   }
   return py::make_tuple(evaluation.value, FromPositions(evaluation.gradient), rotations,
@@ -670,7 +676,8 @@ PYBIND11_MODULE(_harap, m) {
   g_input_error = new py::exception<InputError>(m, "InputError", g_error->ptr());
   g_numerical_error = new py::exception<NumericalError>(m, "NumericalError", g_error->ptr());
   g_internal_error = new py::exception<InternalError>(m, "InternalError", g_error->ptr());
-  for (const char* name : {"Error", "ConfigError", "InputError", "NumericalError", "InternalError"}) {
+  for (const char* name :
+       {"Error", "ConfigError", "InputError", "NumericalError", "InternalError"}) {
     m.attr(name).attr("__module__") = "harap";
   }
   py::register_exception_translator([](std::exception_ptr pointer) {

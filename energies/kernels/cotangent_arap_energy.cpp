@@ -17,11 +17,11 @@ void CotangentArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context&
     std::vector<Eigen::Vector3d> coefficient(a_.nonZeros(), Eigen::Vector3d::Zero());
     double constant = 0.0;
     for (Index f = 0; f < rest.num_elements(); ++f) {
-      const Face face{{rest.vertices.row(faces(f, 0)).transpose(),
-                       rest.vertices.row(faces(f, 1)).transpose(),
-                       rest.vertices.row(faces(f, 2)).transpose()},
-                      {half_cot(f, 0), half_cot(f, 1), half_cot(f, 2)},
-                      entry[f]};
+      const Face face{
+          {rest.vertices.row(faces(f, 0)).transpose(), rest.vertices.row(faces(f, 1)).transpose(),
+           rest.vertices.row(faces(f, 2)).transpose()},
+          {half_cot(f, 0), half_cot(f, 1), half_cot(f, 2)},
+          entry[f]};
       AddFace(face, a_.valuePtr(), coefficient.data(), constant);
     }
     coupling_ = MakeVertexSiteCoupling(a_, std::move(coefficient), constant);

@@ -23,8 +23,8 @@ struct TriangleGeometry {
     edge[1] = p[0] - p[2];
     edge[2] = p[1] - p[0];
     double_area = edge[0].cross(edge[1]).norm();
-    const double longest = std::max({edge[0].squaredNorm(), edge[1].squaredNorm(),
-                                      edge[2].squaredNorm()});
+    const double longest =
+        std::max({edge[0].squaredNorm(), edge[1].squaredNorm(), edge[2].squaredNorm()});
     degenerate = !(double_area > kDegenerateTriangleRatio * longest);
   }
   // −e_b · e_c = |e_b| |e_c| cos(angle at a), e_b and e_c the two edges at corner a.
@@ -107,34 +107,34 @@ Eigen::VectorXd MixedVoronoiAreas(const Positions& vertices, const Elements& tri
   const Index num_faces = static_cast<Index>(triangles.rows());
   // Corner areas per face in parallel, then a serial scatter (vertices are shared by faces).
   Eigen::Matrix<double, Eigen::Dynamic, 3> corner(num_faces, 3);
-  tbb::parallel_for(
-      tbb::blocked_range<Index>(0, num_faces, 4096), [&](const tbb::blocked_range<Index>& range) {
-        for (Index f = range.begin(); f != range.end(); ++f) {
-          const TriangleGeometry triangle(vertices, triangles, f);
-          if (triangle.degenerate) {
-            corner.row(f).setZero();
-            continue;
-          }
-          double cot[3], squared[3];
-          int obtuse = -1;
-          for (int a = 0; a < 3; ++a) {
-            const double dot = triangle.CornerDot(a);  // negative at an obtuse corner
-            cot[a] = dot / triangle.double_area;
-            squared[a] = triangle.edge[a].squaredNorm();
-            if (dot < 0.0) obtuse = a;
-          }
-          const double area = 0.5 * triangle.double_area;
-          for (int a = 0; a < 3; ++a) {
-            if (obtuse >= 0) {
-              corner(f, a) = a == obtuse ? 0.5 * area : 0.25 * area;
-            } else {
-              // The two edges at corner a are e_b and e_c (opposite corners b and c).
-              const int b = (a + 1) % 3, c = (a + 2) % 3;
-              corner(f, a) = 0.125 * (squared[b] * cot[b] + squared[c] * cot[c]);
-            }
-          }
-        }
-      });
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_faces, 4096),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index f = range.begin(); f != range.end(); ++f) {
+                        const TriangleGeometry triangle(vertices, triangles, f);
+                        if (triangle.degenerate) {
+                          corner.row(f).setZero();
+                          continue;
+                        }
+                        double cot[3], squared[3];
+                        int obtuse = -1;
+                        for (int a = 0; a < 3; ++a) {
+                          const double dot = triangle.CornerDot(a);  // negative at an obtuse corner
+                          cot[a] = dot / triangle.double_area;
+                          squared[a] = triangle.edge[a].squaredNorm();
+                          if (dot < 0.0) obtuse = a;
+                        }
+                        const double area = 0.5 * triangle.double_area;
+                        for (int a = 0; a < 3; ++a) {
+                          if (obtuse >= 0) {
+                            corner(f, a) = a == obtuse ? 0.5 * area : 0.25 * area;
+                          } else {
+                            // The two edges at corner a are e_b and e_c (opposite corners b and c).
+                            const int b = (a + 1) % 3, c = (a + 2) % 3;
+                            corner(f, a) = 0.125 * (squared[b] * cot[b] + squared[c] * cot[c]);
+                          }
+                        }
+                      }
+                    });
   Eigen::VectorXd areas = Eigen::VectorXd::Zero(vertices.rows());
   for (Index f = 0; f < num_faces; ++f) {
     for (int a = 0; a < 3; ++a) areas(triangles(f, a)) += corner(f, a);

@@ -35,7 +35,8 @@ Eigen::Matrix3d ClosestRotation(const Eigen::Matrix3d& m, const Eigen::Matrix3d&
   for (int iteration = 0; iteration < 8; ++iteration) {
     double x[3][3];  // X = Rᵀ m
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) x[i][j] = r[0][i] * a[0][j] + r[1][i] * a[1][j] + r[2][i] * a[2][j];
+      for (int j = 0; j < 3; ++j)
+        x[i][j] = r[0][i] * a[0][j] + r[1][i] * a[1][j] + r[2][i] * a[2][j];
     }
     const double g0 = x[2][1] - x[1][2], g1 = x[0][2] - x[2][0], g2 = x[1][0] - x[0][1];
     // H = tr(S) I − S with S = sym(X), written out.
@@ -71,7 +72,8 @@ Eigen::Matrix3d ClosestRotation(const Eigen::Matrix3d& m, const Eigen::Matrix3d&
         {s2 * (qx * qz - qy), s2 * (qy * qz + qx), 1.0 - s2 * (qx * qx + qy * qy)}};
     double next[3][3];
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) next[i][j] = r[i][0] * q[0][j] + r[i][1] * q[1][j] + r[i][2] * q[2][j];
+      for (int j = 0; j < 3; ++j)
+        next[i][j] = r[i][0] * q[0][j] + r[i][1] * q[1][j] + r[i][2] * q[2][j];
     }
     std::copy(&next[0][0], &next[0][0] + 9, &r[0][0]);
     // Quadratic convergence: after a step of size ‖ω‖ the remaining error is O(‖ω‖²), so a step

@@ -184,18 +184,17 @@ void AssembleCoupledRhs(const RotationCoupling& coupling, const Rotations& rotat
   HARAP_CHECK(rhs.rows() == coupling.num_vertices, "rhs has {} rows for {} vertices", rhs.rows(),
               coupling.num_vertices);
   context.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, coupling.num_vertices, kGrain),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index j = range.begin(); j != range.end(); ++j) {
-                          Eigen::Vector3d b = Eigen::Vector3d::Zero();
-                          for (Index p = coupling.vertex_offsets[j];
-                               p < coupling.vertex_offsets[j + 1]; ++p) {
-                            b.noalias() += rotations[coupling.vertex_sites[p]] *
-                                           coupling.vertex_coefficients[p];
-                          }
-                          rhs.row(j) = b.transpose();
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(0, coupling.num_vertices, kGrain),
+        [&](const tbb::blocked_range<Index>& range) {
+          for (Index j = range.begin(); j != range.end(); ++j) {
+            Eigen::Vector3d b = Eigen::Vector3d::Zero();
+            for (Index p = coupling.vertex_offsets[j]; p < coupling.vertex_offsets[j + 1]; ++p) {
+              b.noalias() += rotations[coupling.vertex_sites[p]] * coupling.vertex_coefficients[p];
+            }
+            rhs.row(j) = b.transpose();
+          }
+        });
   });
 }
 
@@ -232,7 +231,8 @@ Eigen::Matrix3d SpectralFunction(const Eigen::Matrix3d& m, Function&& g) {
   for (int a = 0; a < 3; ++a) {
     const double value = g(eigen.eigenvalues()(a), floor);
     if (value != 0.0) {
-      result.noalias() += value * eigen.eigenvectors().col(a) * eigen.eigenvectors().col(a).transpose();
+      result.noalias() +=
+          value * eigen.eigenvectors().col(a) * eigen.eigenvectors().col(a).transpose();
     }
   }
   return result;
@@ -298,7 +298,8 @@ void PrepareCoupledRotationDerivative(const RotationCoupling& coupling, const Po
               if (twist_metric) {
                 const double w = (*twist_metric)[s](2, 2);
                 k(2, 2) = w * w * ClampedTwist(sum * w * w);
-              } else if (sum > kRelativeFloor * stretch.topLeftCorner<2, 2>().cwiseAbs().maxCoeff()) {
+              } else if (sum >
+                         kRelativeFloor * stretch.topLeftCorner<2, 2>().cwiseAbs().maxCoeff()) {
                 k(2, 2) = 1.0 / sum;
               }
               continue;
@@ -316,8 +317,9 @@ void PrepareCoupledRotationDerivative(const RotationCoupling& coupling, const Po
             // relative to rest, β = 1/μ those of N^½ K N^½.
             const Eigen::Matrix3d& w = (*twist_metric)[s];
             const Eigen::Matrix3d relative = w * pair_sums * w;
-            k = w * SpectralFunction(0.5 * (relative + relative.transpose()),
-                                     [](double mu, double) { return ClampedTwist(mu); }) *
+            k = w *
+                SpectralFunction(0.5 * (relative + relative.transpose()),
+                                 [](double mu, double) { return ClampedTwist(mu); }) *
                 w;
           }
         });
@@ -336,19 +338,18 @@ void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions
               coupling.num_vertices);
   d_rotations.resize(coupling.num_sites);
   context.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index s = range.begin(); s != range.end(); ++s) {
-                          const Eigen::Matrix3d x =
-                              rotations[s].transpose() * Covariance(coupling, v, s);
-                          const Eigen::Vector3d axial(x(2, 1) - x(1, 2), x(0, 2) - x(2, 0),
-                                                      x(1, 0) - x(0, 1));
-                          const Eigen::Vector3d w = curvature[s] * axial;
-                          Eigen::Matrix3d cross;
-                          cross << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
-                          d_rotations[s].noalias() = rotations[s] * cross;
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
+        [&](const tbb::blocked_range<Index>& range) {
+          for (Index s = range.begin(); s != range.end(); ++s) {
+            const Eigen::Matrix3d x = rotations[s].transpose() * Covariance(coupling, v, s);
+            const Eigen::Vector3d axial(x(2, 1) - x(1, 2), x(0, 2) - x(2, 0), x(1, 0) - x(0, 1));
+            const Eigen::Vector3d w = curvature[s] * axial;
+            Eigen::Matrix3d cross;
+            cross << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
+            d_rotations[s].noalias() = rotations[s] * cross;
+          }
+        });
   });
 }
 

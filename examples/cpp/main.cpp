@@ -8,10 +8,10 @@
 #include <cstdlib>
 #include <string>
 
-#include "experiments/builtins.h"
-#include "experiments/deform.h"
+#include "api/builtins.h"
+#include "api/deform.h"
 #include "framework/error.h"
-#include "framework/io/scenario.h"
+#include "io/scenario.h"
 
 int main(int argc, char** argv) {
   const int vertices = argc > 1 ? std::atoi(argv[1]) : 2000;
@@ -27,13 +27,15 @@ int main(int argc, char** argv) {
       select.slab = {{ axis = "z", from = 0.98, to = 1.0 }}
       rotate = {{ axis = [1.0, 0.0, 0.0], degrees = 90.0 }}
       translate = [0.0, 0.35, -0.3]
-    )", vertices);
+    )",
+                                                  vertices);
     const harap::Scenario scenario = harap::ParseScenario(scenario_text, "<example>", ".");
     const harap::ConfigNode config = harap::ConfigNode::Parse(R"(
       [optimizer]
       type = "hierarchical"
       tolerance = 1e-6
-    )", "<example config>");
+    )",
+                                                              "<example config>");
     const harap::DeformOutcome outcome =
         harap::RunDeform(registries, scenario, config, harap::DeformOptions{});
     const harap::OptimizeResult& result = outcome.result;

@@ -18,9 +18,9 @@ void LevelLimits::ReadLimits(const ConfigNode& node) {
   min_vertices =
       node.Get("min_vertices", min_vertices,
                "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
-  max_levels = node.Get("max_levels", max_levels,
-                        "at most this many levels, the input included (0 = no limit)",
-                        kMaxLevelsRange);
+  max_levels =
+      node.Get("max_levels", max_levels,
+               "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
 }
 
 std::vector<std::string> LevelLimits::LimitProblems() const {

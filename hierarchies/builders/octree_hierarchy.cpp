@@ -814,9 +814,7 @@ OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& 
   return options;
 }
 
-void OctreeHierarchy::Options::Validate() const {
-  ThrowIfInvalidOptions(kName, LimitProblems());
-}
+void OctreeHierarchy::Options::Validate() const { ThrowIfInvalidOptions(kName, LimitProblems()); }
 
 OctreeHierarchy::OctreeHierarchy(const Options& options) : options_(options) {
   options_.Validate();

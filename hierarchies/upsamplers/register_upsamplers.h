@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
-#include "framework/upsampler.h"
 #include "framework/registry.h"
+#include "framework/upsampler.h"
 
 namespace harap {
 

@@ -102,18 +102,17 @@ void SmoothVertexRotations(const Mesh& mesh, RotationSite site, int passes,
   Rotations next(n);
   for (int pass = 0; pass < passes; ++pass) {
     context.Run([&] {
-      tbb::parallel_for(tbb::blocked_range<Index>(0, n, 2048),
-                        [&](const tbb::blocked_range<Index>& range) {
-                          for (Index v = range.begin(); v != range.end(); ++v) {
-                            Eigen::Matrix3d sum = vertex_rotations[v];
-                            const Index begin = ring.offsets[v], end = ring.offsets[v + 1];
-                            for (Index p = begin; p < end; ++p) {
-                              sum += vertex_rotations[ring.neighbors[p]];
-                            }
-                            next[v] =
-                                begin == end ? vertex_rotations[v] : NearestRotation(sum, planar);
-                          }
-                        });
+      tbb::parallel_for(
+          tbb::blocked_range<Index>(0, n, 2048), [&](const tbb::blocked_range<Index>& range) {
+            for (Index v = range.begin(); v != range.end(); ++v) {
+              Eigen::Matrix3d sum = vertex_rotations[v];
+              const Index begin = ring.offsets[v], end = ring.offsets[v + 1];
+              for (Index p = begin; p < end; ++p) {
+                sum += vertex_rotations[ring.neighbors[p]];
+              }
+              next[v] = begin == end ? vertex_rotations[v] : NearestRotation(sum, planar);
+            }
+          });
     });
     std::swap(next, vertex_rotations);
   }

@@ -48,8 +48,9 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& no
   options.direct = CholmodSolver::Options::FromConfig(
       node.Child("direct", "table: the cholmod options used when it factors"));
   options.iterative = ConjugateGradientSolver::Options::FromConfig(
-      node.Child("iterative", "table: the cg options used when it iterates (default 20 "
-                              "Jacobi-preconditioned iterations per solve)"));
+      node.Child("iterative",
+                 "table: the cg options used when it iterates (default 20 "
+                 "Jacobi-preconditioned iterations per solve)"));
   options.direct.check_residual =
       node.Get("check_residual", options.direct.check_residual,
                "measure ‖b − A x‖ / ‖b‖ in every solve also when it factors (cg always does)");

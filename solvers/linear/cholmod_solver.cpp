@@ -647,8 +647,7 @@ struct CholmodSolver::Impl {
   // analysis, so neither the conversion's copy nor the re-symbolic pass is needed, and the
   // solve's plan stays valid. Returns false, before changing anything, if the factor is not
   // such a factor; throws like Factorize() (leaving the supernodal factor for the message).
-  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a,
-                            const Context& context) {
+  bool FactorNumericInPlace(cholmod_sparse& view, const SparseMatrix& a, const Context& context) {
     if (options.mode != Mode::kAuto || symbolic == nullptr || !symbolic->is_super ||
         factor == nullptr || factor->is_super || factor->is_ll || factor->n != symbolic->n) {
       return false;
@@ -702,8 +701,7 @@ struct CholmodSolver::Impl {
       view.permutation = static_cast<const int*>(f.Perm);
       const Stopwatch setup_clock;
       if (same_arrays && view.row != nullptr && tree_view.row == view.row &&
-          tree_view.value == view.value &&
-          tree_view.column_start == view.column_start &&
+          tree_view.value == view.value && tree_view.column_start == view.column_start &&
           tree_view.column_count == view.column_count && tree_view.n == view.n) {
         tree_solve.RefreshPivots();
       } else if (!(same_pattern && tree_solve.Rebind(view))) {
@@ -900,10 +898,10 @@ CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node
   options.ordering = node.GetEnum("ordering", options.ordering, kOrderingNames,
                                   "fill-reducing ordering; best = CHOLMOD's default (AMD, then "
                                   "METIS if AMD fills a lot)");
-  options.parallel_solve = node.Get(
-      "parallel_solve", options.parallel_solve,
-      "solve with a simplicial factor by substitution over independent subtrees of the "
-      "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
+  options.parallel_solve =
+      node.Get("parallel_solve", options.parallel_solve,
+               "solve with a simplicial factor by substitution over independent subtrees of the "
+               "elimination tree on all threads (false = CHOLMOD's sequential cholmod_solve2)");
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
   options.refactor = node.GetEnum(
       "refactor", options.refactor, kRefactorNames,
@@ -1037,12 +1035,12 @@ CholmodSolver::Estimate CholmodSolver::Analyze(const SparseMatrix& a) {
   // supernodal factor of modes auto and supernodal pads relaxed supernodes, which CHOLMOD's
   // analysis sizes exactly (xsize entries, ssize row indices).
   const cholmod_factor& f = *impl.analysis;
-  const double entries = f.is_super ? std::max(static_cast<double>(f.xsize), estimate.nnz_l)
-                                    : estimate.nnz_l;
-  estimate.factor_bytes = entries * sizeof(double) +
-                          (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) *
-                              sizeof(int) +
-                          static_cast<double>(a.rows()) * 4 * sizeof(int);
+  const double entries =
+      f.is_super ? std::max(static_cast<double>(f.xsize), estimate.nnz_l) : estimate.nnz_l;
+  estimate.factor_bytes =
+      entries * sizeof(double) +
+      (f.is_super ? static_cast<double>(f.ssize) : estimate.nnz_l) * sizeof(int) +
+      static_cast<double>(a.rows()) * 4 * sizeof(int);
   impl.analysis_of = {impl.common.lnz, impl.common.fl, estimate.analysis_seconds};
   // The pattern, to recognize the matrix (or a copy of it) in Factorize(); without the values
   // (a third of a copy of `a`).

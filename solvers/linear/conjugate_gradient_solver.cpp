@@ -1,12 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/linear/conjugate_gradient_solver.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-
-#include <fmt/format.h>
-
 #include <string>
 #include <vector>
 

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <Eigen/Dense>
-
 #include <cstdint>
 #include <vector>
 
@@ -20,7 +19,7 @@ struct LdltFactorView {
   const int* column_count = nullptr;  ///< n counts (entries may be followed by unused slack)
   const int* row = nullptr;
   const double* value = nullptr;
-  const int* permutation = nullptr;   ///< row k of P A Pᵀ is row permutation[k] of A; may be null
+  const int* permutation = nullptr;  ///< row k of P A Pᵀ is row permutation[k] of A; may be null
 };
 
 /// Solves A X = B with a simplicial LDLᵀ factor by forward and backward substitution that runs
@@ -79,7 +78,7 @@ class EliminationTreeSolve {
 
  private:
   struct Block {
-    Index begin = 0, end = 0;        ///< its columns
+    Index begin = 0, end = 0;                  ///< its columns
     int children_begin = 0, children_end = 0;  ///< into block_children_
     int slots_begin = 0, slots_end = 0;        ///< its slots (they stand for rows ≥ end)
     int gather_begin = 0, gather_end = 0;      ///< into gather_slot_: slots aimed at its rows

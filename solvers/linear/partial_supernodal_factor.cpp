@@ -105,8 +105,8 @@ int PartialSupernodalFactor::Refactor(const SupernodalFactorView& f, const Spars
   ResetLists();
   above_pieces_.clear();
   for (int s = 0; s < num_supernodes_; ++s) {
-    const int bad = FactorSupernode(s, marked_[s] != 0, f, a, inverse_permutation, workspace_,
-                                    nullptr);
+    const int bad =
+        FactorSupernode(s, marked_[s] != 0, f, a, inverse_permutation, workspace_, nullptr);
     if (bad >= 0) return bad;
   }
   return -1;
@@ -188,8 +188,8 @@ int PartialSupernodalFactor::FactorSupernode(int s, bool recompute, const Supern
       dsyrk_(&lower, &no, &m1, &d_columns, &one, ld + p1, &d_rows, &zero, update.data(), &m2);
       if (m2 > m1) {
         const int below = m2 - m1;
-        dgemm_(&no, &transposed, &below, &m1, &d_columns, &one, ld + p2, &d_rows, ld + p1,
-               &d_rows, &zero, update.data() + m1, &m2);
+        dgemm_(&no, &transposed, &below, &m1, &d_columns, &one, ld + p2, &d_rows, ld + p1, &d_rows,
+               &zero, update.data() + m1, &m2);
       }
       for (int j = 0; j < m1; ++j) {
         double* target = block + static_cast<size_t>(d_row[p1 + j] - k1) * rows;
@@ -216,8 +216,7 @@ int PartialSupernodalFactor::FactorSupernode(int s, bool recompute, const Supern
   return -1;
 }
 
-std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPieces(
-    int threads) {
+std::vector<PartialSupernodalFactor::Piece> PartialSupernodalFactor::SplitIntoPieces(int threads) {
   above_pieces_.clear();
   if (threads <= 1 || num_supernodes_ < 2) return {};
   // Subtree work and size (children come before their parent: the tree is postordered).

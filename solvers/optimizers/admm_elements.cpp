@@ -13,9 +13,9 @@
 
 #include "framework/error.h"
 #include "framework/rotation.h"
-#include "solvers/optimizers/small_svd.h"
 #include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/local_global_solver.h"
+#include "solvers/optimizers/small_svd.h"
 
 namespace harap {
 namespace {
@@ -63,7 +63,9 @@ std::pair<double, Index> SumOverElements(Index count, const Context& context, Bo
           }
           return sum;
         },
-        [](const Sum& a, const Sum& b) { return Sum{a.first + b.first, a.second + b.second}; });
+        [](const Sum& a, const Sum& b) {
+          return Sum{a.first + b.first, a.second + b.second};
+        });
   });
 }
 
@@ -100,8 +102,7 @@ AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant) {
 }
 
 std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAdmmPd(const ConfigNode& node) {
-  return std::make_unique<AdmmLevelSolver>(
-      ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics));
+  return std::make_unique<AdmmLevelSolver>(ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics));
 }
 
 std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateWrapd(const ConfigNode& node) {
@@ -127,9 +128,9 @@ void AdmmLevelSolver::ElementOperators(const Mesh& mesh, bool drop_misoriented,
     double longest = 0.0;
     for (int a = 0; a < k; ++a) {
       for (int b = a + 1; b < k; ++b) {
-        longest = std::max(longest, (mesh.vertices.row(elements_(t, a)) -
-                                     mesh.vertices.row(elements_(t, b)))
-                                        .norm());
+        longest = std::max(
+            longest,
+            (mesh.vertices.row(elements_(t, a)) - mesh.vertices.row(elements_(t, b))).norm());
       }
     }
     for (int a = 1; a < k; ++a) {
@@ -203,8 +204,9 @@ void AdmmLevelSolver::AssembleA0() {
 void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                                  const Context& context) {
   if (setup.handle_edits) {
-    throw ConfigError("the ADMM level solvers eliminate their constrained vertices once; they "
-                      "do not support handle edits (interactive sessions): use local_global");
+    throw ConfigError(
+        "the ADMM level solvers eliminate their constrained vertices once; they "
+        "do not support handle edits (interactive sessions): use local_global");
   }
   const Mesh& mesh = *setup.mesh;
   const int level = setup.level;
@@ -222,8 +224,9 @@ void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory
   context.ReportPhase(fmt::format("precomputing level {}", level));
   const bool tetrahedra = mesh.kind() == ElementKind::kTetrahedron;
   if (!tetrahedra && !mesh.planar) {
-    throw InputError("the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
-                     "`elements`); this mesh is a surface");
+    throw InputError(
+        "the ADMM optimizers work on tetrahedral or planar triangle meshes (energy "
+        "`elements`); this mesh is a surface");
   }
   const Index num_elements = mesh.num_elements();
   const Index num_vertices = mesh.num_vertices();
@@ -250,7 +253,8 @@ void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory
   dual_ = f_;
   target_ = f_;
   goal_ = f_;
-  if (!planar_) svd_.assign(num_elements, SignedRightSvd{Eigen::Matrix3d::Identity(), {1.0, 1.0, 1.0}});
+  if (!planar_)
+    svd_.assign(num_elements, SignedRightSvd{Eigen::Matrix3d::Identity(), {1.0, 1.0, 1.0}});
   rhs_.resize(num_vertices, 3);
   precompute_seconds_ = clock.Seconds();
 }
@@ -304,16 +308,15 @@ LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveReque
     // The input level: the report's energy, by the factory's energy.
     result.energy = FitRotations(state, context);
     if (run.inverted_elements > 0) {
-      result.notes.push_back(fmt::format("{} elements are inverted (det F < 0) at the end",
-                                         run.inverted_elements));
+      result.notes.push_back(
+          fmt::format("{} elements are inverted (det F < 0) at the end", run.inverted_elements));
     }
   } else {
     // The up-sampler's input: rotations of the elements' polar decompositions.
     state.rotations = ElementRotations(state.positions, context);
   }
   if (dropped_ > 0) {
-    result.notes.push_back(
-        fmt::format("level {}: {} inverted elements dropped", level_, dropped_));
+    result.notes.push_back(fmt::format("level {}: {} inverted elements dropped", level_, dropped_));
   }
   return result;
 }
@@ -328,9 +331,8 @@ Eigen::Matrix3d AdmmLevelSolver::DeformationGradient(const Positions& u, Index t
 }
 
 void AdmmLevelSolver::DeformationGradients(const Positions& u, const Context& context) {
-  ForElements(static_cast<Index>(f_.size()), context, [&](Index t) {
-    f_[t] = DeformationGradient(u, t);
-  });
+  ForElements(static_cast<Index>(f_.size()), context,
+              [&](Index t) { f_[t] = DeformationGradient(u, t); });
 }
 
 void AdmmLevelSolver::Gather(const std::vector<Eigen::Matrix3d>& m, Positions& out,
@@ -358,8 +360,8 @@ void AdmmLevelSolver::SolveA0(const Eigen::MatrixXd& rhs_f, Eigen::MatrixXd& x_f
   const SolveSummary summary = solver_->Solve(rhs_f, x_f, context);
   statistics.Add(summary);
   if (!summary.success()) {
-    throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
-                                     summary.message));
+    throw NumericalError(
+        fmt::format("linear solve failed on level {}: {}", level_, summary.message));
   }
 }
 
@@ -448,7 +450,8 @@ double AdmmLevelSolver::WrapdObjective(const std::vector<Eigen::Matrix3d>& p,
   Gather(target_, rhs_, context);
   // Only the free rows: the gradient with respect to the unknowns.
   const auto& free = system_->free_vertices();
-  for (size_t r = 0; r < free.size(); ++r) gradient_f.row(static_cast<Index>(r)) = rhs_.row(free[r]);
+  for (size_t r = 0; r < free.size(); ++r)
+    gradient_f.row(static_cast<Index>(r)) = rhs_.row(free[r]);
   return objective;
 }
 
@@ -611,8 +614,7 @@ AdmmLevelSolver::RunResult AdmmLevelSolver::Run(Positions& u, const AdmmOptions&
                                        energy, level_, result.iterations));
     }
     if (context.iteration_callback) {
-      IterationSummary summary{level_, result.iterations, energy, 0.0,
-                               context.run_clock.Seconds()};
+      IterationSummary summary{level_, result.iterations, energy, 0.0, context.run_clock.Seconds()};
       summary.inverted_elements = result.inverted_elements;
       if (context.iteration_callback(summary) == CallbackAction::kStop) {
         result.stopped_by_callback = true;

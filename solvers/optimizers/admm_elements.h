@@ -150,8 +150,8 @@ class AdmmLevelSolver final : public LevelSolver {
   SparseMatrix a0_;  ///< A₀ on all vertices (Precompute), eliminated by Constrain
   Elements elements_;
   std::vector<Eigen::Matrix<double, 4, 3>> gradients_;  ///< rows: ∇φ_a at rest (unused rows 0)
-  std::vector<double> volume_;         ///< rest volume (area); 0 for degenerate/dropped
-  std::vector<double> weight_;         ///< w_t² = beta · vol_t (WRAPD's units)
+  std::vector<double> volume_;          ///< rest volume (area); 0 for degenerate/dropped
+  std::vector<double> weight_;          ///< w_t² = beta · vol_t (WRAPD's units)
   std::vector<Index> incidence_start_;  ///< CSR: vertex → (element, corner) pairs
   std::vector<std::pair<Index, int>> incidence_;
   Index dropped_ = 0;

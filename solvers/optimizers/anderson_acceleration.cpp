@@ -7,8 +7,7 @@
 namespace harap {
 
 void AndersonAcceleration::Reset(Eigen::Index rows, int history) {
-  HARAP_CHECK(history >= 1, "Anderson acceleration needs a history of at least 1, got {}",
-              history);
+  HARAP_CHECK(history >= 1, "Anderson acceleration needs a history of at least 1, got {}", history);
   history_ = history;
   residual_.resize(rows, 3);
   previous_residual_.resize(rows, 3);

@@ -6,7 +6,6 @@
 
 namespace harap {
 
-
 LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
                                 const Constraints& finest) {
   const Mesh& mesh = hierarchy.levels[level].mesh;
@@ -66,8 +65,9 @@ void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite 
       const Eigen::Matrix3d r =
           site == RotationSite::kVertex
               ? (*rotations)[constraints.vertices[k]]
-              : MeanElementRotation(*rotations, static_cast<Index>(elements[k].size()),
-                                    [&](Index i) { return elements[k][i]; }, constraints.planar);
+              : MeanElementRotation(
+                    *rotations, static_cast<Index>(elements[k].size()),
+                    [&](Index i) { return elements[k][i]; }, constraints.planar);
       target -= (r * constraints.mean_offset.row(k).transpose()).transpose();
     }
     positions.row(constraints.vertices[k]) = target;

@@ -11,8 +11,8 @@
 #include <unordered_set>
 
 #include "framework/error.h"
-#include "solvers/optimizers/local_global_solver.h"
 #include "solvers/optimizers/level_setup_pipeline.h"
+#include "solvers/optimizers/local_global_solver.h"
 
 namespace harap {
 
@@ -24,10 +24,10 @@ SessionOptions SessionOptions::FromConfig(const ConfigNode& node,
                      "which optimizer (a session runs classic or hierarchical)");
   options.hierarchical = type == "hierarchical";
   // The level solvers say themselves what they cannot do in a session (handle edits).
-  options.optimizer = options.hierarchical
-                          ? HierarchicalOptimizer::Options::FromConfig(node, level_solvers)
-                          : HierarchicalOptimizer::Options::OneLevel(node, level_solvers,
-                                                                     LocalGlobalSolver::kName);
+  options.optimizer =
+      options.hierarchical
+          ? HierarchicalOptimizer::Options::FromConfig(node, level_solvers)
+          : HierarchicalOptimizer::Options::OneLevel(node, level_solvers, LocalGlobalSolver::kName);
   return options;
 }
 
@@ -331,8 +331,7 @@ void DeformationSession::UpdateCoarseTargets(int l) {
 
 void DeformationSession::MaterializePreviewRotations() {
   if (!preview_rotations_pending_) return;
-  GatherRotations(preview_map_, preview_coarse_rotations_, levels_[0]->state.rotations,
-                  context_);
+  GatherRotations(preview_map_, preview_coarse_rotations_, levels_[0]->state.rotations, context_);
   preview_rotations_pending_ = false;
 }
 
@@ -383,8 +382,7 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
 
 LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
                                                    bool preview, bool out_of_time,
-                                                   bool start_with_global_step,
-                                                   bool gather) const {
+                                                   bool start_with_global_step, bool gather) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
   // before every global step with update_constraints).
   LevelSolveRequest request =
@@ -444,10 +442,9 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
     // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
     // the coarser level's solution changed since then (the smooth motion), up-sampled.
     LevelState& now = scratch_[l];
-    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now,
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now, context);
+    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1], work,
                          context);
-    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1],
-                         work, context);
     work.positions = levels_[l]->state.positions + now.positions - work.positions;
     work.rotations = levels_[l]->state.rotations;
     return false;
@@ -537,8 +534,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
       // numbering.)
       const bool gather_step = gathered && l == 0 && !user_stop;
-      start_with_global_step = StartLevel(l, top, preview, straight, gather_step, cur,
-                                          coarse_before_level, context);
+      start_with_global_step =
+          StartLevel(l, top, preview, straight, gather_step, cur, coarse_before_level, context);
       cur = &work;
       LevelState& state = work;
       Level* level = levels_[l].get();
@@ -555,8 +552,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
         break;
       }
       Stopwatch level_clock;
-      const LevelSolveRequest request = LevelRequest(l, solve_options, preview, out_of_time,
-                                                     start_with_global_step, gather_step);
+      const LevelSolveRequest request =
+          LevelRequest(l, solve_options, preview, out_of_time, start_with_global_step, gather_step);
       UpdateCoarseTargets(l);
       const bool was_out_of_time = out_of_time;
       const bool had_solution = level->has_solution;
@@ -576,8 +573,8 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       const Mesh& level_mesh = l == 0 ? mesh_ : hierarchy_.levels[l].mesh;
       result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
                                           run.iterations, run.energy, level_clock.Seconds(),
-                                          run.converged, solver.num_unknowns(),
-                                          run.linear_solves, run.measures});
+                                          run.converged, solver.num_unknowns(), run.linear_solves,
+                                          run.measures});
       if (l == 0) {
         result.energy = run.energy;
         result.iterations = run.iterations;

@@ -98,7 +98,7 @@ struct HandleEditResult {
 ///
 /// Every public method validates its input first and throws InputError (naming the problem)
 /// without changing anything, so the session stays usable after a bad call. `mesh` and `factory`
-/// must outlive the session (experiments/session.h bundles them). Not thread-safe.
+/// must outlive the session (api/session.h bundles them). Not thread-safe.
 class DeformationSession {
  public:
   DeformationSession(const Mesh& mesh, const ComponentFactory& factory,

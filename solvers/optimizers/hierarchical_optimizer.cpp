@@ -97,23 +97,24 @@ Registry<Optimizer>::Factory HierarchicalOptimizer::Factory(
 Registry<Optimizer>::Factory HierarchicalOptimizer::OneLevelFactory(
     std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner) {
   return [level_solvers, inner](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(
-        Options::OneLevel(node, *level_solvers, inner));
+    return std::make_unique<HierarchicalOptimizer>(Options::OneLevel(node, *level_solvers, inner));
   };
 }
 
 std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& report) {
   std::vector<std::string> notes;
   if (report.isolated_vertices > 0) {
-    notes.push_back(fmt::format("{} vertices are used by no (non-degenerate) element; they keep "
-                                "their initial positions",
-                                report.isolated_vertices));
+    notes.push_back(
+        fmt::format("{} vertices are used by no (non-degenerate) element; they keep "
+                    "their initial positions",
+                    report.isolated_vertices));
   }
   if (report.free_components > 0) {
-    notes.push_back(fmt::format("{} connected components ({} vertices) have no constrained "
-                                "vertex; one vertex of each is pinned at its initial position "
-                                "(the energy is invariant to translating them)",
-                                report.free_components, report.vertices_in_free_components));
+    notes.push_back(
+        fmt::format("{} connected components ({} vertices) have no constrained "
+                    "vertex; one vertex of each is pinned at its initial position "
+                    "(the energy is invariant to translating them)",
+                    report.free_components, report.vertices_in_free_components));
   }
   return notes;
 }
@@ -150,8 +151,8 @@ struct Cascade {
     Setup setup;
     setup.solver = options.level_solver->CreateAnother();
     // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-    setup.solver->Precompute(LevelSetup{&LevelMesh(l), l > 0 ? &mesh : nullptr, l, false},
-                             factory, context);
+    setup.solver->Precompute(LevelSetup{&LevelMesh(l), l > 0 ? &mesh : nullptr, l, false}, factory,
+                             context);
     setup.solver->Constrain(constraints, factory, context);
     setup.precompute_seconds = setup.solver->precompute_seconds();
     setup.constrain_seconds = setup.solver->constrain_seconds();

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/level_setup_pipeline.h"
 
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+
 #include <condition_variable>
 #include <exception>
 #include <map>
 #include <mutex>
-
-#include <tbb/task_arena.h>
-#include <tbb/task_group.h>
 
 #include "framework/error.h"
 

@@ -23,8 +23,8 @@ std::unique_ptr<LevelSolver> LocalGlobalSolver::CreateAnother() const {
   return std::make_unique<LocalGlobalSolver>(options_);
 }
 
-LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory,
-                                     int level, const Context& context, const Mesh* input_mesh) {
+LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const ComponentFactory& factory, int level,
+                                     const Context& context, const Mesh* input_mesh) {
   Precompute(LevelSetup{&mesh, input_mesh, level, false}, factory, context);
 }
 
@@ -85,9 +85,9 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
   if (mapped.follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
     FindIncidentElements(*setup_.mesh, mapped);
   }
-  const ConstrainSummary summary =
-      setup_.handle_edits ? ConstrainMasked(mapped.vertices, factory, context)
-                          : ConstrainEliminated(mapped.vertices, factory, context);
+  const ConstrainSummary summary = setup_.handle_edits
+                                       ? ConstrainMasked(mapped.vertices, factory, context)
+                                       : ConstrainEliminated(mapped.vertices, factory, context);
   internal_ = RenumberedConstraints(mapped, ordering_.new_vertex, ordering_.new_element);
   constraints_ = std::move(mapped);
   return summary;
@@ -113,9 +113,9 @@ ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>
   return summary;
 }
 
-ConstrainSummary LocalGlobalSolver::ConstrainMasked(
-    const std::vector<Index>& constrained, const ComponentFactory& factory,
-    const Context& context) {
+ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& constrained,
+                                                    const ComponentFactory& factory,
+                                                    const Context& context) {
   Stopwatch clock;
   context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
   const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
@@ -173,8 +173,8 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
   LevelState& state = internal_state_;
   ordering_.ToNew(caller_state.positions, state.positions);
   ordering_.ToNew(caller_state.rotations, per_element, state.rotations);
-  const RunResult result = Iterate(state, start_with_global_step, options, diagonal, context,
-                                   update_fixed);
+  const RunResult result =
+      Iterate(state, start_with_global_step, options, diagonal, context, update_fixed);
   ordering_.ToOld(state.positions, caller_state.positions);
   ordering_.ToOld(state.rotations, per_element, caller_state.rotations);
   return result;
@@ -212,10 +212,9 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
                 "level {}: gathered rotations for a level that cannot take them", level_);
     // The straight preview: the coarse rotations gathered by the global step itself, in the
     // level's own numbering (the state's rotations are left as they are).
-    result.linear_solves.Add(GatheredGlobalStep(GatheredSource(*request.rotation_source),
-                                                *request.gathered_rotations,
-                                                constraints_.vertices, constraints_.mean_target,
-                                                state.positions, context));
+    result.linear_solves.Add(GatheredGlobalStep(
+        GatheredSource(*request.rotation_source), *request.gathered_rotations,
+        constraints_.vertices, constraints_.mean_target, state.positions, context));
     result.iterations = 1;
     result.energy = std::numeric_limits<double>::quiet_NaN();
     return result;
@@ -272,8 +271,8 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
   const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
   if (!summary.success()) {
-    throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
-                                     summary.message));
+    throw NumericalError(
+        fmt::format("linear solve failed on level {}: {}", level_, summary.message));
   }
   system_->ScatterFree(reduced_x_, u);
   ordering_.ToOld(u, state.positions);
@@ -282,7 +281,8 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
 
 bool LocalGlobalSolver::accepts_gathered_rotations() const {
   // GatheredGlobalStep's conditions: one rotation per vertex, exact (input-level) targets.
-  return energy_ != nullptr && setup_.mesh != nullptr && energy_->rotation_site() == RotationSite::kVertex &&
+  return energy_ != nullptr && setup_.mesh != nullptr &&
+         energy_->rotation_site() == RotationSite::kVertex &&
          energy_->num_rotations() == setup_.mesh->num_vertices() &&
          !constraints_.follow_rotations();
 }
@@ -358,8 +358,8 @@ SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& sou
     if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
     summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
     if (!summary.success()) {
-      throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
-                                       summary.message));
+      throw NumericalError(
+          fmt::format("linear solve failed on level {}: {}", level_, summary.message));
     }
     system_->ScatterFree(reduced_x_, u);
   }
@@ -503,9 +503,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
   system_->SetFixedPositions(state.positions);
   RunResult result;
   const double squared_diagonal = diagonal * diagonal;
-  double energy = start_with_global_step ? 0.0
-                                         : energy_->FitRotations(state.positions, state.rotations,
-                                                                 context);
+  double energy = start_with_global_step
+                      ? 0.0
+                      : energy_->FitRotations(state.positions, state.rotations, context);
   if (system_->num_free() == 0) {
     result.energy = start_with_global_step
                         ? energy_->FitRotations(state.positions, state.rotations, context)
@@ -557,8 +557,8 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
     result.linear_solves.Add(summary);
     if (!summary.success()) {
-      throw NumericalError(fmt::format("linear solve failed on level {}: {}", level_,
-                                       summary.message));
+      throw NumericalError(
+          fmt::format("linear solve failed on level {}: {}", level_, summary.message));
     }
     // Newton steps and Anderson's extrapolation need the same map G(u) = global(local(u)) from
     // one iteration to the next (fixed targets) and rotations fitted to u.
@@ -572,10 +572,11 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     energy_is_fitted = true;
     ++result.iterations;
     if (!std::isfinite(energy)) {
-      throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}",
-                                       energy, level_, result.iterations));
+      throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}", energy,
+                                       level_, result.iterations));
     }
-    if (update_fixed && !targets_frozen && result.iterations > 1 && energy > previous_energy * (1.0 + 1e-12) &&
+    if (update_fixed && !targets_frozen && result.iterations > 1 &&
+        energy > previous_energy * (1.0 + 1e-12) &&
         ++energy_increases == options.freeze_targets_after) {
       targets_frozen = true;
       result.targets_frozen_at = result.iterations;
@@ -602,9 +603,9 @@ double LocalGlobalSolver::NewtonIteration(LevelState& state, double& energy,
                                           const LocalGlobalOptions& options,
                                           double squared_diagonal, const Context& context,
                                           RunResult& result) {
-  const NewtonCgStep::Outcome step =
-      newton_.Step(*energy_, static_cast<const ConstrainedSystem&>(*system_), *solver_, options.newton, state.positions,
-                   state.rotations, energy, reduced_rhs_, reduced_x_, context);
+  const NewtonCgStep::Outcome step = newton_.Step(
+      *energy_, static_cast<const ConstrainedSystem&>(*system_), *solver_, options.newton,
+      state.positions, state.rotations, energy, reduced_rhs_, reduced_x_, context);
   result.newton_steps += step.newton ? 1 : 0;
   result.hessian_products += step.cg_iterations;
   energy = step.energy;
@@ -613,10 +614,9 @@ double LocalGlobalSolver::NewtonIteration(LevelState& state, double& energy,
 }
 
 double LocalGlobalSolver::LocalGlobalIteration(LevelState& state, double& energy,
-                                               const LocalGlobalOptions& options,
-                                               bool targets_move, bool energy_is_fitted,
-                                               double squared_diagonal, const Context& context,
-                                               RunResult& result) {
+                                               const LocalGlobalOptions& options, bool targets_move,
+                                               bool energy_is_fitted, double squared_diagonal,
+                                               const Context& context, RunResult& result) {
   // The map G(u) = global(local(u)) may be accelerated only while it stays the same map
   // (fixed targets) and the pairs (u, G(u)) are true ones (rotations fitted to u).
   const bool accelerate = options.anderson > 0 && !targets_move && energy_is_fitted;
@@ -632,8 +632,7 @@ double LocalGlobalSolver::LocalGlobalIteration(LevelState& state, double& energy
   }
   // The displacement of the plain step, G(u) − u: the convergence test is the same with and
   // without acceleration.
-  const double displacement = system_->ScatterFree(reduced_x_, state.positions) /
-                              squared_diagonal;
+  const double displacement = system_->ScatterFree(reduced_x_, state.positions) / squared_diagonal;
   bool accepted = false;
   if (extrapolated) {
     // Safeguard [Peng et al. 2018]: keep the accelerated iterate only if its energy (rotations
@@ -642,8 +641,7 @@ double LocalGlobalSolver::LocalGlobalIteration(LevelState& state, double& energy
     // The rotations are fitted in place: if the extrapolation is rejected, the plain step's
     // fit below starts from them, as good a warm start as the old ones (G(u) is near both).
     system_->ScatterFree(accelerated_free_, trial_positions_);
-    const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations,
-                                                      context);
+    const double trial_energy = energy_->FitRotations(trial_positions_, state.rotations, context);
     if (trial_energy < energy) {
       std::swap(state.positions, trial_positions_);
       energy = trial_energy;
@@ -662,8 +660,8 @@ Positions InitialPositions(const DeformationProblem& problem) {
   const Constraints& constraints = problem.constraints;
   Positions u = problem.initial ? *problem.initial : mesh.vertices;
   if (u.rows() != mesh.num_vertices()) {
-    throw InputError(fmt::format("the initial configuration has {} vertices, the mesh {}",
-                                 u.rows(), mesh.num_vertices()));
+    throw InputError(fmt::format("the initial configuration has {} vertices, the mesh {}", u.rows(),
+                                 mesh.num_vertices()));
   }
   if (!u.allFinite()) throw InputError("the initial configuration has non-finite coordinates");
   if (static_cast<Index>(constraints.indices.size()) != constraints.targets.rows()) {
@@ -673,9 +671,10 @@ Positions InitialPositions(const DeformationProblem& problem) {
   for (size_t k = 0; k < constraints.indices.size(); ++k) {
     const Index v = constraints.indices[k];
     if (v < 0 || v >= mesh.num_vertices()) {
-      throw InputError(fmt::format("constrained vertex {} is out of range (the mesh has {} "
-                                   "vertices)",
-                                   v, mesh.num_vertices()));
+      throw InputError(
+          fmt::format("constrained vertex {} is out of range (the mesh has {} "
+                      "vertices)",
+                      v, mesh.num_vertices()));
     }
     if (!constraints.targets.row(k).allFinite()) {
       throw InputError(fmt::format("the target of constrained vertex {} is not finite", v));
@@ -726,8 +725,9 @@ LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
                      "projected per rotation site (positive semi-definite, line search)") ==
       "exact";
   if (options.newton > 0 && options.anderson > 0) {
-    node.Fail("newton", "Newton steps and Anderson acceleration exclude each other: set one of "
-                        "`newton` and `anderson` to 0");
+    node.Fail("newton",
+              "Newton steps and Anderson acceleration exclude each other: set one of "
+              "`newton` and `anderson` to 0");
   }
   return options;
 }

@@ -187,9 +187,8 @@ class LocalGlobalSolver final : public LevelSolver {
   // for the convergence test.
   double NewtonIteration(LevelState& state, double& energy, const LocalGlobalOptions& options,
                          double squared_diagonal, const Context& context, RunResult& result);
-  double LocalGlobalIteration(LevelState& state, double& energy,
-                              const LocalGlobalOptions& options, bool targets_move,
-                              bool energy_is_fitted, double squared_diagonal,
+  double LocalGlobalIteration(LevelState& state, double& energy, const LocalGlobalOptions& options,
+                              bool targets_move, bool energy_is_fitted, double squared_diagonal,
                               const Context& context, RunResult& result);
 
   ConstrainSummary ConstrainEliminated(const std::vector<Index>& constrained,
@@ -205,7 +204,7 @@ class LocalGlobalSolver final : public LevelSolver {
   MeshOrdering ordering_;
   std::unique_ptr<Energy> energy_;
   std::unique_ptr<GlobalStepSystem> system_;
-  MaskedSystem* masked_ = nullptr;  ///< system_ when masked
+  MaskedSystem* masked_ = nullptr;    ///< system_ when masked
   bool needs_factorization_ = false;  ///< masked: a Refactor threw, factor anew next time
   std::unique_ptr<LinearSolver> solver_;
   // Per-iteration buffers, allocated once.

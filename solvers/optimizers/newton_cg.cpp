@@ -67,8 +67,7 @@ void NewtonCgStep::HessianProduct(const Energy& energy_function, const Constrain
                                   Eigen::MatrixXd& hp, const Context& context) {
   // Fixed rows of direction_full_ stay 0 (set in Reset): constrained vertices do not move.
   system.ScatterFree(p, direction_full_);
-  energy_function.RotationDerivative(direction_full_, rotations, curvature_, d_rotations_,
-                                     context);
+  energy_function.RotationDerivative(direction_full_, rotations, curvature_, d_rotations_, context);
   energy_function.AssembleRhs(d_rotations_, rhs_full_, context);
   system.GatherFree(rhs_full_, rotation_term_);
   SymmetricProduct(system.reduced_matrix(), p, hp, context);
@@ -77,13 +76,10 @@ void NewtonCgStep::HessianProduct(const Energy& energy_function, const Constrain
   });
 }
 
-NewtonCgStep::CgSearch NewtonCgStep::NewtonDirection(const Energy& energy_function,
-                                                     const ConstrainedSystem& system,
-                                                     LinearSolver& solver,
-                                                     const Rotations& rotations,
-                                                     int max_cg_iterations, double initial_rz,
-                                                     double tolerance, int& cg_iterations,
-                                                     const Context& context) {
+NewtonCgStep::CgSearch NewtonCgStep::NewtonDirection(
+    const Energy& energy_function, const ConstrainedSystem& system, LinearSolver& solver,
+    const Rotations& rotations, int max_cg_iterations, double initial_rz, double tolerance,
+    int& cg_iterations, const Context& context) {
   const bool trust_region = exact_;
   step_.setZero();
   if (trust_region) step_hessian_.setZero();
@@ -190,8 +186,7 @@ NewtonCgStep::Outcome NewtonCgStep::Step(const Energy& energy_function,
   if (!(initial_rz > 0.0)) return take_global_step();  // stationary (or not finite)
   const double gradient_norm = std::sqrt(initial_rz);
   if (first_gradient_norm_ == 0.0) first_gradient_norm_ = gradient_norm;
-  const double forcing =
-      std::min(0.5, std::sqrt(gradient_norm / first_gradient_norm_));
+  const double forcing = std::min(0.5, std::sqrt(gradient_norm / first_gradient_norm_));
 
   energy_function.PrepareRotationDerivative(positions, rotations, /*project=*/!exact_, curvature_,
                                             context);

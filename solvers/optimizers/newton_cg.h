@@ -26,7 +26,8 @@ namespace harap {
 ///     exact line search (α ≥ 1, since H ⪯ P), so a Newton step with one CG iteration is an
 ///     over-relaxed local/global step. The projection ignores negative curvature, so near a
 ///     saddle point the steps crawl as the plain iteration does.
-///   - exact (default): the true, indefinite H in a trust region of the P-norm (Steihaug–Toint CG: to the
+///   - exact (default): the true, indefinite H in a trust region of the P-norm (Steihaug–Toint CG:
+///   to the
 ///     region's boundary along a direction of negative curvature), radius adapted by the ratio of
 ///     actual to predicted decrease [Nocedal & Wright, Alg. 4.1, 7.2]; it leaves saddles along
 ///     their negative curvature.
@@ -46,9 +47,9 @@ class NewtonCgStep {
   void Reset(Index num_vertices, Index num_free, bool exact_hessian = true);
 
   struct Outcome {
-    bool newton = false;     ///< false: the plain local/global step was taken.
-    int cg_iterations = 0;   ///< CG iterations of this step (Hessian products).
-    double energy = 0.0;     ///< E(u⁺, R(u⁺)) of the new state.
+    bool newton = false;    ///< false: the plain local/global step was taken.
+    int cg_iterations = 0;  ///< CG iterations of this step (Hessian products).
+    double energy = 0.0;    ///< E(u⁺, R(u⁺)) of the new state.
     /// max_i ‖z_i‖² of the plain local/global step z = A_ff⁻¹ rhs − u_f (the convergence test's
     /// displacement, before scaling by the diagonal).
     double plain_step_displacement = 0.0;
@@ -58,16 +59,16 @@ class NewtonCgStep {
   /// global step's B_f(R) − A_fc U_c for these rotations and `global_step` its solution A_ff⁻¹ ·
   /// reduced_rhs (the plain local/global step's free positions). Writes the new positions and
   /// fitted rotations in place.
-  Outcome Step(const Energy& energy_function, const ConstrainedSystem& system,
-               LinearSolver& solver, int max_cg_iterations, Positions& positions,
-               Rotations& rotations, double energy, const Eigen::MatrixXd& reduced_rhs,
-               const Eigen::MatrixXd& global_step, const Context& context);
+  Outcome Step(const Energy& energy_function, const ConstrainedSystem& system, LinearSolver& solver,
+               int max_cg_iterations, Positions& positions, Rotations& rotations, double energy,
+               const Eigen::MatrixXd& reduced_rhs, const Eigen::MatrixXd& global_step,
+               const Context& context);
 
  private:
   /// What the CG iterations on H d = r₀ found (d in step_).
   struct CgSearch {
-    double slope = 0.0;  ///< ⟨r₀, d⟩: the slope of E/2 along d is −slope
-    double dd = 0.0;     ///< ‖d‖² in the P-norm
+    double slope = 0.0;        ///< ⟨r₀, d⟩: the slope of E/2 along d is −slope
+    double dd = 0.0;           ///< ‖d‖² in the P-norm
     bool on_boundary = false;  ///< trust region: d ends on its boundary
   };
   /// Preconditioned CG from d = 0 on H d = r₀ (r₀ in residual_, z₀ = P⁻¹ r₀ in
@@ -75,9 +76,9 @@ class NewtonCgStep {
   /// Hessian; stops when ‖r‖_P⁻¹ ≤ tolerance or after max_cg_iterations (counted in
   /// cg_iterations).
   CgSearch NewtonDirection(const Energy& energy_function, const ConstrainedSystem& system,
-                           LinearSolver& solver, const Rotations& rotations,
-                           int max_cg_iterations, double initial_rz, double tolerance,
-                           int& cg_iterations, const Context& context);
+                           LinearSolver& solver, const Rotations& rotations, int max_cg_iterations,
+                           double initial_rz, double tolerance, int& cg_iterations,
+                           const Context& context);
   /// hp = H p on the free vertices (P's half: the factor 2 of E's derivatives is left out of
   /// both H and P, which leaves P⁻¹H unchanged).
   void HessianProduct(const Energy& energy_function, const ConstrainedSystem& system,

@@ -24,8 +24,7 @@ void RegisterLevelSolvers(Registry<LevelSolver>& registry) {
                &AdmmLevelSolver::CreateWrapd);
 }
 
-void RegisterOptimizers(Registry<Optimizer>& registry,
-                        const Registry<LevelSolver>& level_solvers) {
+void RegisterOptimizers(Registry<Optimizer>& registry, const Registry<LevelSolver>& level_solvers) {
   const auto solvers = std::make_shared<const Registry<LevelSolver>>(level_solvers);
   registry.Add("classic",
                "classic single-level local/global ARAP [Sorkine & Alexa 2007], the paper's "

@@ -12,7 +12,6 @@ void RegisterLevelSolvers(Registry<LevelSolver>& registry);
 
 /// Adds every Optimizer implementation of this module to `registry`. The optimizers create their
 /// level solvers from a copy of `level_solvers` as it is now: register those first.
-void RegisterOptimizers(Registry<Optimizer>& registry,
-                        const Registry<LevelSolver>& level_solvers);
+void RegisterOptimizers(Registry<Optimizer>& registry, const Registry<LevelSolver>& level_solvers);
 
 }  // namespace harap

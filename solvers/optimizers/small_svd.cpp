@@ -28,7 +28,8 @@ SignedRightSvd JacobiRightSvd(const Eigen::Matrix3d& f, double a[3][3], double v
       const double apq = a[p][q];
       if (apq == 0.0) continue;
       const double theta = (a[q][q] - a[p][p]) / (2.0 * apq);
-      const double t = (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+      const double t =
+          (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
       const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
       const double arp = a[r][p], arq = a[r][q];
       a[p][p] -= t * apq;

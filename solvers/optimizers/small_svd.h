@@ -12,8 +12,8 @@ namespace harap {
 /// derivative and the ARAP distance need.
 ///
 /// Shared numerics (optimizers and energies may not depend on each other), in the hot loops of the
-/// per-element ADMM optimizers: 2× faster than Eigen's 3×3 JacobiSVD (benchmark SignedSvd_*), and as accurate (see
-/// ComputeSignedRightSvd).
+/// per-element ADMM optimizers: 2× faster than Eigen's 3×3 JacobiSVD (benchmark SignedSvd_*), and
+/// as accurate (see ComputeSignedRightSvd).
 struct SignedRightSvd {
   Eigen::Matrix3d v;      ///< right singular vectors as columns, det v = +1
   Eigen::Vector3d sigma;  ///< signed singular values, descending in magnitude

@@ -103,20 +103,23 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   for_each(m, [&](Index k) {
     const Index e = ordering.old_element[k];
     ordering.new_element[e] = k;
-    for (int a = 0; a < size; ++a) ordering.mesh.elements(k, a) = ordering.new_vertex[mesh.elements(e, a)];
+    for (int a = 0; a < size; ++a)
+      ordering.mesh.elements(k, a) = ordering.new_vertex[mesh.elements(e, a)];
   });
   return ordering;
 }
 
 Positions MeshOrdering::ToNew(const Positions& input) const {
   Positions result(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) result.row(k) = input.row(old_vertex[k]);
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
+    result.row(k) = input.row(old_vertex[k]);
   return result;
 }
 
 Positions MeshOrdering::ToOld(const Positions& renumbered) const {
   Positions result(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) result.row(old_vertex[k]) = renumbered.row(k);
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
+    result.row(old_vertex[k]) = renumbered.row(k);
   return result;
 }
 
@@ -137,12 +140,14 @@ Rotations MeshOrdering::ToOld(const Rotations& renumbered, bool per_element) con
 
 void MeshOrdering::ToNew(const Positions& input, Positions& out) const {
   out.resize(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) out.row(k) = input.row(old_vertex[k]);
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
+    out.row(k) = input.row(old_vertex[k]);
 }
 
 void MeshOrdering::ToOld(const Positions& renumbered, Positions& out) const {
   out.resize(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k) out.row(old_vertex[k]) = renumbered.row(k);
+  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
+    out.row(old_vertex[k]) = renumbered.row(k);
 }
 
 void MeshOrdering::ToNew(const Rotations& input, bool per_element, Rotations& out) const {

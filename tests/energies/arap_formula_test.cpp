@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The reported energies against a direct, independent evaluation of their defining formulas
 // (own cotangents, own rotation fit through Eigen's SVD of the explicit cell covariance).
-#include <catch2/catch.hpp>
-
 #include <Eigen/SVD>
+#include <catch2/catch.hpp>
 #include <map>
 
 #include "energies/spokes_and_rims_energy.h"
@@ -86,8 +85,8 @@ double SpokesReference(const Mesh& mesh, const Positions& u) {
   for (Index i = 0; i < mesh.num_vertices(); ++i) {
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     for (auto [j, w] : spokes[i]) {
-      covariance += w * Eigen::Vector3d(mesh.vertices.row(i) - mesh.vertices.row(j)) *
-                    (u.row(i) - u.row(j));
+      covariance +=
+          w * Eigen::Vector3d(mesh.vertices.row(i) - mesh.vertices.row(j)) * (u.row(i) - u.row(j));
     }
     const Eigen::Matrix3d r = BestRotation(covariance);
     for (auto [j, w] : spokes[i]) {
@@ -145,14 +144,15 @@ TEST_CASE("degenerate triangles get zero weight instead of inf/NaN", "[energies]
   const Context context;
   for (int which = 0; which < 2; ++which) {
     std::unique_ptr<CoupledQuadraticEnergy> energy;
-    if (which == 0) energy = std::make_unique<SpokesAndRimsEnergy>(SpokesAndRimsEnergy::Options{});
-    else energy = std::make_unique<SpokesEnergy>(SpokesEnergy::Options{});
+    if (which == 0)
+      energy = std::make_unique<SpokesAndRimsEnergy>(SpokesAndRimsEnergy::Options{});
+    else
+      energy = std::make_unique<SpokesEnergy>(SpokesEnergy::Options{});
     energy->Precompute(mesh, context);
     const SparseMatrix& m = energy->system_matrix();
     CHECK(Eigen::Map<const Eigen::VectorXd>(m.valuePtr(), m.nonZeros()).allFinite());
     Rotations rotations(mesh.num_vertices(), Rotation::Identity());
-    const double e = energy->FitRotations(SmoothlyDeformed(mesh.vertices, 1.0), rotations,
-                                          context);
+    const double e = energy->FitRotations(SmoothlyDeformed(mesh.vertices, 1.0), rotations, context);
     CHECK(std::isfinite(e));
     for (const auto& rotation : rotations) CHECK(rotation.allFinite());
   }

@@ -2,13 +2,13 @@
 // The per-element energy `elements` (Section 6 of the paper) against independent formulas:
 // WRAPD's Σ ½ vol ‖F − R‖² from deformation gradients and an SVD, dihedral angles by
 // trigonometry, and the surface energies on a flat mesh where they must agree.
-#include <catch2/catch.hpp>
+#include "energies/element_arap_energy.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <catch2/catch.hpp>
 #include <random>
 
-#include "energies/element_arap_energy.h"
 #include "energies/kernels/cotangent_weights.h"
 #include "energies/spokes_and_rims_energy.h"
 #include "energies/spokes_energy.h"
@@ -117,17 +117,17 @@ TEST_CASE("elements: one tetrahedron under a random affine map has exactly twice
   }
 }
 
-TEST_CASE("elements: one planar triangle under a random in-plane affine map has twice WRAPD's "
-          "energy",
-          "[energies]") {
+TEST_CASE(
+    "elements: one planar triangle under a random in-plane affine map has twice WRAPD's "
+    "energy",
+    "[energies]") {
   std::mt19937 rng(8);
   const Context context;
   for (int trial = 0; trial < 40; ++trial) {
     const Eigen::Matrix<double, 2, 3> rest = Eigen::Matrix<double, 2, 3>::Random();
     Eigen::Matrix2d f = RandomMatrix(rng).topLeftCorner<2, 2>();
     if ((f.determinant() < 0) != (trial % 2 == 0)) f.col(0) *= -1.0;
-    const Eigen::Matrix<double, 2, 3> deformed =
-        (f * rest).colwise() + Eigen::Vector2d::Random();
+    const Eigen::Matrix<double, 2, 3> deformed = (f * rest).colwise() + Eigen::Vector2d::Random();
     Mesh mesh;
     mesh.planar = true;
     mesh.vertices = Positions::Zero(3, 3);
@@ -189,9 +189,9 @@ TEST_CASE("elements: whole meshes equal the sum of WRAPD's per-element energies,
 TEST_CASE("elements: negative weights, yet A is PSD with exactly the constants as null space",
           "[energies]") {
   const Context context;
-  for (const Mesh& mesh : {Jittered(TetBox(5, 5, 4, 5), 5, 0.24, 11),
-                           Jittered(TetBox(4, 5, 5, 6), 5, 0.24, 12),
-                           Jittered(PlanarGrid(7, 6), 7, 0.3, 13)}) {
+  for (const Mesh& mesh :
+       {Jittered(TetBox(5, 5, 4, 5), 5, 0.24, 11), Jittered(TetBox(4, 5, 5, 6), 5, 0.24, 12),
+        Jittered(PlanarGrid(7, 6), 7, 0.3, 13)}) {
     Index negative = 0;
     if (mesh.planar) {
       negative = (HalfCotangents(mesh.vertices, mesh.elements).array() < 0.0).count();
@@ -252,8 +252,8 @@ TEST_CASE("elements: degenerate rest tetrahedra get zero weight", "[energies]") 
   // The new vertex is used only by the flat tetrahedron: its row of A is zero.
   CHECK(Eigen::MatrixXd(m).row(n).cwiseAbs().maxCoeff() == 0.0);
   Rotations rotations(mesh.num_elements(), Rotation::Identity());
-  CHECK(std::isfinite(energy.FitRotations(SmoothlyDeformed(mesh.vertices, 1.0), rotations,
-                                          context)));
+  CHECK(
+      std::isfinite(energy.FitRotations(SmoothlyDeformed(mesh.vertices, 1.0), rotations, context)));
   for (const auto& r : rotations) CHECK(r.allFinite());
 }
 

@@ -1,13 +1,12 @@
 // SPDX-License-Identifier: MIT
 // Properties every registered energy must have; a new energy is tested the moment it is
 // registered.
-#include <catch2/catch.hpp>
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <catch2/catch.hpp>
 #include <random>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "framework/error.h"
 #include "tests/support/level_energies.h"
 #include "tests/support/test_meshes.h"
@@ -126,9 +125,9 @@ TEST_CASE("every energy: gradient matches finite differences", "[energies]") {
       const double h = 1e-6;
       const Positions plus = u + h * direction;
       const Positions minus = u - h * direction;
-      const double numeric = (energy.Evaluate(plus, rotations, context) -
-                              energy.Evaluate(minus, rotations, context)) /
-                             (2.0 * h);
+      const double numeric =
+          (energy.Evaluate(plus, rotations, context) - energy.Evaluate(minus, rotations, context)) /
+          (2.0 * h);
       const double analytic = gradient.cwiseProduct(direction).sum();
       CHECK(numeric == Approx(analytic).epsilon(1e-6).margin(1e-8));
     }
@@ -186,9 +185,10 @@ TEST_CASE("every energy with a rotation derivative: Hessian products match finit
   });
 }
 
-TEST_CASE("every energy with a rotation derivative: the projected Hessian is PSD, and exact "
-          "where stretched",
-          "[energies]") {
+TEST_CASE(
+    "every energy with a rotation derivative: the projected Hessian is PSD, and exact "
+    "where stretched",
+    "[energies]") {
   const Context context;
   ForEachEnergyAndMesh([&](Energy& energy, const Mesh& mesh) {
     if (!energy.has_rotation_derivative()) return;

@@ -9,8 +9,7 @@
 using namespace harap;
 using namespace harap::testing;
 
-TEST_CASE("TriangleEntryPositions and TransposePositions agree with EntryPosition",
-          "[energies]") {
+TEST_CASE("TriangleEntryPositions and TransposePositions agree with EntryPosition", "[energies]") {
   for (const Mesh& mesh : {Tube(6, 7), Icosphere(2)}) {
     const SparseMatrix pattern = AdjacencyPattern(mesh.num_vertices(), mesh.elements);
     const auto entry = TriangleEntryPositions(pattern, mesh.elements);

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
-#include <catch2/catch.hpp>
+#include "energies/kernels/polar_decomposition.h"
 
+#include <catch2/catch.hpp>
 #include <random>
 
-#include "energies/kernels/polar_decomposition.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
@@ -41,8 +41,8 @@ TEST_CASE("ClosestRotation equals the SVD solution for any warm start", "[energi
     const Eigen::Matrix3d reference = ClosestRotationSvd(m);
     // Warm starts: identity, a random rotation, and one close to the answer.
     const Eigen::Matrix3d close =
-        reference * Eigen::AngleAxisd(0.05, Eigen::Vector3d(1, -2, 0.5).normalized())
-                        .toRotationMatrix();
+        reference *
+        Eigen::AngleAxisd(0.05, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
     for (const Eigen::Matrix3d& warm :
          {Eigen::Matrix3d(Eigen::Matrix3d::Identity()),
           testing::RandomRotation(static_cast<unsigned>(trial)), close}) {

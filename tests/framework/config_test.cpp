@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
+#include "framework/config.h"
+
 #include <catch2/catch.hpp>
 
-#include "framework/config.h"
 #include "framework/error.h"
 #include "framework/registries.h"
 
@@ -26,9 +27,9 @@ flag = true
 
   ConfigNode typo = ConfigNode::Parse("[solver]\nsweps = 3\n", "run.toml").Child("solver");
   typo.Get("sweeps", 1, "sweeps per solve");
-  CHECK_THROWS_WITH(typo.RejectUnknownKeys(),
-                    Catch::Contains("run.toml:2") && Catch::Contains("sweps") &&
-                        Catch::Contains("valid options: sweeps"));
+  CHECK_THROWS_WITH(typo.RejectUnknownKeys(), Catch::Contains("run.toml:2") &&
+                                                  Catch::Contains("sweps") &&
+                                                  Catch::Contains("valid options: sweeps"));
 }
 
 TEST_CASE("ConfigNode reports type errors with file, line and key", "[framework]") {
@@ -36,8 +37,8 @@ TEST_CASE("ConfigNode reports type errors with file, line and key", "[framework]
   CHECK_THROWS_WITH(node.Get("a", 1.0, "h"), Catch::Contains("bad.toml:1") &&
                                                  Catch::Contains("'a'") &&
                                                  Catch::Contains("number"));
-  CHECK_THROWS_WITH(node.Get("b", 1, "h"), Catch::Contains("bad.toml:2") &&
-                                               Catch::Contains("integer"));
+  CHECK_THROWS_WITH(node.Get("b", 1, "h"),
+                    Catch::Contains("bad.toml:2") && Catch::Contains("integer"));
   CHECK_THROWS_WITH(node.Get("c", 1.0, "h"), Catch::Contains("finite"));
   CHECK_THROWS_WITH(ConfigNode::Parse("a = [1,\n", "broken.toml"),
                     Catch::Contains("broken.toml") && Catch::Contains("syntax"));
@@ -86,9 +87,9 @@ TEST_CASE("Registry creates by name and lists the valid names on errors", "[fram
   CHECK(registry.Create("small", ConfigNode::Parse("size = 3", "t"))->size == 3);
   CHECK(registry.Create(ConfigNode::Parse("type = \"large\"", "t"), "small")->size == 100);
   CHECK(registry.Create(ConfigNode(), "small")->size == 1);
-  CHECK_THROWS_WITH(registry.Create("medium", ConfigNode()),
-                    Catch::Contains("unknown widget 'medium'") &&
-                        Catch::Contains("valid names: large, small"));
+  CHECK_THROWS_WITH(
+      registry.Create("medium", ConfigNode()),
+      Catch::Contains("unknown widget 'medium'") && Catch::Contains("valid names: large, small"));
   CHECK_THROWS_AS(registry.Add("small", "again", nullptr), InternalError);
   const auto options = registry.DescribeOptions("small");
   REQUIRE(options.size() == 1);

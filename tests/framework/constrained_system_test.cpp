@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
+#include "framework/constrained_system.h"
+
 #include <catch2/catch.hpp>
 
 #include "energies/spokes_and_rims_energy.h"
-#include "framework/constrained_system.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
@@ -39,8 +40,7 @@ TEST_CASE("ConstrainedSystem splits A and pins unconstrained components", "[fram
   const Eigen::MatrixXd residual_full = dense_a * u - b;  // rows of free vertices
   const Eigen::MatrixXd residual_reduced = a_ff * x_f - rhs_f;
   for (Index r = 0; r < system.num_free(); ++r) {
-    CHECK((residual_full.row(system.free_vertices()[r]) - residual_reduced.row(r)).norm() <
-          1e-10);
+    CHECK((residual_full.row(system.free_vertices()[r]) - residual_reduced.row(r)).norm() < 1e-10);
   }
   // Scatter writes free rows only and returns the largest squared displacement.
   Positions v = u;

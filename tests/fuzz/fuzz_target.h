@@ -17,8 +17,8 @@
 #include <string_view>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/mesh_repair.h"
+#include "io/mesh_io.h"
+#include "io/mesh_repair.h"
 
 namespace harap::fuzzing {
 

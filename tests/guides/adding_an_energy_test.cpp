@@ -6,7 +6,7 @@
 #include <cmath>
 #include <memory>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "tests/guides/guide_support.h"
 #include "tests/support/test_meshes.h"
 

@@ -5,7 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "tests/guides/guide_support.h"
 #include "tests/support/test_meshes.h"
 

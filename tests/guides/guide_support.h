@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/component_factory.h"
+#include "api/component_factory.h"
 #include "framework/config.h"
 #include "framework/registries.h"
 

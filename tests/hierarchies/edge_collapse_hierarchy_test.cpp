@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "framework/disjoint_sets.h"
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
 #include "hierarchies/builders/octree_hierarchy.h"
+#include "io/mesh_io.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "io/mesh_io.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
 

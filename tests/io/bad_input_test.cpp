@@ -3,7 +3,6 @@
 // with the error type and message EXPECTED.tsv gives for it, and the message must name the file.
 // Meshes go through ReadMesh, scenarios (.toml) through LoadScenario.
 #include <catch2/catch.hpp>
-
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,8 +11,8 @@
 #include <string>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/scenario.h"
+#include "io/mesh_io.h"
+#include "io/scenario.h"
 #include "tests/support/shared_data.h"
 
 namespace harap {
@@ -22,7 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct Expectation {
-  std::string error_type;  // InputError or ConfigError
+  std::string error_type;            // InputError or ConfigError
   std::vector<std::string> phrases;  // each must occur in the message
 };
 

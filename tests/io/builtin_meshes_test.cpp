@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: MIT
-#include "framework/io/builtin_meshes.h"
+#include "io/builtin_meshes.h"
 
 #include <catch2/catch.hpp>
-
 #include <cmath>
 
 #include "framework/error.h"
@@ -27,8 +26,7 @@ void CheckClosedOrientedManifold(const Mesh& mesh) {
   // Euler characteristic of a sphere, and no vertex left out.
   const auto referenced = ReferencedVertices(mesh);
   CHECK(std::count(referenced.begin(), referenced.end(), false) == 0);
-  CHECK(mesh.num_vertices() - static_cast<Index>(counts.undirected.size()) +
-            mesh.num_elements() ==
+  CHECK(mesh.num_vertices() - static_cast<Index>(counts.undirected.size()) + mesh.num_elements() ==
         2);
 }
 
@@ -78,9 +76,10 @@ TEST_CASE("builtin cylinder: vertex counts within 10% for sizes and aspects", "[
   for (const int vertices : {100, 1000, 12345, 100000}) {
     for (const double aspect : {1.0, 4.0, 10.0}) {
       for (const bool caps : {true, false}) {
-        const Mesh mesh = Make(fmt::format("builtin = \"cylinder\"\nvertices = {}\naspect = {}\n"
-                                           "caps = {}",
-                                           vertices, aspect, caps));
+        const Mesh mesh =
+            Make(fmt::format("builtin = \"cylinder\"\nvertices = {}\naspect = {}\n"
+                             "caps = {}",
+                             vertices, aspect, caps));
         INFO(vertices << " vertices, aspect " << aspect << ", caps " << caps << ": got "
                       << mesh.num_vertices());
         CHECK(std::abs(mesh.num_vertices() - vertices) <= vertices / 10);
@@ -99,8 +98,8 @@ TEST_CASE("builtin cylinder: vertex counts within 10% for sizes and aspects", "[
             (count == 1 ? boundary : count == 2 ? interior : other)++;
           }
           CHECK(other == 0);
-          const int ring = static_cast<int>(
-              (mesh.vertices.col(2).array() == 0.0).count());  // bottom row
+          const int ring =
+              static_cast<int>((mesh.vertices.col(2).array() == 0.0).count());  // bottom row
           CHECK(boundary == 2 * ring);
         }
       }
@@ -144,8 +143,8 @@ TEST_CASE("builtin plane: grid with sharp spikes", "[io][builtin]") {
   CHECK(tips >= 1);
   CHECK(tips <= 5);
   const Index raised = static_cast<Index>((mesh.vertices.col(2).array() > 0.0).count());
-  CHECK(raised > 5);                           // cones, not single raised vertices
-  CHECK(raised < mesh.num_vertices() / 20);    // narrow
+  CHECK(raised > 5);                         // cones, not single raised vertices
+  CHECK(raised < mesh.num_vertices() / 20);  // narrow
   // The border stays flat, and every triangle faces +z (the grid is oriented).
   for (Index v = 0; v < mesh.num_vertices(); ++v) {
     const double x = mesh.vertices(v, 0), y = mesh.vertices(v, 1);
@@ -187,8 +186,7 @@ void CheckPlanarDisk(const Mesh& mesh) {
   CHECK(boundary > 0);
   const auto referenced = ReferencedVertices(mesh);
   CHECK(std::count(referenced.begin(), referenced.end(), false) == 0);
-  CHECK(mesh.num_vertices() - static_cast<Index>(counts.undirected.size()) +
-            mesh.num_elements() ==
+  CHECK(mesh.num_vertices() - static_cast<Index>(counts.undirected.size()) + mesh.num_elements() ==
         1);
   CHECK(testing::MinAngleDegrees(mesh) > 25.0);
 }
@@ -212,9 +210,10 @@ TEST_CASE("builtin disk and rectangle: planar, counter-clockwise, sized", "[io][
     CHECK(area == Approx(M_PI / 4).epsilon(0.05));
     for (const double aspect : {1.0, 4.0, 0.25}) {
       INFO("aspect = " << aspect);
-      const Mesh rectangle = Make(fmt::format("builtin = \"rectangle\"\nvertices = {}\n"
-                                              "aspect = {}",
-                                              vertices, aspect));
+      const Mesh rectangle =
+          Make(fmt::format("builtin = \"rectangle\"\nvertices = {}\n"
+                           "aspect = {}",
+                           vertices, aspect));
       CheckPlanarDisk(rectangle);
       CHECK(std::abs(rectangle.num_vertices() - vertices) <= std::max(10, vertices / 10));
       CHECK(rectangle.vertices.col(0).maxCoeff() == Approx(aspect));
@@ -234,9 +233,9 @@ TEST_CASE("builtin meshes reject unknown names, unknown keys and bad values", "[
                     Contains("torus") && Contains("cylinder") && Contains("plane"));
   CHECK_THROWS_AS(Make("builtin = \"torus\""), ConfigError);
   CHECK_THROWS_WITH(Make("vertices = 10"), Contains("builtin") && Contains("cylinder, plane"));
-  CHECK_THROWS_WITH(Make("builtin = \"cylinder\"\nvertex = 10"),
-                    Contains("unknown option 'vertex'") && Contains("aspect") &&
-                        Contains("test.toml:2"));
+  CHECK_THROWS_WITH(
+      Make("builtin = \"cylinder\"\nvertex = 10"),
+      Contains("unknown option 'vertex'") && Contains("aspect") && Contains("test.toml:2"));
   CHECK_THROWS_WITH(Make("builtin = \"plane\"\naspect = 2"), Contains("unknown option 'aspect'"));
   CHECK_THROWS_WITH(Make("builtin = \"cylinder\"\nvertices = 0"), Contains("'vertices'"));
   CHECK_THROWS_WITH(Make("builtin = \"cylinder\"\naspect = -1.0"), Contains("'aspect'"));
@@ -244,8 +243,7 @@ TEST_CASE("builtin meshes reject unknown names, unknown keys and bad values", "[
   CHECK_THROWS_WITH(Make("builtin = \"plane\"\nvertices = 100\nspike_radius = 0.45"),
                     Contains("do not fit"));
   CHECK_THROWS_AS(Make("builtin = \"cylinder\"\nvertices = \"many\""), ConfigError);
-  CHECK(BuiltinMeshNames() ==
-        std::vector<std::string>{"cylinder", "plane", "disk", "rectangle"});
+  CHECK(BuiltinMeshNames() == std::vector<std::string>{"cylinder", "plane", "disk", "rectangle"});
 }
 
 }  // namespace

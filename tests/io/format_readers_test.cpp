@@ -3,17 +3,16 @@
 // directly: each gives what ReadMesh/ParseMesh give for its extension, names its source in
 // errors, and PLY reads WritePly's doubles back exactly.
 #include <catch2/catch.hpp>
-
 #include <string>
 
 #include "framework/error.h"
-#include "framework/io/file_reading.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/mesh_writers.h"
-#include "framework/io/obj_reader.h"
-#include "framework/io/off_reader.h"
-#include "framework/io/ply_reader.h"
-#include "framework/io/stl_reader.h"
+#include "io/file_reading.h"
+#include "io/mesh_io.h"
+#include "io/mesh_writers.h"
+#include "io/obj_reader.h"
+#include "io/off_reader.h"
+#include "io/ply_reader.h"
+#include "io/stl_reader.h"
 #include "tests/io/io_test_util.h"
 
 namespace {

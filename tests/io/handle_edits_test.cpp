@@ -2,11 +2,10 @@
 // Handle-edit files (`harap drag --edits`): an added handle is selected exactly as a scenario's
 // [[handle]] with the same table would select it; bad entries name file:line and the edit.
 #include <catch2/catch.hpp>
-
 #include <string>
 
 #include "framework/error.h"
-#include "framework/io/scenario.h"
+#include "io/scenario.h"
 #include "tests/io/io_test_util.h"
 
 using namespace harap;
@@ -52,11 +51,13 @@ remove = "ball"
   CHECK(edits[0].frame == 3);
   CHECK(edits[0].add);
   CHECK(edits[0].name == "ball");
-  CHECK(edits[0].vertices ==
-        ScenarioSelects("name = \"ball\"\nselect.ball = { center = [0.5, 0.5, 0.5], radius = 0.2 }"));
+  CHECK(
+      edits[0].vertices ==
+      ScenarioSelects("name = \"ball\"\nselect.ball = { center = [0.5, 0.5, 0.5], radius = 0.2 }"));
   CHECK_FALSE(edits[0].vertices.empty());
-  CHECK(edits[1].vertices == ScenarioSelects("name = \"ring\"\nunits = \"absolute\"\n"
-                                             "select.slab = { axis = \"z\", from = 1.0, to = 1.5 }"));
+  CHECK(edits[1].vertices ==
+        ScenarioSelects("name = \"ring\"\nunits = \"absolute\"\n"
+                        "select.slab = { axis = \"z\", from = 1.0, to = 1.5 }"));
   CHECK_FALSE(edits[1].vertices.empty());
   CHECK(edits[2].vertices == std::vector<Index>{3, 5, 7});
   CHECK_FALSE(edits[3].add);

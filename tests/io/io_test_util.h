@@ -2,18 +2,17 @@
 // Helpers shared by the io tests: scratch directories, file writing, topology checks.
 #pragma once
 
-#include <catch2/catch.hpp>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
-
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
 #include <string_view>
-#include <unistd.h>
 #include <utility>
 #include <vector>
 
@@ -101,7 +100,8 @@ void ExpectInputError(Run run, const std::vector<std::string>& phrases) {
   } catch (const InputError& error) {
     const std::string message = error.what();
     INFO("message: " << message);
-    for (const std::string& phrase : phrases) CHECK_THAT(message, Catch::Matchers::Contains(phrase));
+    for (const std::string& phrase : phrases)
+      CHECK_THAT(message, Catch::Matchers::Contains(phrase));
   }
 }
 

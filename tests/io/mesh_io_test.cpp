@@ -1,11 +1,9 @@
 // SPDX-License-Identifier: MIT
-#include "framework/io/mesh_io.h"
-
-#include <catch2/catch.hpp>
+#include "io/mesh_io.h"
 
 #include <Eigen/Geometry>
-
 #include <bit>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -14,8 +12,8 @@
 #include <sstream>
 
 #include "framework/error.h"
-#include "framework/io/file_reading.h"
-#include "framework/io/mesh_writers.h"
+#include "io/file_reading.h"
+#include "io/mesh_writers.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
@@ -23,8 +21,8 @@
 namespace harap {
 namespace {
 
-using testing::ScratchDir;
 using Catch::Matchers::Contains;
+using testing::ScratchDir;
 
 // A closed tetrahedron, xz-compressed by `xz -9e` (100 bytes), so the xz path is tested without
 // the shared data folder.
@@ -150,8 +148,8 @@ TEST_CASE("ReadMesh reads ASCII and binary STL through OpenMesh, welding corners
     binary.append(2, '\0');
   }
   ascii += "endsolid tet\n";
-  for (const auto& [name, bytes] : {std::pair{std::string("a.stl"), ascii},
-                                    std::pair{std::string("b.stl"), binary}}) {
+  for (const auto& [name, bytes] :
+       {std::pair{std::string("a.stl"), ascii}, std::pair{std::string("b.stl"), binary}}) {
     INFO(name);
     const Mesh mesh = ReadMesh(dir.Write(name, bytes));
     REQUIRE(mesh.num_vertices() == 4);
@@ -264,10 +262,13 @@ TEST_CASE("ReadMesh survives random bytes in every format", "[io]") {
       if (trial % 2 == 1) {
         const std::string_view ext(extension);
         if (ext == "off") bytes = "OFF\n3 1 0\n" + bytes;
-        if (ext == "ply") bytes = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
-                                  "property float x\nproperty float y\nproperty float z\n"
-                                  "element face 1\nproperty list uchar int vertex_indices\n"
-                                  "end_header\n" + bytes;
+        if (ext == "ply")
+          bytes =
+              "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+              "property float x\nproperty float y\nproperty float z\n"
+              "element face 1\nproperty list uchar int vertex_indices\n"
+              "end_header\n" +
+              bytes;
         if (ext == "stl") bytes = "solid x\n facet normal 0 0 0\n  outer loop\n" + bytes;
         if (ext == "obj") bytes = "v 0 0 0\nf 1 2 3\n" + bytes;
       }
@@ -297,11 +298,13 @@ TEST_CASE("ReadMesh survives mutations of valid files in every format", "[io]") 
       {"obj", kTetrahedronObj},
       {"off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n4 0 1 2 3\n"},
       {"ply", testing::ReadBytes(dir.path() / "pyramid.ply")},
-      {"ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
-              "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
-              "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
-      {"stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
-              "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n"},
+      {"ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+       "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+       "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"stl",
+       "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+       "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n"},
       {"stl", binary_stl},
       {"obj.xz", TetrahedronXzBytes()}};
   uint64_t state = 99;

@@ -1,16 +1,15 @@
 // SPDX-License-Identifier: MIT
-#include "framework/io/mesh_repair.h"
-
-#include <catch2/catch.hpp>
+#include "io/mesh_repair.h"
 
 #include <array>
+#include <catch2/catch.hpp>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <sstream>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "io/mesh_io.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
 
@@ -113,9 +112,9 @@ TEST_CASE("CheckMesh finds each defect and names the element", "[mesh_checks]") 
   }
   SECTION("a closed fan around a vertex, listed in scrambled order, is one fan") {
     // An octahedron: every vertex has a closed fan of four triangles.
-    Mesh mesh = MakeMesh({{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}},
-                         {{0, 2, 4}, {1, 3, 5}, {2, 1, 4}, {3, 0, 5}, {1, 2, 5}, {0, 3, 4},
-                          {2, 0, 5}, {3, 1, 4}});
+    Mesh mesh = MakeMesh(
+        {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}},
+        {{0, 2, 4}, {1, 3, 5}, {2, 1, 4}, {3, 0, 5}, {1, 2, 5}, {0, 3, 4}, {2, 0, 5}, {3, 1, 4}});
     const MeshCheckReport report = CheckMesh(mesh, {});
     CHECK(report.non_manifold_vertices.count == 0);
     CHECK(report.boundary_edges.count == 0);
@@ -275,8 +274,8 @@ TEST_CASE("PreparedProblem drops repeated faces and faces welding collapses", "[
   }
   SECTION("repeats that only welding makes are dropped too") {
     // Two copies of one triangle on unwelded seam vertices: different faces until welded.
-    const Mesh seam = MakeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}},
-                               {{0, 1, 2}, {3, 4, 2}});
+    const Mesh seam =
+        MakeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}}, {{0, 1, 2}, {3, 4, 2}});
     DeformationProblem seam_problem;
     seam_problem.mesh = &seam;
     MeshRepairOptions weld;

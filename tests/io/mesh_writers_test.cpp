@@ -2,7 +2,7 @@
 // WriteMesh: the extension picks the format, each format reads back (exactly where the format
 // can hold doubles), tetrahedra-only formats refuse triangle meshes, unknown extensions name the
 // valid ones.
-#include "framework/io/mesh_writers.h"
+#include "io/mesh_writers.h"
 
 #include <unistd.h>
 
@@ -12,8 +12,8 @@
 #include <sstream>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/tetrahedra.h"
+#include "io/mesh_io.h"
+#include "io/tetrahedra.h"
 #include "tests/support/test_meshes.h"
 
 namespace harap {

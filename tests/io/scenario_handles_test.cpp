@@ -2,11 +2,10 @@
 // Handle options beyond FORMAT.md (docs/input.md): absolute coordinates (`units`), per-vertex
 // targets from a file (`target_file`) and the deformation benchmark's .sel/.def files.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 
 #include "framework/error.h"
-#include "framework/io/scenario.h"
+#include "io/scenario.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/test_files.h"
 
@@ -74,11 +73,11 @@ TEST_CASE("scenario units: a ball in absolute coordinates and the top-level defa
           "[io][scenario][units]") {
   ScratchDir dir;
   dir.Write("grid.obj", kGridObj);
-  const auto file = dir.Write(
-      "s.toml", "mesh = \"grid.obj\"\nunits = \"absolute\"\n"
-                "[[handle]]\nselect.ball = { center = [12, -1, 0], radius = 0.5 }\n"
-                "[[handle]]\nunits = \"fractions\"\n"
-                "select.ball = { center = [0.5, 0.0, 0.0], radius = 0.1 }\n");
+  const auto file = dir.Write("s.toml",
+                              "mesh = \"grid.obj\"\nunits = \"absolute\"\n"
+                              "[[handle]]\nselect.ball = { center = [12, -1, 0], radius = 0.5 }\n"
+                              "[[handle]]\nunits = \"fractions\"\n"
+                              "select.ball = { center = [0.5, 0.0, 0.0], radius = 0.1 }\n");
   const Scenario scenario = LoadScenario(file);
   CHECK(scenario.handles[0].vertices == std::vector<Index>{1});
   CHECK(scenario.handles[1].vertices == std::vector<Index>{1});  // (12, -1): fractions (0.5, 0)
@@ -89,9 +88,10 @@ TEST_CASE("scenario units: messages say the kind of selection and give the box",
   ScratchDir dir;
   dir.Write("grid.obj", kGridObj);
   // Coordinates written as fractions (the default): matches nothing, the message says so.
-  std::string message = MessageOf(dir.Write(
-      "a.toml", "mesh = \"grid.obj\"\n[[handle]]\nname = \"end\"\n"
-                "select.slab = { axis = \"x\", from = 13.5, to = 14.0 }\n"));
+  std::string message =
+      MessageOf(dir.Write("a.toml",
+                          "mesh = \"grid.obj\"\n[[handle]]\nname = \"end\"\n"
+                          "select.slab = { axis = \"x\", from = 13.5, to = 14.0 }\n"));
   CHECK_THAT(message, Contains("a.toml:4"));
   CHECK_THAT(message, Contains("handle 'end'"));
   CHECK_THAT(message, Contains("slab x in [13.5, 14]"));
@@ -99,15 +99,16 @@ TEST_CASE("scenario units: messages say the kind of selection and give the box",
   CHECK_THAT(message, Contains("matches no vertex"));
   CHECK_THAT(message, Contains("units = \"absolute\""));
   // Absolute coordinates that miss the mesh: the message gives the box.
-  message = MessageOf(dir.Write(
-      "b.toml", "mesh = \"grid.obj\"\n[[handle]]\nunits = \"absolute\"\n"
-                "select.slab = { axis = \"x\", from = 0.9, to = 1.0 }\n"));
+  message = MessageOf(dir.Write("b.toml",
+                                "mesh = \"grid.obj\"\n[[handle]]\nunits = \"absolute\"\n"
+                                "select.slab = { axis = \"x\", from = 0.9, to = 1.0 }\n"));
   CHECK_THAT(message, Contains("absolute coordinates"));
   CHECK_THAT(message, Contains("x in [10, 14]"));
   CHECK_THAT(message, Contains("matches no vertex"));
   // `units` in the selection table: a hint where it belongs; a bad value lists the valid ones.
-  message = MessageOf(dir.Write(
-      "c.toml", "mesh = \"grid.obj\"\n[[handle]]\n"
+  message = MessageOf(
+      dir.Write("c.toml",
+                "mesh = \"grid.obj\"\n[[handle]]\n"
                 "select.slab = { axis = \"x\", from = 9, to = 11, units = \"absolute\" }\n"));
   CHECK_THAT(message, Contains("c.toml:3"));
   CHECK_THAT(message, Contains("key of the [[handle]]"));
@@ -123,9 +124,10 @@ TEST_CASE("scenario target_file: per-vertex targets, errors name file and line",
   ScratchDir dir;
   dir.Write("grid.obj", kGridObj);
   dir.Write("moves.txt", "# index x y z\n5 14 0 2\n\n0 10 -1 0  # held\n3 9.5 0.5 0\n");
-  const Scenario scenario = LoadScenario(dir.Write(
-      "s.toml", "mesh = \"grid.obj\"\n[[handle]]\nname = \"moves\"\n"
-                "target_file = \"moves.txt\"\n"));
+  const Scenario scenario =
+      LoadScenario(dir.Write("s.toml",
+                             "mesh = \"grid.obj\"\n[[handle]]\nname = \"moves\"\n"
+                             "target_file = \"moves.txt\"\n"));
   REQUIRE(scenario.handles.size() == 1);
   const ScenarioHandle& handle = scenario.handles[0];
   REQUIRE(handle.vertices == std::vector<Index>{0, 3, 5});  // ascending
@@ -137,8 +139,9 @@ TEST_CASE("scenario target_file: per-vertex targets, errors name file and line",
 
   auto error_for = [&](const std::string& content) {
     dir.Write("bad.txt", content);
-    return MessageOf(dir.Write("bad.toml", "mesh = \"grid.obj\"\n[[handle]]\nname = \"t\"\n"
-                                           "target_file = \"bad.txt\"\n"));
+    return MessageOf(dir.Write("bad.toml",
+                               "mesh = \"grid.obj\"\n[[handle]]\nname = \"t\"\n"
+                               "target_file = \"bad.txt\"\n"));
   };
   std::string message = error_for("0 1 2 3\n1 1 2\n");
   CHECK_THAT(message, Contains("bad.toml:4"));
@@ -158,13 +161,15 @@ TEST_CASE("scenario target_file: per-vertex targets, errors name file and line",
   CHECK_THAT(message, Contains("not a finite number"));
   message = error_for("# nothing\n");
   CHECK_THAT(message, Contains("no 'index x y z' line"));
-  message = MessageOf(dir.Write("both.toml", "mesh = \"grid.obj\"\n[[handle]]\n"
-                                             "target_file = \"moves.txt\"\n"
-                                             "select.indices = [0]\n"));
+  message = MessageOf(dir.Write("both.toml",
+                                "mesh = \"grid.obj\"\n[[handle]]\n"
+                                "target_file = \"moves.txt\"\n"
+                                "select.indices = [0]\n"));
   CHECK_THAT(message, Contains("both.toml:4"));
   CHECK_THAT(message, Contains("remove 'select'"));
-  message = MessageOf(dir.Write("missing.toml", "mesh = \"grid.obj\"\n[[handle]]\n"
-                                                "target_file = \"nowhere.txt\"\n"));
+  message = MessageOf(dir.Write("missing.toml",
+                                "mesh = \"grid.obj\"\n[[handle]]\n"
+                                "target_file = \"nowhere.txt\"\n"));
   CHECK_THAT(message, Contains("missing.toml:3"));
   CHECK_THAT(message, Contains("nowhere.txt not found"));
 }
@@ -218,15 +223,14 @@ TEST_CASE("scenario: the deformation benchmark's .sel and .def files", "[io][sce
   for (int v = 0; v < 16; ++v) no_handle += "0\n";
   CHECK_THAT(message(no_handle, good_def), Contains("no vertex as handle (label 2)"));
   CHECK_THAT(message(labels, "1 0 0 0\n0 1 0 0\n"), Contains("ends after 8 of the 16 numbers"));
-  CHECK_THAT(message(labels, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n5\n"),
-             Contains("x.def:5"));
+  CHECK_THAT(message(labels, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n5\n"), Contains("x.def:5"));
   CHECK_THAT(message(labels, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n"),
              Contains("not an affine transform"));
   CHECK_THAT(message(labels, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "selection = \"x.sel\"\n"),
              Contains("come together"));
   // Labels with no 0 give only the moving handle; the rest is free.
-  const Scenario only_handle = LoadScenario(dir.Write(
-      "y.toml", "mesh = \"bar.off\"\nselection = \"x.sel\"\ndeformation = \"x.def\"\n"));
+  const Scenario only_handle = LoadScenario(
+      dir.Write("y.toml", "mesh = \"bar.off\"\nselection = \"x.sel\"\ndeformation = \"x.def\"\n"));
   REQUIRE(only_handle.handles.size() == 1);
   CHECK(only_handle.handles[0].vertices == std::vector<Index>{15});
 }

@@ -1,15 +1,14 @@
 // SPDX-License-Identifier: MIT
-#include "framework/io/scenario.h"
+#include "io/scenario.h"
 
 #include <catch2/catch.hpp>
-
 #include <chrono>
 #include <cmath>
 
 #include "framework/error.h"
-#include "framework/io/builtin_meshes.h"
-#include "framework/io/mesh_io.h"
-#include "framework/io/mesh_writers.h"
+#include "io/builtin_meshes.h"
+#include "io/mesh_io.h"
+#include "io/mesh_writers.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 
@@ -54,18 +53,20 @@ Eigen::Matrix3d Rodrigues(Eigen::Vector3d axis, double degrees) {
 // Errors: each names the file (with line:column), the handle and the problem.
 
 TEST_CASE("scenario errors: unknown keys at every level", "[io][scenario]") {
-  ExpectError<ConfigError>(kMesh + "refinee = 1\n", {"errors.toml:2:1", "unknown key 'refinee'",
-                                                    "the top level"});
+  ExpectError<ConfigError>(kMesh + "refinee = 1\n",
+                           {"errors.toml:2:1", "unknown key 'refinee'", "the top level"});
   ExpectError<ConfigError>(
-      kMesh + "[[handle]]\nname = \"top\"\nselect.slab = { axis = \"z\", from = 0.9, to = 1.0 }\n"
-              "rotat = { axis = [1, 0, 0], degrees = 10 }\n",
+      kMesh +
+          "[[handle]]\nname = \"top\"\nselect.slab = { axis = \"z\", from = 0.9, to = 1.0 }\n"
+          "rotat = { axis = [1, 0, 0], degrees = 10 }\n",
       {"errors.toml:5:1", "handle 'top'", "unknown key 'rotat'", "rotate"});
   ExpectError<ConfigError>(
       kMesh + "[[handle]]\nname = \"top\"\nselect.slabs = { axis = \"z\", from = 0.9, to = 1 }\n",
       {"handle 'top'", "unknown key 'slabs'", "slab, ball, indices, index_file"});
   ExpectError<ConfigError>(
-      kMesh + "[[handle]]\nname = \"top\"\nselect.slab = { axis = \"z\", from = 0.9, to = 1.0 }\n"
-              "rotate = { axis = [1, 0, 0], angle = 10 }\n",
+      kMesh +
+          "[[handle]]\nname = \"top\"\nselect.slab = { axis = \"z\", from = 0.9, to = 1.0 }\n"
+          "rotate = { axis = [1, 0, 0], angle = 10 }\n",
       {"handle 'top'", "unknown key 'angle'", "degrees"});
   ExpectError<ConfigError>(
       kMesh + "[[handle]]\nselect.slab = { axis = \"z\", from = 0.9, upto = 1.0 }\n",
@@ -90,8 +91,9 @@ TEST_CASE("scenario errors: selections", "[io][scenario]") {
   ExpectError<ConfigError>(kMesh + "[[handle]]\nname = \"none\"\nselect.indices = []\n",
                            {"handle 'none'", "matches no vertex"});
   ExpectError<ConfigError>(
-      kMesh + "[[handle]]\nname = \"both\"\nselect.slab = { axis = \"z\", from = 0, to = 1 }\n"
-              "select.ball = { center = [0.5, 0.5, 0.5], radius = 0.1 }\n",
+      kMesh +
+          "[[handle]]\nname = \"both\"\nselect.slab = { axis = \"z\", from = 0, to = 1 }\n"
+          "select.ball = { center = [0.5, 0.5, 0.5], radius = 0.1 }\n",
       {"handle 'both'", "2 selections (slab, ball)", "exactly one"});
   ExpectError<ConfigError>(kMesh + "[[handle]]\nname = \"nothing\"\ntranslate = [0, 0, 1]\n",
                            {"handle 'nothing'", "no selection"});
@@ -131,11 +133,10 @@ TEST_CASE("scenario errors: mesh, files and syntax", "[io][scenario]") {
   ExpectError<ConfigError>("[[handle]]\nselect.indices = [0]\n", {"no 'mesh'"});
   ExpectError<InputError>("mesh = \"missing.obj\"\n",
                           {"errors.toml:1:8", "missing.obj", "not found"}, dir.path());
-  ExpectError<InputError>("mesh = \"bunny.mesh.xz\"\n", {"bunny.mesh.xz", "not found"},
-                          dir.path());
+  ExpectError<InputError>("mesh = \"bunny.mesh.xz\"\n", {"bunny.mesh.xz", "not found"}, dir.path());
   dir.Write("rabbit.node", "1 3 0 0\n0 0 0 0\n");
-  ExpectError<InputError>("mesh = \"rabbit.node\"\n",
-                          {"errors.toml:1", "rabbit.ele", "is missing"}, dir.path());
+  ExpectError<InputError>("mesh = \"rabbit.node\"\n", {"errors.toml:1", "rabbit.ele", "is missing"},
+                          dir.path());
   dir.Write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
   ExpectError<InputError>("mesh = \"bad.obj\"\n", {"errors.toml:1", "bad.obj", "out of range"},
                           dir.path());
@@ -145,8 +146,7 @@ TEST_CASE("scenario errors: mesh, files and syntax", "[io][scenario]") {
   // Index files: missing, malformed, out of range.
   const std::string handle = "[[handle]]\nname = \"file\"\nselect.index_file = ";
   ExpectError<InputError>(kMesh + handle + "\"none.txt\"\n",
-                          {"errors.toml:4", "handle 'file'", "none.txt", "not found"},
-                          dir.path());
+                          {"errors.toml:4", "handle 'file'", "none.txt", "not found"}, dir.path());
   dir.Write("bad.txt", "0 1\n2 x\n");
   ExpectError<InputError>(kMesh + handle + "\"bad.txt\"\n",
                           {"handle 'file'", "bad.txt", "line 2", "'x' is not a vertex index"},
@@ -217,8 +217,8 @@ TEST_CASE("scenario motion: rotate about the centroid or a centre, then translat
     REQUIRE(p.z() >= lo.z() + 0.8 * (hi.z() - lo.z()));
   }
   // Rigid: distances between handle vertices are kept.
-  const Eigen::Vector3d d0 = mesh.vertices.row(top.vertices.front()) -
-                             mesh.vertices.row(top.vertices.back());
+  const Eigen::Vector3d d0 =
+      mesh.vertices.row(top.vertices.front()) - mesh.vertices.row(top.vertices.back());
   const Eigen::Vector3d d1 = top.targets.row(0) - top.targets.row(top.targets.rows() - 1);
   CHECK(d1.norm() == Approx(d0.norm()));
 
@@ -342,9 +342,8 @@ TEST_CASE("scenario: TetGen files, a .node start configuration, target = initial
   // refine is Loop subdivision of triangles; planar needs triangles.
   ExpectError<ConfigError>("refine = 1\n" + text, {"errors.toml:1", "refine", "tetrahedra"},
                            dir.path());
-  ExpectError<ConfigError>("planar = true\n" + text, {"errors.toml:1", "planar = true",
-                                                      "tetrahedra"},
-                           dir.path());
+  ExpectError<ConfigError>("planar = true\n" + text,
+                           {"errors.toml:1", "planar = true", "tetrahedra"}, dir.path());
   // A start configuration of the wrong size; a broken .node file names its line.
   dir.Write("tets/short.node", "2 3\n0 0 0 0\n1 1 0 0\n");
   ExpectError<InputError>("mesh = \"tets/bar_rest.node\"\ninitial = \"tets/short.node\"\n",
@@ -369,8 +368,8 @@ TEST_CASE("scenario: tetrahedralize a built-in surface or a surface file",
   CHECK(mesh.kind() == ElementKind::kTetrahedron);
   REQUIRE(mesh.num_vertices() > surface.num_vertices());
   CHECK(mesh.vertices.topRows(surface.num_vertices()) == surface.vertices);
-  CHECK_THAT(scenario.mesh_source, Contains("tetrahedralized builtin") &&
-                                       Contains("max_volume=0.01"));
+  CHECK_THAT(scenario.mesh_source,
+             Contains("tetrahedralized builtin") && Contains("max_volume=0.01"));
   REQUIRE(scenario.notes.size() == 1);
   CHECK_THAT(scenario.notes[0], Contains("surface vertices") && Contains("tetrahedra"));
   // Handle indices refer to the surface's vertices, unchanged.
@@ -396,9 +395,8 @@ TEST_CASE("scenario: tetrahedralize a built-in surface or a surface file",
                            {"errors.toml:1", "max_volume must be in [0, 1)"}, dir.path());
   ExpectError<ConfigError>("mesh = { tetrahedralize = 3 }\n",
                            {"errors.toml:1", "mesh.tetrahedralize must be"});
-  ExpectError<ConfigError>(
-      "mesh = { tetrahedralize = { builtin = \"cylinder\", vertexes = 9 } }\n",
-      {"errors.toml:1", "vertexes"});
+  ExpectError<ConfigError>("mesh = { tetrahedralize = { builtin = \"cylinder\", vertexes = 9 } }\n",
+                           {"errors.toml:1", "vertexes"});
   ExpectError<InputError>("mesh = { tetrahedralize = \"none.obj\" }\n",
                           {"errors.toml:1", "none.obj", "not found"}, dir.path());
   ExpectError<InputError>(
@@ -413,10 +411,12 @@ TEST_CASE("scenario: tetrahedralize a built-in surface or a surface file",
 TEST_CASE("scenario: planar meshes, automatic and explicit", "[io][scenario][planar]") {
   ScratchDir dir;
   const std::string rectangle = "mesh = { builtin = \"rectangle\", vertices = 200 }\n";
-  const std::string left = "[[handle]]\nname = \"left\"\n"
-                           "select.slab = { axis = \"x\", from = 0.0, to = 0.05 }\n";
-  const std::string right = "[[handle]]\nname = \"right\"\n"
-                            "select.slab = { axis = \"x\", from = 0.95, to = 1.0 }\n";
+  const std::string left =
+      "[[handle]]\nname = \"left\"\n"
+      "select.slab = { axis = \"x\", from = 0.0, to = 0.05 }\n";
+  const std::string right =
+      "[[handle]]\nname = \"right\"\n"
+      "select.slab = { axis = \"x\", from = 0.95, to = 1.0 }\n";
   // In-plane motion of a flat mesh: planar.
   const Scenario in_plane =
       Parse(rectangle + left + right + "rotate = { axis = [0, 0, 1], degrees = 45 }\n");
@@ -431,9 +431,9 @@ TEST_CASE("scenario: planar meshes, automatic and explicit", "[io][scenario][pla
   // Explicit settings win.
   CHECK(!Parse("planar = false\n" + rectangle + left).mesh.planar);
   CHECK(Parse("planar = true\n" + rectangle + left).mesh.planar);
-  ExpectError<ConfigError>("planar = true\n" + rectangle + left + right +
-                               "translate = [0, 0, 0.1]\n",
-                           {"errors.toml:1", "planar = true", "handle 'right'", "z ="});
+  ExpectError<ConfigError>(
+      "planar = true\n" + rectangle + left + right + "translate = [0, 0, 0.1]\n",
+      {"errors.toml:1", "planar = true", "handle 'right'", "z ="});
   ExpectError<ConfigError>("planar = true\nmesh = { builtin = \"plane\", vertices = 400 }\n",
                            {"errors.toml:1", "planar = true", "vertex", "z ="});
   ExpectError<ConfigError>("planar = 1\n" + rectangle, {"errors.toml:1", "true or false"});
@@ -525,8 +525,8 @@ void CheckSharedScenario(const std::filesystem::path& file) {
 }
 
 TEST_CASE("shared scenarios: the small ones load", "[io][scenario][shared]") {
-  for (const char* name : {"cactus-small.toml", "bunny-ears.toml", "cow-stretch.toml",
-                           "armadillo-bend-43k.toml"}) {
+  for (const char* name :
+       {"cactus-small.toml", "bunny-ears.toml", "cow-stretch.toml", "armadillo-bend-43k.toml"}) {
     HARAP_REQUIRE_SHARED(file, std::string("scenarios/") + name);
     CheckSharedScenario(file);
   }
@@ -558,9 +558,9 @@ TEST_CASE("shared scenarios: every tetrahedral scenario loads", "[io][scenario][
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const Mesh& mesh = scenario.mesh;
-    WARN(entry.path().filename().string() << ": " << mesh.num_vertices() << " vertices, "
-                                          << mesh.num_elements() << " tetrahedra, loaded in "
-                                          << seconds << " s");
+    WARN(entry.path().filename().string()
+         << ": " << mesh.num_vertices() << " vertices, " << mesh.num_elements()
+         << " tetrahedra, loaded in " << seconds << " s");
     CHECK(mesh.kind() == ElementKind::kTetrahedron);
     CHECK(!mesh.planar);
     // WRAPD's rest tetrahedra are all positively oriented (../shared/tets/README.md).

@@ -1,15 +1,14 @@
 // SPDX-License-Identifier: MIT
-#include "framework/io/subdivision.h"
+#include "io/subdivision.h"
 
 #include <catch2/catch.hpp>
-
 #include <chrono>
 #include <iostream>
 #include <sstream>
 
 #include "framework/error.h"
-#include "framework/io/builtin_meshes.h"
-#include "framework/io/mesh_io.h"
+#include "io/builtin_meshes.h"
+#include "io/mesh_io.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 
@@ -44,15 +43,15 @@ TEST_CASE("LoopSubdivide: counts and Loop's stencils on a tetrahedron", "[io][su
   CHECK(twice.num_vertices() == 10 + 24);
   CHECK(twice.num_elements() == 64);
   const auto counts = testing::CountEdges(once);
-  for (const auto& [edge, count] : counts.directed) REQUIRE(count == 1);  // still oriented
+  for (const auto& [edge, count] : counts.directed) REQUIRE(count == 1);    // still oriented
   for (const auto& [edge, count] : counts.undirected) REQUIRE(count == 2);  // still closed
 
   // Old vertices come first, moved by the valence-3 rule (1 - 3b) p + b * sum(neighbours) with
   // b = 3/16; each edge gets 3/8 (a + b) + 1/8 (c + d) of its endpoints and opposite corners.
   const Positions& p = tetrahedron.vertices;
   for (Index v = 0; v < 4; ++v) {
-    const Eigen::RowVector3d expected = (1.0 - 3.0 * 3.0 / 16.0) * p.row(v) +
-                                        3.0 / 16.0 * (p.colwise().sum() - p.row(v));
+    const Eigen::RowVector3d expected =
+        (1.0 - 3.0 * 3.0 / 16.0) * p.row(v) + 3.0 / 16.0 * (p.colwise().sum() - p.row(v));
     CHECK((once.vertices.row(v) - expected).norm() < 1e-14);
   }
   for (Index a = 0; a < 4; ++a) {
@@ -195,8 +194,8 @@ TEST_CASE("LoopSubdivideCreased equals OpenMesh's Loop on manifold meshes", "[io
 }
 
 TEST_CASE("LoopSubdivide of the built-in cylinder stays a closed manifold", "[io][subdivision]") {
-  const Mesh cylinder = MakeBuiltinMesh(
-      ConfigNode::Parse("builtin = \"cylinder\"\nvertices = 2000", "test"));
+  const Mesh cylinder =
+      MakeBuiltinMesh(ConfigNode::Parse("builtin = \"cylinder\"\nvertices = 2000", "test"));
   const Mesh refined = LoopSubdivide(cylinder, 1);
   const auto counts = testing::CountEdges(cylinder);
   CHECK(refined.num_vertices() ==
@@ -205,7 +204,8 @@ TEST_CASE("LoopSubdivide of the built-in cylinder stays a closed manifold", "[io
   for (const auto& [edge, count] : testing::CountEdges(refined).undirected) REQUIRE(count == 2);
 }
 
-TEST_CASE("LoopSubdivide of armadillo-43k gives the paper's ~173K vertices", "[io][subdivision]"
+TEST_CASE("LoopSubdivide of armadillo-43k gives the paper's ~173K vertices",
+          "[io][subdivision]"
           "[shared]") {
   HARAP_REQUIRE_SHARED(file, "meshes/armadillo-43k.obj.xz");
   const Mesh mesh = ReadMesh(file);
@@ -221,7 +221,8 @@ TEST_CASE("LoopSubdivide of armadillo-43k gives the paper's ~173K vertices", "[i
   CHECK(BoundingBoxDiagonal(refined) == Approx(BoundingBoxDiagonal(mesh)).epsilon(0.02));
 }
 
-TEST_CASE("LoopSubdivide refines the non-manifold dragon-res2 with a note", "[io][subdivision]"
+TEST_CASE("LoopSubdivide refines the non-manifold dragon-res2 with a note",
+          "[io][subdivision]"
           "[shared]") {
   HARAP_REQUIRE_SHARED(file, "meshes/dragon-res2.obj.xz");
   const Mesh mesh = ReadMesh(file);

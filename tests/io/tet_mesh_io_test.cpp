@@ -1,17 +1,15 @@
 // SPDX-License-Identifier: MIT
 // TetGen .node/.ele and MEDIT .mesh readers: small files written into a scratch directory, the
 // error for each kind of broken file, and the shared WRAPD scenes.
-#include "framework/io/medit_reader.h"
-#include "framework/io/tetgen_reader.h"
-#include "framework/io/tetrahedra.h"
-
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <string>
 
 #include "framework/error.h"
-#include "framework/io/mesh_io.h"
+#include "io/medit_reader.h"
+#include "io/mesh_io.h"
+#include "io/tetgen_reader.h"
+#include "io/tetrahedra.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/shared_data.h"
 
@@ -88,16 +86,16 @@ TEST_CASE("TetGen reader: 0- and 1-based pairs, named by either file", "[io][tet
   std::vector<std::string> notes;
   CheckTwoTetrahedra(ReadMesh(node0, &notes));
   REQUIRE(notes.size() == 1);
-  CHECK_THAT(notes[0], Contains("zero.ele") && Contains("1 of 2 tetrahedra") &&
-                           Contains("reoriented"));
+  CHECK_THAT(notes[0],
+             Contains("zero.ele") && Contains("1 of 2 tetrahedra") && Contains("reoriented"));
   CheckTwoTetrahedra(ReadMesh(ele0));
   CheckTwoTetrahedra(ReadTetGenMesh(node1));
   // The points alone (a start configuration): no .ele needed.
   const auto lonely = dir.Write("lonely.node", kNodeOneBased);
   const Positions points = ReadMeshVertices(lonely);
   CHECK(points == ReadMesh(node1).vertices);
-  CHECK_THROWS_WITH(ReadMesh(lonely), Contains("lonely.node") && Contains("lonely.ele") &&
-                                          Contains("is missing"));
+  CHECK_THROWS_WITH(ReadMesh(lonely),
+                    Contains("lonely.node") && Contains("lonely.ele") && Contains("is missing"));
   CHECK_THROWS_WITH(ReadMesh(dir.path() / "none.ele"), Contains("none.node"));
 }
 
@@ -117,14 +115,15 @@ TEST_CASE("TetGen reader: malformed, truncated and inconsistent files", "[io][te
                     {"x.node", "truncated", "after 1 of the 9999999 points"});
   ExpectTetGenError("9999999999 3\n1 0 0 0\n", ele, {"x.node", "more than harap's limit"});
   ExpectTetGenError("5 3\n2 0 0 0\n", ele, {"line 2", "first point id is 2"});
-  ExpectTetGenError("5 3\n1 0 0 0\n3 1 0 0\n", ele, {"line 3", "point id 3 out of sequence",
-                                                    "expected 2"});
+  ExpectTetGenError("5 3\n1 0 0 0\n3 1 0 0\n", ele,
+                    {"line 3", "point id 3 out of sequence", "expected 2"});
   ExpectTetGenError("5 3\n1 0 0 0\n2 1 x 0\n", ele, {"line 3", "'x'", "not a number"});
   ExpectTetGenError("5 3\n1 0 0 0\n2 1 0\n", ele, {"line 3", "(missing)"});
   ExpectTetGenError("5 3\n1 0 0 0\n2 1 nan 0\n", ele, {"line 3", "non-finite"});
   ExpectTetGenError("5 3\n1 0 0 0\n2 1 1e999 0\n", ele, {"line 3", "non-finite"});
-  ExpectTetGenError("5 3\n1 0 0 0 4\n", ele, {"line 2", "1 values after its coordinates",
-                                              "0 attributes and 0 boundary markers"});
+  ExpectTetGenError(
+      "5 3\n1 0 0 0 4\n", ele,
+      {"line 2", "1 values after its coordinates", "0 attributes and 0 boundary markers"});
   ExpectTetGenError(node + "6 2 2 2\n", ele, {"x.node", "line 7", "more data after the 5 points"});
   ExpectTetGenError(node, "2 10\n", {"x.ele", "10-node (quadratic)"});
   ExpectTetGenError(node, "2 3\n", {"x.ele", "3 nodes per tetrahedron"});
@@ -184,8 +183,8 @@ TEST_CASE("MEDIT reader: malformed and truncated files", "[io][tet]") {
   ExpectMeditError(vertices, {"x.mesh", "no Tetrahedra section", "OBJ"});
   ExpectMeditError("Dimension 2\n" + vertices + tets, {"line 1", "Dimension 2"});
   ExpectMeditError("MeshVersionFormatted 7\n", {"line 1", "MeshVersionFormatted '7'"});
-  ExpectMeditError(vertices + "Prisms2 1\n" + tets, {"line 8", "unknown section keyword",
-                                                     "'Prisms2'", "triangles"});
+  ExpectMeditError(vertices + "Prisms2 1\n" + tets,
+                   {"line 8", "unknown section keyword", "'Prisms2'", "triangles"});
   ExpectMeditError(vertices + tets + "Triangles 1\n1 2 3\n",
                    {"truncated", "section Triangles after 0 of its 1 entries"});
   ExpectMeditError(vertices + "Triangles 1\n1 2 3 0 4\n" + tets,

@@ -1,18 +1,17 @@
 // SPDX-License-Identifier: MIT
 // Tetrahedralization with TetGen: the surface survives exactly, the tetrahedra fill it with
 // positive volumes, and broken surfaces (open, self-intersecting, ...) are InputErrors.
-#include "framework/io/tetrahedralize.h"
-
-#include <catch2/catch.hpp>
+#include "io/tetrahedralize.h"
 
 #include <algorithm>
 #include <array>
+#include <catch2/catch.hpp>
 #include <map>
 
 #include "framework/config.h"
 #include "framework/error.h"
-#include "framework/io/builtin_meshes.h"
-#include "framework/io/tetrahedra.h"
+#include "io/builtin_meshes.h"
+#include "io/tetrahedra.h"
 #include "tests/io/io_test_util.h"
 
 namespace harap {
@@ -32,8 +31,8 @@ Mesh Cube() {
   mesh.vertices.resize(8, 3);
   mesh.vertices << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1;
   mesh.elements.resize(12, 3);
-  mesh.elements << 0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3,
-      7, 2, 7, 6, 3, 0, 4, 3, 4, 7;
+  mesh.elements << 0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7,
+      2, 7, 6, 3, 0, 4, 3, 4, 7;
   return mesh;
 }
 
@@ -101,8 +100,8 @@ TEST_CASE("Tetrahedralize keeps the surface of the built-in cylinder", "[io][tet
     CheckKeepsSurface(surface, volume);
   }
   SECTION("with a volume bound: more tetrahedra, interior Steiner points") {
-    const Mesh coarse = Tetrahedralize(surface, {.max_volume = 0.0, .max_radius_edge_ratio = 0.0},
-                                       "cylinder");
+    const Mesh coarse =
+        Tetrahedralize(surface, {.max_volume = 0.0, .max_radius_edge_ratio = 0.0}, "cylinder");
     CheckKeepsSurface(surface, coarse);
     CHECK(coarse.num_vertices() == surface.num_vertices());  // no refinement: no Steiner points
     TetrahedralizeOptions options;

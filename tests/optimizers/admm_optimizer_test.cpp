@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
 // admm_pd and wrapd (flat and as hierarchical's inner optimizer) on a small twisted and stretched
 // tetrahedral box, against classic local/global's converged per-element ARAP energy.
-#include <catch2/catch.hpp>
-
 #include <Eigen/Geometry>
+#include <catch2/catch.hpp>
 
 #include "framework/error.h"
 #include "solvers/optimizers/local_global_solver.h"
@@ -50,9 +49,10 @@ struct TwistedBox {
 Mesh SmallBox() { return TetBox(9, 5, 5, 6); }
 
 std::string Config(const std::string& optimizer, const std::string& options) {
-  return fmt::format("[optimizer]\ntype = \"{}\"\n{}\n[energy]\ntype = \"elements\"\n"
-                     "[hierarchy]\nmin_vertices = 30\n",
-                     optimizer, options);
+  return fmt::format(
+      "[optimizer]\ntype = \"{}\"\n{}\n[energy]\ntype = \"elements\"\n"
+      "[hierarchy]\nmin_vertices = 30\n",
+      optimizer, options);
 }
 
 /// classic local/global run to a displacement of 1e-14 diag²: the reference minimum.
@@ -150,7 +150,8 @@ TEST_CASE("admm_pd on a planar mesh reaches the local/global minimum", "[optimiz
     const Eigen::Vector3d p = grid.vertices.row(v);
     if (p.x() < 1e-9 || p.x() > 2.0 - 1e-9) {
       problem.constraints.indices.push_back(v);
-      targets.push_back(p.x() < 1e-9 ? p : Eigen::Vector3d(turn * p + Eigen::Vector3d(0.2, 0.1, 0)));
+      targets.push_back(p.x() < 1e-9 ? p
+                                     : Eigen::Vector3d(turn * p + Eigen::Vector3d(0.2, 0.1, 0)));
     }
   }
   problem.constraints.targets.resize(static_cast<Index>(targets.size()), 3);
@@ -160,7 +161,7 @@ TEST_CASE("admm_pd on a planar mesh reaches the local/global minimum", "[optimiz
   const double minimum = ClassicMinimum(problem);
   const TracedRun run = Run(Config("admm_pd", "tolerance = 1e-12\nmax_iterations = 5000"), problem);
   INFO("energy " << run.result.energy << " after " << run.result.iterations
-                  << " iterations (converged " << run.result.converged << "), minimum " << minimum);
+                 << " iterations (converged " << run.result.converged << "), minimum " << minimum);
   CHECK(run.result.energy <= minimum * (1.0 + 1e-6));
   CHECK(run.result.energy >= minimum * (1.0 - 1e-9));
   CHECK(run.result.positions.col(2).isZero(0.0));
@@ -176,10 +177,10 @@ TEST_CASE("hierarchical with inner admm_pd and wrapd", "[optimizers][admm]") {
     SECTION(inner) {
       const TracedRun flat =
           Run(Config(inner, "tolerance = 1e-9\nmax_iterations = 2000"), box.problem);
-      const TracedRun hierarchical = Run(
-          Config("hierarchical",
-                 fmt::format("inner = \"{}\"\ntolerance = 1e-9\nmax_iterations = 2000", inner)),
-          box.problem);
+      const TracedRun hierarchical =
+          Run(Config("hierarchical",
+                     fmt::format("inner = \"{}\"\ntolerance = 1e-9\nmax_iterations = 2000", inner)),
+              box.problem);
       const OptimizeResult& h = hierarchical.result;
       INFO(inner << ": hierarchical " << h.energy << " (" << h.levels.size() << " levels, "
                  << h.iterations << " finest iterations), flat " << flat.result.energy << " ("
@@ -214,8 +215,7 @@ TEST_CASE("ADMM options are validated", "[optimizers][admm]") {
   CHECK_THAT(message(Config("admm_pd", "tolerance = -1")), Catch::Contains("tolerance"));
   CHECK_THAT(message(Config("admm_pd", "patience = 0")), Catch::Contains("patience"));
   CHECK_THAT(message(Config("wrapd", "lbfgs_history = 0")), Catch::Contains("lbfgs_history"));
-  CHECK_THAT(message(Config("wrapd", "lbfgs_iterations = 0")),
-             Catch::Contains("lbfgs_iterations"));
+  CHECK_THAT(message(Config("wrapd", "lbfgs_iterations = 0")), Catch::Contains("lbfgs_iterations"));
   // L-BFGS keys belong to wrapd only; unknown keys are rejected naming the key.
   CHECK_THAT(message(Config("admm_pd", "lbfgs_history = 4")), Catch::Contains("lbfgs_history"));
   CHECK_THAT(message(Config("wrapd", "betta = 2")), Catch::Contains("betta"));

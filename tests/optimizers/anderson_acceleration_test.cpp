@@ -21,7 +21,8 @@ TEST_CASE("Anderson acceleration solves a linear contraction far sooner than the
   Eigen::MatrixXd q = Eigen::MatrixXd::NullaryExpr(rows, rows, [&] { return uniform(random); });
   q = Eigen::HouseholderQR<Eigen::MatrixXd>(q).householderQ();
   Eigen::VectorXd spectrum(rows);
-  for (Eigen::Index i = 0; i < rows; ++i) spectrum(i) = i % 3 == 0 ? 0.99 : (i % 3 == 1 ? 0.5 : -0.3);
+  for (Eigen::Index i = 0; i < rows; ++i)
+    spectrum(i) = i % 3 == 0 ? 0.99 : (i % 3 == 1 ? 0.5 : -0.3);
   const Eigen::MatrixXd m = q * spectrum.asDiagonal() * q.transpose();
   const Eigen::MatrixXd b = Eigen::MatrixXd::NullaryExpr(rows, 3, [&] { return uniform(random); });
   const Eigen::MatrixXd fixed_point =
@@ -81,9 +82,10 @@ TEST_CASE("local/global with Anderson acceleration: monotone, same minimum, fewe
     // acceleration off); fixed ones keep every level monotone.
     const std::string fixed_targets =
         std::string(optimizer) == "hierarchical" ? "update_constraints = false\n" : "";
-    TestSetup setup(fmt::format("[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\n"
-                                "max_iterations = 3000\nanderson = {}\n{}",
-                                optimizer, anderson, fixed_targets));
+    TestSetup setup(
+        fmt::format("[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\n"
+                    "max_iterations = 3000\nanderson = {}\n{}",
+                    optimizer, anderson, fixed_targets));
     return OptimizeWithTrace(setup, problem, trace);
   };
   for (const char* optimizer : {"classic", "hierarchical"}) {

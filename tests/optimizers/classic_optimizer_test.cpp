@@ -14,8 +14,7 @@ namespace {
 DeformationProblem BendTube(const Mesh& mesh, int rings, int segments) {
   DeformationProblem problem;
   problem.mesh = &mesh;
-  const Eigen::Matrix3d turn =
-      Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
   std::vector<Index> indices;
   for (int s = 0; s < segments; ++s) indices.push_back(s);
   for (int s = 0; s < segments; ++s) indices.push_back((rings - 1) * segments + s);
@@ -37,9 +36,10 @@ TEST_CASE("classic ARAP: energy never increases and constraints hold exactly", "
   for (const char* energy : {"spokes_and_rims", "spokes"}) {
     for (const char* solver : {"cholmod", "eigen_ldlt"}) {
       DYNAMIC_SECTION(energy << " with " << solver) {
-        TestSetup setup(fmt::format("[energy]\ntype = \"{}\"\n[solver]\ntype = \"{}\"\n"
-                                    "[optimizer]\ntolerance = 1e-8\nmax_iterations = 2000\n",
-                                    energy, solver));
+        TestSetup setup(
+            fmt::format("[energy]\ntype = \"{}\"\n[solver]\ntype = \"{}\"\n"
+                        "[optimizer]\ntolerance = 1e-8\nmax_iterations = 2000\n",
+                        energy, solver));
         EnergyTrace trace;
         const OptimizeResult result = OptimizeWithTrace(setup, problem, trace);
         const std::vector<double>& energies = trace[0];

@@ -4,7 +4,6 @@
 // (it quotes the steps), and the other way round: the suite builds and runs it, so a guide
 // that no longer matches the interface fails here.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <limits>
 #include <map>
@@ -32,7 +31,7 @@ namespace {
 class SweepsLevelSolver final : public LevelSolver {
  public:
   struct Options {
-    double tolerance = 1e-6;    ///< on max ‖Δu_i‖² / diag² of an iteration, as local_global's
+    double tolerance = 1e-6;  ///< on max ‖Δu_i‖² / diag² of an iteration, as local_global's
     int max_iterations = 1000;  ///< per level
     int sweeps = 4;             ///< Gauss–Seidel sweeps per global step
   };
@@ -47,7 +46,8 @@ class SweepsLevelSolver final : public LevelSolver {
     options.max_iterations =
         node.Get("max_iterations", options.max_iterations, "cap on iterations (per level)");
     options.sweeps = node.Get("sweeps", options.sweeps, "Gauss-Seidel sweeps per global step");
-    if (options.sweeps < 1) node.Fail("sweeps", fmt::format("must be >= 1, got {}", options.sweeps));
+    if (options.sweeps < 1)
+      node.Fail("sweeps", fmt::format("must be >= 1, got {}", options.sweeps));
     return std::make_unique<SweepsLevelSolver>(options);
   }
 
@@ -130,7 +130,8 @@ class SweepsLevelSolver final : public LevelSolver {
         break;
       }
     }
-    if (std::isnan(energy)) energy = energy_->FitRotations(state.positions, state.rotations, context);
+    if (std::isnan(energy))
+      energy = energy_->FitRotations(state.positions, state.rotations, context);
     result.energy = energy;
     result.measures["sweeps"] = static_cast<double>(result.iterations) * options_.sweeps;
     return result;

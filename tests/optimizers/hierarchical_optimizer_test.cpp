@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: MIT
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <map>
 #include <string>
@@ -27,7 +26,8 @@ TEST_CASE("hierarchical with a one-level hierarchy reproduces classic exactly", 
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-7\n");
   TestSetup hierarchical(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\n[hierarchy]\nmax_levels = 1\n");
-  const OptimizeResult a = classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
+  const OptimizeResult a =
+      classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
   const OptimizeResult b =
       hierarchical.MakeOptimizer()->Optimize(tube.problem, hierarchical.factory, Context());
   REQUIRE(b.levels.size() == 1);
@@ -73,16 +73,18 @@ TEST_CASE("hierarchical: a stop requested on a coarse level still finishes the f
     return summary.level > 0 && summary.iteration == 2 ? CallbackAction::kStop
                                                        : CallbackAction::kContinue;
   };
-  const OptimizeResult result = setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+  const OptimizeResult result =
+      setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
   CHECK(result.stopped_by_callback);
   CHECK(result.positions.rows() == tube.mesh.num_vertices());
   CHECK(std::isfinite(result.energy));
   CHECK(result.constraints.constrained_vertices == 80);
 }
 
-TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints exact, levels "
-          "reported",
-          "[optimizers]") {
+TEST_CASE(
+    "hierarchical ARAP: energy decreases within each level, constraints exact, levels "
+    "reported",
+    "[optimizers]") {
   LongBentTube tube;
   for (const char* upsampler : {"rotations", "positions", "smoothed_rotations"}) {
     DYNAMIC_SECTION("upsampler " << upsampler) {
@@ -113,13 +115,14 @@ TEST_CASE("hierarchical ARAP: energy decreases within each level, constraints ex
   }
 }
 
-TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend",
-          "[optimizers]") {
+TEST_CASE("hierarchical ARAP reaches a lower energy than classic on a large bend", "[optimizers]") {
   LongBentTube tube;
   TestSetup classic("[optimizer]\ntype = \"classic\"\ntolerance = 1e-6\n");
-  TestSetup hierarchical("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
-                         "[hierarchy]\nmin_vertices = 100\n");
-  const OptimizeResult a = classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
+  TestSetup hierarchical(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-6\n"
+      "[hierarchy]\nmin_vertices = 100\n");
+  const OptimizeResult a =
+      classic.MakeOptimizer()->Optimize(tube.problem, classic.factory, Context());
   const OptimizeResult b =
       hierarchical.MakeOptimizer()->Optimize(tube.problem, hierarchical.factory, Context());
   CHECK(b.energy < a.energy);
@@ -159,9 +162,9 @@ TEST_CASE("coarse targets of a rigidly moved handle are the rigid motion of the 
 }
 
 TEST_CASE("hierarchical options are validated", "[optimizers]") {
-  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevel_step = 0\n")
-                        .MakeOptimizer(),
-                    Catch::Contains("level_step"));
+  CHECK_THROWS_WITH(
+      TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevel_step = 0\n").MakeOptimizer(),
+      Catch::Contains("level_step"));
   CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevels = 2\n").MakeOptimizer(),
                     Catch::Contains("level_step") && Catch::Contains("levels"));
 }

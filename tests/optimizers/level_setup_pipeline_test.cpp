@@ -1,22 +1,21 @@
 // SPDX-License-Identifier: MIT
-#include <catch2/catch.hpp>
+#include "solvers/optimizers/level_setup_pipeline.h"
+
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <mutex>
 #include <thread>
 #include <vector>
 
-#include <tbb/parallel_for.h>
-
 #include "framework/error.h"
-#include "solvers/optimizers/level_setup_pipeline.h"
 
 using namespace harap;
 
-TEST_CASE("LevelSetupPipeline sets every level up once, also levels added later",
-          "[optimizers]") {
+TEST_CASE("LevelSetupPipeline sets every level up once, also levels added later", "[optimizers]") {
   for (const bool overlap : {false, true}) {
     const Context context = Context::WithThreads(2);
     std::mutex mutex;
@@ -41,14 +40,14 @@ TEST_CASE("LevelSetupPipeline sets every level up once, also levels added later"
   }
 }
 
-TEST_CASE("LevelSetupPipeline stops a background task still waiting for levels",
-          "[optimizers]") {
+TEST_CASE("LevelSetupPipeline stops a background task still waiting for levels", "[optimizers]") {
   // E.g. the hierarchy's build threw before AddLevels(): the destructor must not hang.
   const Context context = Context::WithThreads(2);
   std::atomic<int> calls{0};
   {
-    LevelSetupPipeline pipeline({0}, [&](int) { ++calls; }, /*overlap=*/true, context,
-                                /*more_levels=*/true);
+    LevelSetupPipeline pipeline(
+        {0}, [&](int) { ++calls; }, /*overlap=*/true, context,
+        /*more_levels=*/true);
     pipeline.WaitFor(0);
   }
   CHECK(calls == 1);

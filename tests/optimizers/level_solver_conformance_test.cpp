@@ -4,7 +4,6 @@
 // energy of the state it returns, keeps its state between solves (moved targets need no new
 // Constrain), and says clearly when it cannot do handle edits.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <string>
 
@@ -24,7 +23,8 @@ double TargetError(const Positions& positions, const std::vector<Index>& vertice
                    const Positions& targets) {
   double error = 0.0;
   for (size_t k = 0; k < vertices.size(); ++k) {
-    error = std::max(error, (positions.row(vertices[k]) - targets.row(static_cast<Index>(k))).norm());
+    error =
+        std::max(error, (positions.row(vertices[k]) - targets.row(static_cast<Index>(k))).norm());
   }
   return error;
 }
@@ -94,8 +94,9 @@ TEST_CASE("level solvers: the contract, for every registered one", "[optimizers]
 TEST_CASE("level solvers: ADMM reports inverted elements as a named measure",
           "[optimizers][level_solver]") {
   const TwistedTetBar bar(4, 4, 9, 3.0, M_PI / 3);
-  for (const char* config : {"[optimizer]\ntype = \"wrapd\"\nmax_iterations = 30\n",
-                             "[optimizer]\ntype = \"classic\"\nanderson = 3\nmax_iterations = 30\n"}) {
+  for (const char* config :
+       {"[optimizer]\ntype = \"wrapd\"\nmax_iterations = 30\n",
+        "[optimizer]\ntype = \"classic\"\nanderson = 3\nmax_iterations = 30\n"}) {
     DYNAMIC_SECTION(config) {
       const TestSetup setup(std::string(config) + "[energy]\ntype = \"elements\"\n");
       const OptimizeResult result =

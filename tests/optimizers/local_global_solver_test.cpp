@@ -1,14 +1,16 @@
 // SPDX-License-Identifier: MIT
+#include "solvers/optimizers/local_global_solver.h"
+
 #include <catch2/catch.hpp>
 
-#include "solvers/optimizers/local_global_solver.h"
 #include "tests/support/level_energies.h"
 #include "tests/support/test_factory.h"
 
 using namespace harap;
 using namespace harap::testing;
 
-TEST_CASE("local/global: constraint targets that keep raising the energy are frozen", "[optimizers]") {
+TEST_CASE("local/global: constraint targets that keep raising the energy are frozen",
+          "[optimizers]") {
   constexpr int kSegments = 24;
   const BentTube tube(40, kSegments, 2.0, M_PI / 2, Eigen::Vector3d(0.0, 0.8, -0.8));
   const TestSetup setup;
@@ -75,9 +77,9 @@ TEST_CASE("local/global: the gathered global step equals the global step on gath
       for (int round = 0; round < 3; ++round) {
         Rotations coarse(7);
         for (int c = 0; c < 7; ++c) {
-          coarse[c] = Eigen::AngleAxisd(0.3 * c + 0.2 * round,
-                                        Eigen::Vector3d(1.0, c, round).normalized())
-                          .toRotationMatrix();
+          coarse[c] =
+              Eigen::AngleAxisd(0.3 * c + 0.2 * round, Eigen::Vector3d(1.0, c, round).normalized())
+                  .toRotationMatrix();
         }
         const Positions targets = handles.targets * (1.0 + 0.1 * round);
         LevelState reference;

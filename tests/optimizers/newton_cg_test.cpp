@@ -18,10 +18,10 @@ std::string Config(const char* optimizer, const char* energy, int newton, int ma
   // ones keep every level a plain minimization.
   const std::string fixed_targets =
       std::string(optimizer) == "hierarchical" ? "update_constraints = false\n" : "";
-  return fmt::format("[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\nmax_iterations = {}\n"
-                     "newton = {}\nnewton_hessian = \"{}\"\n{}[energy]\ntype = \"{}\"\n",
-                     optimizer, max_iterations, newton, newton > 0 ? hessian : "projected",
-                     fixed_targets, energy);
+  return fmt::format(
+      "[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\nmax_iterations = {}\n"
+      "newton = {}\nnewton_hessian = \"{}\"\n{}[energy]\ntype = \"{}\"\n",
+      optimizer, max_iterations, newton, newton > 0 ? hessian : "projected", fixed_targets, energy);
 }
 
 }  // namespace
@@ -33,33 +33,31 @@ TEST_CASE("local/global with Newton steps: monotone, same minimum, far fewer ite
   const BentTube tube(24, 16, 2.0, 0.6, Eigen::Vector3d(0.0, 0.3, -0.1));
   for (const char* optimizer : {"classic", "hierarchical"}) {
     for (const char* energy : {"spokes_and_rims", "spokes", "smooth_arap"}) {
-     for (const char* hessian : {"projected", "exact"}) {
-      DYNAMIC_SECTION(optimizer << " with " << energy << ", " << hessian << " Hessian") {
-        EnergyTrace plain_trace, newton_trace;
-        const OptimizeResult plain =
-            OptimizeWithTrace(TestSetup(Config(optimizer, energy, 0, 5000)), tube.problem,
-                              plain_trace);
-        const OptimizeResult newton =
-            OptimizeWithTrace(TestSetup(Config(optimizer, energy, 20, 5000, hessian)),
-                              tube.problem, newton_trace);
-        CheckEnergiesNeverIncrease(newton_trace);
-        REQUIRE(plain.converged);
-        REQUIRE(newton.converged);
-        CHECK(newton.energy == Approx(plain.energy).epsilon(1e-6));
-        CHECK((newton.positions - plain.positions).cwiseAbs().maxCoeff() < 1e-3);
-        INFO("iterations: plain " << plain.iterations << ", Newton " << newton.iterations);
-        CHECK(5 * newton.iterations < plain.iterations);
-        // Every finest-level iteration took a Newton step (each kept the sufficient decrease),
-        // or most with the trust region, which rejects a step now and then while it adapts its
-        // radius; the report says how many Hessian products they used.
-        const LevelResult& finest = newton.levels.front();
-        CHECK(finest.level == 0);
-        CHECK(finest.Measure("newton_steps") >= (std::string(hessian) == "exact" ? finest.iterations / 2
-                                                                      : finest.iterations - 1));
-        CHECK(finest.Measure("hessian_products") >= finest.Measure("newton_steps"));
-        CHECK(plain.levels.front().Measure("newton_steps") == -1);
+      for (const char* hessian : {"projected", "exact"}) {
+        DYNAMIC_SECTION(optimizer << " with " << energy << ", " << hessian << " Hessian") {
+          EnergyTrace plain_trace, newton_trace;
+          const OptimizeResult plain = OptimizeWithTrace(
+              TestSetup(Config(optimizer, energy, 0, 5000)), tube.problem, plain_trace);
+          const OptimizeResult newton = OptimizeWithTrace(
+              TestSetup(Config(optimizer, energy, 20, 5000, hessian)), tube.problem, newton_trace);
+          CheckEnergiesNeverIncrease(newton_trace);
+          REQUIRE(plain.converged);
+          REQUIRE(newton.converged);
+          CHECK(newton.energy == Approx(plain.energy).epsilon(1e-6));
+          CHECK((newton.positions - plain.positions).cwiseAbs().maxCoeff() < 1e-3);
+          INFO("iterations: plain " << plain.iterations << ", Newton " << newton.iterations);
+          CHECK(5 * newton.iterations < plain.iterations);
+          // Every finest-level iteration took a Newton step (each kept the sufficient decrease),
+          // or most with the trust region, which rejects a step now and then while it adapts its
+          // radius; the report says how many Hessian products they used.
+          const LevelResult& finest = newton.levels.front();
+          CHECK(finest.level == 0);
+          CHECK(finest.Measure("newton_steps") >=
+                (std::string(hessian) == "exact" ? finest.iterations / 2 : finest.iterations - 1));
+          CHECK(finest.Measure("hessian_products") >= finest.Measure("newton_steps"));
+          CHECK(plain.levels.front().Measure("newton_steps") == -1);
+        }
       }
-     }
     }
   }
 }

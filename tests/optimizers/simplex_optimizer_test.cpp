@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
 // classic and hierarchical with the per-element energy on tetrahedral and planar meshes
 // (Section 6 of the paper), with every registered linear solver.
-#include <catch2/catch.hpp>
-
 #include <Eigen/Geometry>
+#include <catch2/catch.hpp>
 
 #include "framework/error.h"
 #include "solvers/optimizers/local_global_solver.h"
@@ -26,8 +25,8 @@ struct BentBar {
     // Planar meshes turn in their plane, volumes about y.
     const Eigen::Vector3d axis = mesh.planar ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
     const Eigen::Matrix3d turn = Eigen::AngleAxisd(M_PI / 3, axis).toRotationMatrix();
-    const Eigen::Vector3d shift = mesh.planar ? Eigen::Vector3d(-0.5, 1.0, 0.0)
-                                              : Eigen::Vector3d(-0.5, 0.0, 1.0);
+    const Eigen::Vector3d shift =
+        mesh.planar ? Eigen::Vector3d(-0.5, 1.0, 0.0) : Eigen::Vector3d(-0.5, 0.0, 1.0);
     std::vector<Eigen::Vector3d> targets;
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
       const Eigen::Vector3d p = mesh.vertices.row(v);
@@ -72,10 +71,9 @@ TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every so
       for (const auto& solver : solvers) {
         DYNAMIC_SECTION((planar ? "planar " : "tetrahedra ") << optimizer << " " << solver) {
           // Fixed coarse targets make each level a plain local/global descent.
-          const TestSetup setup(RunConfig(optimizer, solver,
-                                          std::string(optimizer) == "hierarchical"
-                                              ? "update_constraints = false"
-                                              : ""));
+          const TestSetup setup(RunConfig(
+              optimizer, solver,
+              std::string(optimizer) == "hierarchical" ? "update_constraints = false" : ""));
           std::vector<IterationSummary> trace;
           Context context;
           context.iteration_callback = [&](const IterationSummary& s) {
@@ -93,7 +91,8 @@ TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every so
             if (trace[i].level != trace[i - 1].level) continue;
             CHECK(trace[i].energy <= trace[i - 1].energy * (1.0 + 1e-12));
           }
-          CHECK(result.energy == Approx(FittedElementEnergy(bar.mesh, result.positions)).epsilon(1e-10));
+          CHECK(result.energy ==
+                Approx(FittedElementEnergy(bar.mesh, result.positions)).epsilon(1e-10));
           REQUIRE(result.measures.count("energy_wrapd") == 1);
           CHECK(result.measures.at("energy_wrapd") == Approx(0.5 * result.energy).epsilon(1e-9));
           for (size_t k = 0; k < bar.problem.constraints.indices.size(); ++k) {
@@ -112,7 +111,8 @@ TEST_CASE("classic and hierarchical reach the same minimum on a tetrahedral bar"
   const BentBar bar = TetBar();
   const TestSetup classic(RunConfig("classic", "cholmod"));
   const TestSetup hierarchical(RunConfig("hierarchical", "cholmod"));
-  const OptimizeResult a = classic.MakeOptimizer()->Optimize(bar.problem, classic.factory, Context());
+  const OptimizeResult a =
+      classic.MakeOptimizer()->Optimize(bar.problem, classic.factory, Context());
   const OptimizeResult b =
       hierarchical.MakeOptimizer()->Optimize(bar.problem, hierarchical.factory, Context());
   CHECK(b.levels.size() >= 3);
@@ -125,9 +125,9 @@ TEST_CASE("hierarchical with a one-level hierarchy reproduces classic on tetrahe
           "[optimizers]") {
   const BentBar bar = TetBar();
   const TestSetup classic(RunConfig("classic", "cholmod"));
-  const TestSetup hierarchical(
-      RunConfig("hierarchical", "cholmod") + "max_levels = 1\n");
-  const OptimizeResult a = classic.MakeOptimizer()->Optimize(bar.problem, classic.factory, Context());
+  const TestSetup hierarchical(RunConfig("hierarchical", "cholmod") + "max_levels = 1\n");
+  const OptimizeResult a =
+      classic.MakeOptimizer()->Optimize(bar.problem, classic.factory, Context());
   const OptimizeResult b =
       hierarchical.MakeOptimizer()->Optimize(bar.problem, hierarchical.factory, Context());
   REQUIRE(b.levels.size() == 1);
@@ -144,7 +144,8 @@ TEST_CASE("hierarchical stopped on a coarse level reports the energy of its fine
   context.iteration_callback = [](const IterationSummary& s) {
     return s.level > 0 && s.iteration == 2 ? CallbackAction::kStop : CallbackAction::kContinue;
   };
-  const OptimizeResult result = setup.MakeOptimizer()->Optimize(bar.problem, setup.factory, context);
+  const OptimizeResult result =
+      setup.MakeOptimizer()->Optimize(bar.problem, setup.factory, context);
   CHECK(result.stopped_by_callback);
   REQUIRE(result.positions.rows() == bar.mesh.num_vertices());
   CHECK(result.energy == Approx(FittedElementEnergy(bar.mesh, result.positions)).epsilon(1e-10));

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: MIT
 // MeshOrdering::IsToNew, and LocalGlobalSolver::AuxiliaryMeasures, which uses it to measure the
 // final state from the level's kept internal copy instead of making another one.
-#include <catch2/catch.hpp>
+#include "solvers/optimizers/vertex_ordering.h"
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <numeric>
 #include <random>
 #include <vector>
 
 #include "solvers/optimizers/local_global_solver.h"
-#include "solvers/optimizers/vertex_ordering.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -24,8 +24,8 @@ Rotations RandomRotations(size_t count, unsigned seed) {
   std::uniform_real_distribution<double> angle(-3.0, 3.0);
   Rotations rotations(count);
   for (Rotation& r : rotations) {
-    r = Eigen::AngleAxisd(angle(random), Eigen::Vector3d(angle(random), 1.0, angle(random))
-                                             .normalized())
+    r = Eigen::AngleAxisd(angle(random),
+                          Eigen::Vector3d(angle(random), 1.0, angle(random)).normalized())
             .toRotationMatrix();
   }
   return rotations;

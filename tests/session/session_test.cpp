@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "experiments/session.h"
+#include "api/session.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>

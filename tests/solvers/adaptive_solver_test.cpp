@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // AdaptiveSolver: factor or iterate, chosen from CHOLMOD's analysis before factoring.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <string>
 #include <vector>

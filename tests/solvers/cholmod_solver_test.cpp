@@ -2,9 +2,11 @@
 // CHOLMOD-specific behaviour (options, every mode × ordering, out of memory). Skipped when the
 // build has no CHOLMOD (the registry then has no "cholmod").
 
-#include <catch2/catch.hpp>
+#include "solvers/linear/cholmod_solver.h"
+
 #include <dlfcn.h>
 
+#include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -13,7 +15,6 @@
 
 #include "framework/context.h"
 #include "framework/error.h"
-#include "solvers/linear/cholmod_solver.h"
 #include "tests/solvers/solver_test_matrices.h"
 
 #if defined(__linux__)
@@ -113,9 +114,9 @@ TEST_CASE("cholmod: native_threads caps CHOLMOD's OpenMP and BLAS threads, resul
     std::thread worker([&] {
       const int dynamic_before = omp_get_dynamic ? omp_get_dynamic() : 0;
       const int threads_before = omp_get_max_threads ? omp_get_max_threads() : 0;
-      auto solver = MakeSolver(registry, "cholmod",
-                               "mode = \"supernodal\"\nnative_threads = " +
-                                   std::to_string(native_threads));
+      auto solver =
+          MakeSolver(registry, "cholmod",
+                     "mode = \"supernodal\"\nnative_threads = " + std::to_string(native_threads));
       const long before = ThreadCount();
       solver->Factorize(a, context);
       new_threads = ThreadCount() - before;
@@ -190,8 +191,8 @@ TEST_CASE("cholmod: the elimination-tree parallel solve matches CHOLMOD's own so
   const SparseMatrix forest = [&] {
     const Eigen::MatrixXd dense_a = Eigen::MatrixXd(PinnedGridLaplacian(30, 40, 32));
     const Eigen::MatrixXd dense_b = Eigen::MatrixXd(PinnedGridLaplacian(25, 20, 33));
-    Eigen::MatrixXd both = Eigen::MatrixXd::Zero(dense_a.rows() + dense_b.rows(),
-                                                 dense_a.rows() + dense_b.rows());
+    Eigen::MatrixXd both =
+        Eigen::MatrixXd::Zero(dense_a.rows() + dense_b.rows(), dense_a.rows() + dense_b.rows());
     both.topLeftCorner(dense_a.rows(), dense_a.rows()) = dense_a;
     both.bottomRightCorner(dense_b.rows(), dense_b.rows()) = dense_b;
     return FromDense(both);
@@ -290,7 +291,8 @@ TEST_CASE("cholmod: a one-shot factor frees CHOLMOD's row indices, a refactorabl
     }
   }
   SECTION("CHOLMOD's own solve needs its rows: kept") {
-    auto solver = MakeSolver(registry, "cholmod", Options("auto", "amd") + "parallel_solve = false\n");
+    auto solver =
+        MakeSolver(registry, "cholmod", Options("auto", "amd") + "parallel_solve = false\n");
     solver->Factorize(a, context);
 #ifdef HARAP_HAVE_CHOLMOD
     CHECK(released(*solver) == 0.0);
@@ -422,8 +424,7 @@ TEST_CASE("cholmod: a matrix whose pattern is not symmetric is rejected, not rea
   for (int k = 0; k < 40; ++k) a.coeffRef(k, a.cols() - 1 - k) = -0.01;
   a.makeCompressed();
   auto solver = MakeSolver(registry, "cholmod", Options("supernodal", "amd"));
-  CHECK_THROWS_WITH(solver->Factorize(a, Context::WithThreads(2)),
-                    Catch::Contains("symmetric"));
+  CHECK_THROWS_WITH(solver->Factorize(a, Context::WithThreads(2)), Catch::Contains("symmetric"));
 }
 
 TEST_CASE("cholmod: every mode × ordering rejects indefinite and singular matrices",

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "framework/constrained_system.h"
 #include "framework/context.h"
 #include "framework/error.h"
@@ -165,8 +165,8 @@ TEST_CASE("cg: estimates the share of the correction its iterations left undone"
                               const Eigen::MatrixXd& x) {
     double share = 0.0;
     for (int c = 0; c < 3; ++c) {
-      share = std::max(share, a_norm2(solution.col(c) - x.col(c)) /
-                                  a_norm2(solution.col(c) - start.col(c)));
+      share = std::max(
+          share, a_norm2(solution.col(c) - x.col(c)) / a_norm2(solution.col(c) - start.col(c)));
     }
     return share;
   };
@@ -178,8 +178,8 @@ TEST_CASE("cg: estimates the share of the correction its iterations left undone"
   for (const bool smooth_error : {true, false}) {
     INFO((smooth_error ? "smooth" : "rough") << " error");
     const Eigen::MatrixXd solution = smooth + 0.01 * rough;
-    const Eigen::MatrixXd start = smooth_error ? Eigen::MatrixXd(0.01 * rough)
-                                               : Eigen::MatrixXd(smooth + 0.002 * smooth);
+    const Eigen::MatrixXd start =
+        smooth_error ? Eigen::MatrixXd(0.01 * rough) : Eigen::MatrixXd(smooth + 0.002 * smooth);
     const Eigen::MatrixXd b = Eigen::MatrixXd(a * solution);
     Eigen::MatrixXd x = start;
     REQUIRE(cg.Solve(b, x, context).success());

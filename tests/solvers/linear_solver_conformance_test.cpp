@@ -276,8 +276,7 @@ TEST_CASE("linear solvers: singular PSD matrices fail loudly, never with silent 
               // that it did not converge, with the residual it really reached.
               CHECK(x.allFinite());
               CHECK(summary.relative_residual > kConformanceTolerance);
-              CHECK(summary.relative_residual ==
-                    Approx(RelativeResidual(a, b, x)).epsilon(0.01));
+              CHECK(summary.relative_residual == Approx(RelativeResidual(a, b, x)).epsilon(0.01));
             } else {
               CHECK_FALSE(summary.message.empty());
             }

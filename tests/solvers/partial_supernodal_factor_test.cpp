@@ -86,9 +86,10 @@ bool EveryOtherRange() {
 
 }  // namespace
 
-TEST_CASE("PartialSupernodalFactor: FactorAll gives the same factor on any threads, also when "
-          "threads refuse their subtrees",
-          "[solvers][cholmod]") {
+TEST_CASE(
+    "PartialSupernodalFactor: FactorAll gives the same factor on any threads, also when "
+    "threads refuse their subtrees",
+    "[solvers][cholmod]") {
   const StarForest forest(24, 40);
   std::vector<int> identity(forest.n);
   for (int j = 0; j < forest.n; ++j) identity[j] = j;

@@ -360,8 +360,8 @@ TEST_CASE("refactor: auto keeps copies only after PrepareForRefactor, explicit r
         solver->Factorize(a, context);
         // A one-shot run (auto, not prepared) and "full" keep nothing; the others keep the
         // analysis and the matrix.
-        const bool keeps = refactor == "numeric" || refactor == "update" ||
-                           refactor == "partial" || (refactor == "auto" && prepare);
+        const bool keeps = refactor == "numeric" || refactor == "update" || refactor == "partial" ||
+                           (refactor == "auto" && prepare);
         CHECK((cholmod.factor_info().refactor_bytes > 0.0) == keeps);
         const auto summary = solver->Refactor(b, SymmetricDifference(handles, more), context);
         CHECK((summary.route != Route::kFull) == keeps);

@@ -3,6 +3,8 @@
 // iteration). Counted by interposing malloc/calloc/realloc in this executable (glibc: forwards to
 // __libc_*), which also sees CHOLMOD's and BLAS's allocations through the dynamic linker.
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -13,8 +15,6 @@
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <dlfcn.h>
 
 #include "framework/context.h"
 #include "tests/solvers/solver_test_matrices.h"

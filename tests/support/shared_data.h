@@ -2,7 +2,6 @@
 #pragma once
 
 #include <catch2/catch.hpp>
-
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -26,10 +25,10 @@ inline std::filesystem::path SourceDir() { return HARAP_SOURCE_DIR; }
 }  // namespace harap::testing
 
 /// Skips the current test (with a clear message) when a shared file is missing.
-#define HARAP_REQUIRE_SHARED(var, relative)                                                 \
-  const std::filesystem::path var = ::harap::testing::SharedFile(relative);                 \
-  if (var.empty()) {                                                                        \
-    WARN("skipped: " << relative << " not found under " << ::harap::testing::SharedDir()    \
-                     << " (the shared data folder beside the repository)");                 \
-    return;                                                                                 \
+#define HARAP_REQUIRE_SHARED(var, relative)                                              \
+  const std::filesystem::path var = ::harap::testing::SharedFile(relative);              \
+  if (var.empty()) {                                                                     \
+    WARN("skipped: " << relative << " not found under " << ::harap::testing::SharedDir() \
+                     << " (the shared data folder beside the repository)");              \
+    return;                                                                              \
   }

@@ -2,10 +2,10 @@
 // A scratch folder for tests that write input files and run harap on them.
 #pragma once
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <filesystem>
-#include <fmt/format.h>
 #include <fstream>
 #include <sstream>
 #include <string>

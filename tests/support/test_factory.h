@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/builtins.h"
-#include "experiments/component_factory.h"
+#include "api/builtins.h"
+#include "api/component_factory.h"
 
 namespace harap::testing {
 
@@ -17,7 +17,9 @@ struct TestSetup {
       : registries(MakeBuiltinRegistries()),
         config(ConfigNode::Parse(toml, "test config")),
         factory(registries, config) {}
-  std::unique_ptr<Optimizer> MakeOptimizer() const { return harap::MakeOptimizer(registries, config); }
+  std::unique_ptr<Optimizer> MakeOptimizer() const {
+    return harap::MakeOptimizer(registries, config);
+  }
 
   Registries registries;
   ConfigNode config;

@@ -95,10 +95,10 @@ Mesh TetBox(int nx, int ny, int nz, int tets_per_cube) {
   for (size_t t = 0; t < tets.size(); ++t) {
     auto& tet = tets[t];
     const Eigen::Vector3d p0 = mesh.vertices.row(tet[0]);
-    const Eigen::Matrix3d d = (Eigen::Matrix3d() << mesh.vertices.row(tet[1]) - p0.transpose(),
-                               mesh.vertices.row(tet[2]) - p0.transpose(),
-                               mesh.vertices.row(tet[3]) - p0.transpose())
-                                  .finished();
+    const Eigen::Matrix3d d =
+        (Eigen::Matrix3d() << mesh.vertices.row(tet[1]) - p0.transpose(),
+         mesh.vertices.row(tet[2]) - p0.transpose(), mesh.vertices.row(tet[3]) - p0.transpose())
+            .finished();
     if (d.determinant() < 0) std::swap(tet[2], tet[3]);
     for (int a = 0; a < 4; ++a) mesh.elements(t, a) = tet[a];
   }
@@ -156,7 +156,8 @@ TwistedTetBar::TwistedTetBar(int nx, int ny, int nz, double height, double angle
     : mesh(TetBox(nx, ny, nz)) {
   mesh.vertices.col(2) *= height;
   problem.mesh = &mesh;
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d axis(0.5, 0.5, 0.0);
   FixVertices(
       mesh, [&](const Eigen::Vector3d& p) { return p.z() == 0.0 || p.z() == height; },

@@ -1,9 +1,8 @@
 // SPDX-License-Identifier: MIT
+#include <Eigen/Geometry>
 #include <catch2/catch.hpp>
 
-#include <Eigen/Geometry>
-
-#include "experiments/builtins.h"
+#include "api/builtins.h"
 #include "framework/error.h"
 #include "framework/rotation.h"
 #include "tests/support/test_meshes.h"
@@ -17,7 +16,8 @@ MeshHierarchy TwoLevels() {
   const Registries registries = MakeBuiltinRegistries();
   Mesh mesh = Icosphere(3);
   ConfigNode options = ConfigNode::Parse("min_vertices = 10\nmax_levels = 2\n", "test");
-  MeshHierarchy hierarchy = registries.hierarchies.Create("octree", options)->Build(mesh, Context());
+  MeshHierarchy hierarchy =
+      registries.hierarchies.Create("octree", options)->Build(mesh, Context());
   REQUIRE(hierarchy.num_levels() == 2);
   return hierarchy;
 }
@@ -38,8 +38,7 @@ TEST_CASE("every upsampler carries a rigid coarse state to the rigid fine state"
     DYNAMIC_SECTION(name) {
       auto upsampler = registries.upsamplers.Create(name, ConfigNode());
       LevelState fine_state;
-      upsampler->Upsample(fine, coarse, RotationSite::kVertex, coarse_state, fine_state,
-                          Context());
+      upsampler->Upsample(fine, coarse, RotationSite::kVertex, coarse_state, fine_state, Context());
       REQUIRE(fine_state.positions.rows() == fine.mesh.num_vertices());
       REQUIRE(static_cast<Index>(fine_state.rotations.size()) == fine.mesh.num_vertices());
       const Positions expected = (fine.mesh.vertices * r.transpose()).rowwise() + t;
@@ -68,8 +67,7 @@ TEST_CASE("rotations upsampler copies each cell rotation (Eq. 7) and smoothing a
   double copied_jump = 0.0, smoothed_jump = 0.0;
   for (Index j = 0; j < fine.mesh.num_vertices(); ++j) {
     CHECK(copied.rotations[j] == coarse_state.rotations[fine.coarse_vertex[j]]);
-    CHECK((smoothed.rotations[j].transpose() * smoothed.rotations[j] -
-           Eigen::Matrix3d::Identity())
+    CHECK((smoothed.rotations[j].transpose() * smoothed.rotations[j] - Eigen::Matrix3d::Identity())
               .norm() < 1e-12);
   }
   for (Index f = 0; f < fine.mesh.num_elements(); ++f) {
@@ -96,7 +94,8 @@ namespace {
 MeshHierarchy TwoLevelsOf(const Mesh& mesh) {
   const Registries registries = MakeBuiltinRegistries();
   ConfigNode options = ConfigNode::Parse("min_vertices = 10\nmax_levels = 2\n", "test");
-  MeshHierarchy hierarchy = registries.hierarchies.Create("octree", options)->Build(mesh, Context());
+  MeshHierarchy hierarchy =
+      registries.hierarchies.Create("octree", options)->Build(mesh, Context());
   REQUIRE(hierarchy.num_levels() == 2);
   return hierarchy;
 }
@@ -141,9 +140,10 @@ TEST_CASE("every upsampler carries rigid element rotations to the rigid fine sta
   }
 }
 
-TEST_CASE("element rotations: vertex averages (Eq. 11), copied down (Eq. 7), element averages "
-          "(Eq. 12)",
-          "[upsamplers]") {
+TEST_CASE(
+    "element rotations: vertex averages (Eq. 11), copied down (Eq. 7), element averages "
+    "(Eq. 12)",
+    "[upsamplers]") {
   const Registries registries = MakeBuiltinRegistries();
   for (const auto& [mesh_name, mesh] : SimplexMeshes()) {
     DYNAMIC_SECTION(mesh_name) {
@@ -164,7 +164,8 @@ TEST_CASE("element rotations: vertex averages (Eq. 11), copied down (Eq. 7), ele
       // projected mean of its vertices' (Eq. 12).
       std::vector<Eigen::Matrix3d> vertex_sum(coarse.mesh.num_vertices(), Eigen::Matrix3d::Zero());
       for (Index e = 0; e < coarse.mesh.num_elements(); ++e) {
-        for (int a = 0; a < k; ++a) vertex_sum[coarse.mesh.elements(e, a)] += coarse_state.rotations[e];
+        for (int a = 0; a < k; ++a)
+          vertex_sum[coarse.mesh.elements(e, a)] += coarse_state.rotations[e];
       }
       for (Index e = 0; e < fine.mesh.num_elements(); ++e) {
         Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();

@@ -1,0 +1,452 @@
+// SPDX-License-Identifier: MIT
+//
+// Parsed here, not by OpenMesh: OpenMesh's readers hand every coordinate to the importer as a
+// float (Vec3f) even when the file stores doubles, so coordinates such as "0.354446" would be
+// rounded to float. A double-precision PLY written by WritePly would then not read back
+// bit-identically. OpenMesh's PLY reader also reports a truncated binary file as success with
+// the vertices read so far; here a truncation is an error naming the element and byte.
+#include "io/ply_reader.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "framework/error.h"
+#include "io/raw_mesh.h"
+#include "io/text_scanning.h"
+
+namespace harap {
+
+namespace {
+
+using namespace io_internal;
+
+// PLY: ASCII and binary (both byte orders); `vertex` with x y z of any scalar type, `face` with a
+// `vertex_indices` (or `vertex_index`) list; other elements and properties are skipped.
+
+enum class PlyType { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+
+bool ParsePlyType(std::string_view name, PlyType& type) {
+  static const std::pair<std::string_view, PlyType> kTypes[] = {
+      {"char", PlyType::kInt8},      {"int8", PlyType::kInt8},       {"uchar", PlyType::kUInt8},
+      {"uint8", PlyType::kUInt8},    {"short", PlyType::kInt16},     {"int16", PlyType::kInt16},
+      {"ushort", PlyType::kUInt16},  {"uint16", PlyType::kUInt16},   {"int", PlyType::kInt32},
+      {"int32", PlyType::kInt32},    {"uint", PlyType::kUInt32},     {"uint32", PlyType::kUInt32},
+      {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
+      {"float64", PlyType::kFloat64}};
+  for (const auto& [text, value] : kTypes) {
+    if (text == name) {
+      type = value;
+      return true;
+    }
+  }
+  return false;
+}
+
+size_t PlyTypeSize(PlyType type) {
+  switch (type) {
+    case PlyType::kInt8:
+    case PlyType::kUInt8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUInt16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUInt32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
+  }
+  return 0;
+}
+
+bool IsIntegerType(PlyType type) { return type != PlyType::kFloat32 && type != PlyType::kFloat64; }
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::kFloat32;
+  bool is_list = false;
+  PlyType count_type = PlyType::kUInt8;
+};
+
+struct PlyElement {
+  std::string name;
+  int64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::kAscii;
+  std::vector<PlyElement> elements;
+  size_t data_offset = 0;  // first byte after end_header's line
+  size_t data_lines = 0;   // lines up to and including end_header
+};
+
+PlyHeader ParsePlyHeader(std::string_view data, const std::string& what) {
+  PlyHeader header;
+  LineReader lines(data);
+  std::string_view line;
+  if (!lines.Next(line) || NextToken(line) != "ply") {
+    Fail(what, "not a PLY file (it does not start with the line \"ply\")");
+  }
+  bool have_format = false;
+  while (true) {
+    if (!lines.Next(line)) Fail(what, "PLY header has no end_header line");
+    std::string_view rest = line;
+    const std::string_view keyword = NextToken(rest);
+    const size_t number = lines.line_number();
+    if (keyword == "end_header") break;
+    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
+    if (keyword == "format") {
+      const std::string_view kind = NextToken(rest);
+      if (kind == "ascii") {
+        header.format = PlyFormat::kAscii;
+      } else if (kind == "binary_little_endian") {
+        header.format = PlyFormat::kBinaryLittleEndian;
+      } else if (kind == "binary_big_endian") {
+        header.format = PlyFormat::kBinaryBigEndian;
+      } else {
+        Fail(what, fmt::format("PLY header line {}: unknown format {}", number, Quote(kind)));
+      }
+      have_format = true;
+    } else if (keyword == "element") {
+      PlyElement element;
+      element.name = std::string(NextToken(rest));
+      const std::string_view count = NextToken(rest);
+      if (element.name.empty() || !ParseInteger(count, element.count) || element.count < 0) {
+        Fail(what, fmt::format("PLY header line {}: malformed element line", number));
+      }
+      header.elements.push_back(std::move(element));
+    } else if (keyword == "property") {
+      if (header.elements.empty()) {
+        Fail(what, fmt::format("PLY header line {}: property before any element", number));
+      }
+      PlyProperty property;
+      std::string_view type = NextToken(rest);
+      if (type == "list") {
+        property.is_list = true;
+        const std::string_view count_type = NextToken(rest);
+        if (!ParsePlyType(count_type, property.count_type) || !IsIntegerType(property.count_type)) {
+          Fail(what, fmt::format("PLY header line {}: bad list count type {}", number,
+                                 Quote(count_type)));
+        }
+        type = NextToken(rest);
+      }
+      if (!ParsePlyType(type, property.type)) {
+        Fail(what,
+             fmt::format("PLY header line {}: unknown property type {}", number, Quote(type)));
+      }
+      property.name = std::string(NextToken(rest));
+      if (property.name.empty()) {
+        Fail(what, fmt::format("PLY header line {}: property without a name", number));
+      }
+      header.elements.back().properties.push_back(std::move(property));
+    } else {
+      Fail(what, fmt::format("PLY header line {}: unknown keyword {}", number, Quote(keyword)));
+    }
+  }
+  if (!have_format) Fail(what, "PLY header has no format line");
+  header.data_offset = lines.position();
+  header.data_lines = lines.line_number();
+  return header;
+}
+
+// Reads the values of a PLY body one by one, ASCII or binary, with bounds checks, and says where
+// it is for error messages ("line 12" in ASCII, "byte 345" in binary; both count from the start
+// of the file).
+class PlyBodyReader {
+ public:
+  PlyBodyReader(std::string_view data, const PlyHeader& header, const std::string& what)
+      : data_(data),
+        position_(header.data_offset),
+        line_(header.data_lines + 1),
+        binary_(header.format != PlyFormat::kAscii),
+        swap_(binary_ && (header.format == PlyFormat::kBinaryBigEndian) !=
+                             (std::endian::native == std::endian::big)),
+        what_(what) {}
+
+  bool binary() const { return binary_; }
+
+  // Where the next value starts.
+  std::string Where() {
+    if (binary_) return fmt::format("byte {}", position_);
+    SkipSpace();
+    return fmt::format("line {}", line_);
+  }
+  int64_t Location() {
+    if (binary_) return static_cast<int64_t>(position_);
+    SkipSpace();
+    return static_cast<int64_t>(line_);
+  }
+  const char* location_kind() const { return binary_ ? "byte" : "line"; }
+
+  // Each returns false at the end of the data and fails on a malformed ASCII token.
+  bool ReadInteger(PlyType type, int64_t& value) {
+    if (binary_) return ReadBinary(type, value);
+    const std::string_view token = NextToken();
+    if (token.empty()) return false;
+    if (!ParseInteger(token, value)) {
+      Fail(what_, fmt::format("line {}: {} is not an integer", line_, Quote(token)));
+    }
+    return true;
+  }
+  bool ReadDouble(PlyType type, double& value) {
+    if (binary_) {
+      int64_t integer = 0;
+      if (type == PlyType::kFloat32 || type == PlyType::kFloat64)
+        return ReadBinaryFloat(type, value);
+      if (!ReadBinary(type, integer)) return false;
+      value = static_cast<double>(integer);
+      return true;
+    }
+    const std::string_view token = NextToken();
+    if (token.empty()) return false;
+    if (!ParseDouble(token, value)) {
+      Fail(what_,
+           fmt::format("line {}: vertex coordinate {} is not a number", line_, Quote(token)));
+    }
+    return true;
+  }
+  bool Skip(PlyType type, uint64_t count = 1) {
+    if (!binary_) {
+      for (uint64_t i = 0; i < count; ++i) {
+        if (NextToken().empty()) return false;
+      }
+      return true;
+    }
+    const uint64_t bytes = count * PlyTypeSize(type);  // count < 2^32, size ≤ 8: no overflow
+    if (data_.size() - position_ < bytes) return false;
+    position_ += static_cast<size_t>(bytes);
+    return true;
+  }
+
+ private:
+  void SkipSpace() {
+    while (position_ < data_.size()) {
+      const char c = data_[position_];
+      if (c == '\n' ||
+          (c == '\r' && (position_ + 1 == data_.size() || data_[position_ + 1] != '\n'))) {
+        ++line_;  // "\n", "\r\n" (counted at its "\n") or a lone "\r"
+      } else if (!IsSpace(c)) {
+        break;
+      }
+      ++position_;
+    }
+  }
+  std::string_view NextToken() {
+    SkipSpace();
+    const size_t start = position_;
+    while (position_ < data_.size() && !IsSpace(data_[position_]) && data_[position_] != '\n') {
+      ++position_;
+    }
+    return data_.substr(start, position_ - start);
+  }
+  bool Load(PlyType type, unsigned char* bytes) {
+    const size_t size = PlyTypeSize(type);
+    if (data_.size() - position_ < size) return false;
+    std::memcpy(bytes, data_.data() + position_, size);
+    position_ += size;
+    if (swap_) std::reverse(bytes, bytes + size);
+    return true;
+  }
+  template <class T>
+  static T As(const unsigned char* bytes) {
+    T value;
+    std::memcpy(&value, bytes, sizeof(T));
+    return value;
+  }
+  bool ReadBinary(PlyType type, int64_t& value) {
+    unsigned char bytes[8];
+    if (!Load(type, bytes)) return false;
+    switch (type) {
+      case PlyType::kInt8:
+        value = static_cast<int8_t>(bytes[0]);
+        break;
+      case PlyType::kUInt8:
+        value = bytes[0];
+        break;
+      case PlyType::kInt16:
+        value = As<int16_t>(bytes);
+        break;
+      case PlyType::kUInt16:
+        value = As<uint16_t>(bytes);
+        break;
+      case PlyType::kInt32:
+        value = As<int32_t>(bytes);
+        break;
+      case PlyType::kUInt32:
+        value = As<uint32_t>(bytes);
+        break;
+      case PlyType::kFloat32:
+      case PlyType::kFloat64:
+        HARAP_CHECK(false, "integer read of a floating-point PLY property");
+    }
+    return true;
+  }
+  bool ReadBinaryFloat(PlyType type, double& value) {
+    unsigned char bytes[8];
+    if (!Load(type, bytes)) return false;
+    value = type == PlyType::kFloat32 ? As<float>(bytes) : As<double>(bytes);
+    return true;
+  }
+
+  std::string_view data_;
+  size_t position_;
+  size_t line_;
+  bool binary_;
+  bool swap_;
+  const std::string& what_;
+};
+
+}  // namespace
+
+Mesh ParsePly(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const std::string_view body = data.substr(header.data_offset);
+  const bool binary = header.format != PlyFormat::kAscii;
+
+  // Locate the vertex coordinates and the face index list.
+  const PlyElement* vertex_element = nullptr;
+  const PlyElement* face_element = nullptr;
+  int coordinate_slot[3] = {-1, -1, -1};
+  int index_slot = -1;
+  for (const PlyElement& element : header.elements) {
+    // A second 'vertex' or 'face' element would leave the slots below pointing into the first
+    // one's property list (found by fuzzing: a heap overflow); no writer produces one.
+    if ((element.name == "vertex" && vertex_element) || (element.name == "face" && face_element)) {
+      Fail(what, fmt::format("PLY header declares the element '{}' twice", element.name));
+    }
+    if (element.name == "vertex") {
+      vertex_element = &element;
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        for (int d = 0; d < 3; ++d) {
+          if (property.name == std::string(1, static_cast<char>('x' + d)) && !property.is_list) {
+            coordinate_slot[d] = static_cast<int>(p);
+          }
+        }
+      }
+    } else if (element.name == "face") {
+      face_element = &element;
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        if (property.is_list &&
+            (property.name == "vertex_indices" || property.name == "vertex_index")) {
+          index_slot = static_cast<int>(p);
+        }
+      }
+    }
+  }
+  if (!vertex_element) Fail(what, "PLY header declares no 'vertex' element");
+  for (int d = 0; d < 3; ++d) {
+    if (coordinate_slot[d] < 0) {
+      Fail(what, fmt::format("PLY 'vertex' element has no scalar property '{}'",
+                             static_cast<char>('x' + d)));
+    }
+  }
+  if (!face_element || face_element->count == 0) {
+    Fail(what, fmt::format("no faces: the PLY file declares {} vertices but no faces",
+                           vertex_element->count));
+  }
+  if (index_slot < 0) {
+    Fail(what, "PLY 'face' element has no list property 'vertex_indices' (or 'vertex_index')");
+  }
+  if (!IsIntegerType(face_element->properties[index_slot].type)) {
+    Fail(what, "PLY face property 'vertex_indices' has a floating-point type");
+  }
+
+  // A lower bound on the bytes each item needs, so that a corrupt count fails before it makes us
+  // reserve gigabytes. (ASCII: one character per value and a separator between values.)
+  for (const PlyElement& element : header.elements) {
+    size_t min_bytes = 0;
+    for (const PlyProperty& property : element.properties) {
+      min_bytes += binary ? PlyTypeSize(property.is_list ? property.count_type : property.type) : 2;
+    }
+    const size_t available = binary ? body.size() : body.size() + 1;
+    if (min_bytes > 0 && static_cast<uint64_t>(element.count) > available / min_bytes) {
+      Fail(what, fmt::format("truncated PLY data: the header declares {} '{}' items, more than "
+                             "the {} bytes after the header can hold",
+                             element.count, element.name, body.size()));
+    }
+  }
+
+  RawMesh raw;
+  raw.origin_kind = "face";
+  raw.xyz.reserve(static_cast<size_t>(vertex_element->count) * 3);
+  raw.corners.reserve(static_cast<size_t>(face_element->count) * 3);
+  raw.origin.reserve(static_cast<size_t>(face_element->count));
+  std::vector<int64_t> polygon;
+  PlyBodyReader reader(data, header, what);
+  raw.location_kind = reader.location_kind();
+  auto truncated = [&](const PlyElement& element, int64_t item) {
+    Fail(what, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
+                           "{}, at {})",
+                           element.name, item, element.count, reader.Where()));
+  };
+  bool vertices_done = false;
+  for (const PlyElement& element : header.elements) {
+    const bool is_vertex = &element == vertex_element;
+    const bool is_face = &element == face_element;
+    if (element.properties.empty()) continue;  // nothing stored per item
+    for (int64_t item = 0; item < element.count; ++item) {
+      const int64_t item_location = reader.Location();
+      double xyz[3] = {0.0, 0.0, 0.0};
+      for (size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        if (!property.is_list) {
+          int slot = -1;
+          for (int d = 0; d < 3; ++d) slot = coordinate_slot[d] == static_cast<int>(p) ? d : slot;
+          const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
+                                                 : reader.Skip(property.type);
+          if (!ok) truncated(element, item);
+          continue;
+        }
+        const std::string count_where = reader.Where();
+        int64_t count = 0;
+        if (!reader.ReadInteger(property.count_type, count)) truncated(element, item);
+        if (count < 0) {
+          Fail(what, fmt::format("{}: PLY element '{}' item {}: negative list length {}",
+                                 count_where, element.name, item, count));
+        }
+        if (!is_face || static_cast<int>(p) != index_slot) {
+          if (!reader.Skip(property.type, static_cast<uint64_t>(count))) truncated(element, item);
+          continue;
+        }
+        if (count < 3) {
+          Fail(what, fmt::format("{}: face {}: face has {} vertices (at least 3 are needed)",
+                                 count_where, item, count));
+        }
+        polygon.clear();
+        for (int64_t i = 0; i < count; ++i) {
+          int64_t index = 0;
+          if (!reader.ReadInteger(property.type, index)) truncated(element, item);
+          polygon.push_back(index);
+        }
+        raw.AddPolygon(polygon, item);
+        raw.location.resize(raw.origin.size(), item_location);
+      }
+      if (is_vertex) {
+        if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
+          Fail(what, fmt::format("{} {}: non-finite coordinate: vertex {} (0-based) is ({}, {}, "
+                                 "{})",
+                                 raw.location_kind, item_location, item, xyz[0], xyz[1], xyz[2]));
+        }
+        raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+      }
+    }
+    vertices_done = vertices_done || is_vertex;
+    if (is_face && vertices_done) break;  // later elements hold nothing we use
+  }
+  return BuildMesh(raw, what);
+}
+
+}  // namespace harap
