@@ -9,6 +9,7 @@
 
 #include "api/builtins.h"
 #include "tests/support/run_harap.h"
+#include "tests/support/shared_data.h"
 
 using namespace harap;
 using namespace harap::testing;
@@ -16,7 +17,7 @@ using namespace harap::testing;
 namespace {
 
 const std::string kCylinder =
-    std::string(HARAP_SOURCE_DIR) + "/experiments/scenarios/cylinder-bend.toml";
+    ::harap::testing::SourceDir().string() + "/experiments/scenarios/cylinder-bend.toml";
 
 }  // namespace
 

@@ -13,6 +13,7 @@
 #include "framework/error.h"
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
+#include "tests/support/shared_data.h"
 #include "tests/support/test_meshes.h"
 
 namespace harap {
@@ -209,7 +210,8 @@ TEST_CASE("harap deform under `ulimit -v`: a clear out-of-memory error, never a 
       const testing::CommandResult run = testing::RunCommand(fmt::format(
           "ulimit -v {} && exec timeout 300 {} deform {} --solver {} --max-iterations 2 "
           "--threads 2 -q",
-          megabytes * 1024, HARAP_EXECUTABLE, (dir / "scenario.toml").string(), solver));
+          megabytes * 1024, ::harap::testing::HarapExecutable(), (dir / "scenario.toml").string(),
+          solver));
       INFO(solver << " under " << megabytes << " MB: exit status " << run.status
                   << ", output: " << run.output);
       CHECK((run.status == 0 || run.status == 1));

@@ -29,6 +29,7 @@
 #include "cli/progress.h"
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
+#include "tests/support/shared_data.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
@@ -427,8 +428,9 @@ print("covered", high - low)
 if ((high - low) < 0.85).any():
     sys.exit(f"the meshes cover only {high - low} of the panel (rows, columns)")
 )PY";
-  const CommandResult check = testing::RunCommand(
-      fmt::format("/usr/bin/python3 {} {}", (dir / "check.py").string(), HARAP_SOURCE_DIR));
+  const CommandResult check =
+      testing::RunCommand(fmt::format("/usr/bin/python3 {} {}", (dir / "check.py").string(),
+                                      ::harap::testing::SourceDir().string()));
   INFO(check.output);
   CHECK(check.status == 0);
   if (check.output.find("SKIP") != std::string::npos) WARN(check.output);
@@ -447,7 +449,7 @@ std::pair<pid_t, int> SpawnHarap(const std::vector<std::string>& arguments) {
     dup2(null, STDOUT_FILENO);
     close(pipe_ends[0]);
     std::vector<char*> argv;
-    std::string executable = HARAP_EXECUTABLE;
+    std::string executable = ::harap::testing::HarapExecutable();
     argv.push_back(executable.data());
     std::vector<std::string> copy = arguments;
     for (auto& argument : copy) argv.push_back(argument.data());

@@ -14,11 +14,12 @@
 #include "api/component_factory.h"
 #include "framework/config.h"
 #include "framework/registries.h"
+#include "tests/support/shared_data.h"
 
 namespace harap::testing {
 
 inline std::string ReadSourceFile(const std::string& relative_path) {
-  std::ifstream file(std::string(HARAP_SOURCE_DIR) + "/" + relative_path);
+  std::ifstream file(::harap::testing::SourceDir().string() + "/" + relative_path);
   REQUIRE(file.good());
   std::stringstream text;
   text << file.rdbuf();

@@ -51,7 +51,7 @@ translate = [0.0, 0.0, 0.2]
     options.shard = shard;
     options.jobs = jobs;
     options.threads = 1;
-    options.executable = HARAP_EXECUTABLE;
+    options.executable = ::harap::testing::HarapExecutable();
     return RunExperiment(experiment, options);
   }
 };
@@ -313,7 +313,7 @@ TEST_CASE("Two shards run with GNU parallel, merged, equal the unsharded run",
   const fs::path config = workspace.Write("experiment.toml", kSmallSweep);
   const fs::path whole = workspace.dir / "whole";
   const fs::path sharded = workspace.dir / "sharded";
-  const std::string harap = HARAP_EXECUTABLE;
+  const std::string harap = ::harap::testing::HarapExecutable();
   REQUIRE(std::system(fmt::format("{} run {} --out {} --threads 1 -q", harap, config.string(),
                                   whole.string())
                           .c_str()) == 0);
@@ -340,7 +340,7 @@ TEST_CASE("harap report writes report.md from a run folder", "[experiments][runn
                                                                  "[report]\nclaim = \"lower\"\n"
                                                                  "figures = [\"phases\"]\n");
   const fs::path out = workspace.dir / "out";
-  const std::string harap = HARAP_EXECUTABLE;
+  const std::string harap = ::harap::testing::HarapExecutable();
   REQUIRE(std::system(
               fmt::format("{} run {} --out {} --threads 1 -q", harap, config.string(), out.string())
                   .c_str()) == 0);

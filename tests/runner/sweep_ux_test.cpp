@@ -14,6 +14,7 @@
 #include "framework/error.h"
 #include "runner/experiment.h"
 #include "tests/support/run_harap.h"
+#include "tests/support/shared_data.h"
 #include "tests/support/temp_folder.h"
 #include "tests/support/test_files.h"
 
@@ -53,12 +54,12 @@ TEST_CASE("harap run checks [report] before any run: figures, keys, compare",
 
   // The list is the one report.py reads.
   const std::string keys =
-      ReadText(fs::path(HARAP_SOURCE_DIR) / "experiments/scripts/report_keys.json");
+      ReadText(::harap::testing::SourceDir() / "experiments/scripts/report_keys.json");
   for (const std::string& figure : harap::LoadReportKeys().figures) {
     CHECK(keys.find(fmt::format("\"{}\"", figure)) != std::string::npos);
   }
   const std::string report_py =
-      ReadText(fs::path(HARAP_SOURCE_DIR) / "experiments/scripts/report.py");
+      ReadText(::harap::testing::SourceDir() / "experiments/scripts/report.py");
   CHECK_THAT(report_py, Contains("report_keys.json"));
 
   // A typo in a scenario file fails now too, naming the scenario file and line.
@@ -172,7 +173,7 @@ tolerance = 1e-30
       "for i in $(seq 1 600); do "
       "  n=$(ls {out}/runs/*.json 2>/dev/null | wc -l); [ \"$n\" -ge 2 ] && break; sleep 0.05; "
       "done; kill -9 $pid; wait $pid; echo \"exit $?\"",
-      fmt::arg("harap", HARAP_EXECUTABLE), fmt::arg("config", config),
+      fmt::arg("harap", ::harap::testing::HarapExecutable()), fmt::arg("config", config),
       fmt::arg("out", out.string())));
   INFO(killed.output);
   REQUIRE_THAT(killed.output, Contains("exit 137"));  // killed, not finished

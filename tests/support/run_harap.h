@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <string>
 
+#include "tests/support/shared_data.h"
+
 namespace harap::testing {
 
 struct CommandResult {
@@ -28,7 +30,7 @@ inline CommandResult RunCommand(const std::string& command) {
 
 /// Runs the harap executable of this build with `arguments`.
 inline CommandResult RunHarap(const std::string& arguments) {
-  return RunCommand(std::string(HARAP_EXECUTABLE) + " " + arguments);
+  return RunCommand(::harap::testing::HarapExecutable() + " " + arguments);
 }
 
 }  // namespace harap::testing

@@ -8,19 +8,21 @@
 
 namespace harap::testing {
 
+// The build's paths are compiled into build_paths.cpp alone, so that no other test object
+// depends on where the checkout is (compiler caches then serve every checkout alike).
+
 /// The shared data folder beside the repository (../shared), or $HARAP_SHARED if set.
-inline std::filesystem::path SharedDir() {
-  if (const char* env = std::getenv("HARAP_SHARED")) return env;
-  return HARAP_SHARED_DIR;
-}
+std::filesystem::path SharedDir();
+/// The repository's root folder.
+std::filesystem::path SourceDir();
+/// The harap executable of this build.
+std::string HarapExecutable();
 
 /// Path of a file under ../shared, or an empty path if the shared folder (or the file) is absent.
 inline std::filesystem::path SharedFile(const std::string& relative) {
   std::filesystem::path path = SharedDir() / relative;
   return std::filesystem::exists(path) ? path : std::filesystem::path();
 }
-
-inline std::filesystem::path SourceDir() { return HARAP_SOURCE_DIR; }
 
 }  // namespace harap::testing
 
