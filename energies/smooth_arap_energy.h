@@ -49,7 +49,7 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   };
 
   struct Options {
-    /// Weight of the Laplacian term, in [0, 1) (default as issue 7 asks).
+    /// Weight of the Laplacian term, in [0, 1) (default 0.99).
     double lambda = 0.99;
     RotationFit rotation_fit = RotationFit::kWholeEnergy;
     /// M has mean 1 over the input mesh (true: the same energy on every hierarchy level) or over

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Interactive strategies side by side (issue 21): `harap drag --report` per strategy, then a
+"""Interactive strategies side by side (docs/results.md, "Interactive sessions and dragging"): `harap drag --report` per strategy, then a
 table and a figure of the latency and the energy of every frame.
 
 `harap run` drives `harap deform` only, so this script runs `harap drag` itself, one strategy

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Octree vs edge-collapse hierarchy (issue 4, the paper's Fig. 18): hierarchical ARAP with each
+# Octree vs edge-collapse hierarchy (the paper's Fig. 18): hierarchical ARAP with each
 # hierarchy on the shared scenarios, default options otherwise (tolerance 1e-6, spokes_and_rims,
 # cholmod, rotations upsampler; edge_collapse targets the octree's level vertex counts). Writes
 # one report per run and prints the table of docs/results.md.

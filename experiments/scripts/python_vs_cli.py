@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Side-by-side timing of harap.deform (Python module) and `harap deform` (the command) on one
-scenario (docs/results.md, issue 22). Alternates fresh processes of each, RUNS times, and prints
+scenario (docs/results.md, "The Python module"). Alternates fresh processes of each, RUNS times, and prints
 the energy (as the command prints it, 10 significant digits) and the report's total time.
 
     PYTHONPATH=build/python python3 experiments/scripts/python_vs_cli.py \\

@@ -354,7 +354,7 @@ def figure_levels(directory, runs):
 
 def figure_scaling(directory, runs, compare):
     """Log-log total time and peak memory against the vertex count, one line per compared
-    value, with the least-squares slope of log T and log M over log n (issue 23's n^1.2)."""
+    value, with the least-squares slope of log T and log M over log n."""
     done = [r for r in runs if ok(r) and r.get("mesh", {}).get("vertices")]
     groups = OrderedDict()
     for run in done:

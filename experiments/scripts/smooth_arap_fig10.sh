@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The smooth ARAP measurement of docs/results.md ("Smooth ARAP (issue 7, Fig. 10)"): classic vs
+# The smooth ARAP measurement of docs/results.md ("Fig. 10: smooth ARAP"): classic vs
 # hierarchical with smooth_arap next to spokes_and_rims, on the shared armadillo-bend (173K
 # vertices) and cylinder-bend (built-in cylinder, 480K vertices) scenarios and the repository's
 # 20K cylinder-bend, plus pictures.

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""Time to energy from `harap deform --report R.json --trace` reports (issue 3's criterion).
+"""Time to energy from `harap deform --report R.json --trace` reports (the paper's Fig. 1 quantified).
 
 E_best is the lowest final energy among the given reports (run them with classic at tolerance 0
 and a large iteration cap, and hierarchical at a tight tolerance). For each report, t(p%) is the

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""classic, hierarchical and ADMM optimizers on the WRAPD scenes, next to WRAPD's figures (issues 8, 9).
+"""classic, hierarchical and ADMM optimizers on the WRAPD scenes, next to WRAPD's figures (docs/results.md, Fig. 12).
 
 Runs `harap deform SCENE --energy elements --report R.json --trace` for every scenario in the
 tetrahedral scenario folder and each optimizer, then prints a Markdown table per scene and
@@ -10,13 +10,12 @@ from the start of the run, precomputation included; BASELINE.md prints it to 7 s
 so an energy that rounds to the printed value reaches it: the target is the printed value plus
 half a unit in its last digit, a relative 5e-7 at most) and to within --slack percent of it, and
 WRAPD's energy, iterations and wall time
-(precompute + time to stall) from BASELINE.md, with the ratio ours / WRAPD. The issue's goal:
-hierarchical reaches WRAPD's final energy in at most a third of WRAPD's wall time on at least
-eight of the eleven scenes.
+(precompute + time to stall) from BASELINE.md, with the ratio ours / WRAPD, and per optimizer
+on how many scenes it reaches WRAPD's final energy in at most a third of WRAPD's wall time.
 
 An optimizer may carry settings as NAME:KEY=VALUE,KEY=VALUE (passed as
 `--set optimizer.KEY=VALUE`), e.g. `hierarchical:inner=wrapd` or `wrapd:tolerance=1e-9`. After the
-time-to-energy table comes a phase table per scene and optimizer (issue 9, the paper's inset
+time-to-energy table comes a phase table per scene and optimizer (the paper's inset
 table of Section 7): P (hierarchy + precompute + constrain), S (solve), final E_wrapd, finest
 iterations, seconds per finest-level iteration next to WRAPD's, and inverted elements at the end
 (ADMM optimizers).

@@ -70,8 +70,8 @@ namespace harap {
 /// reduces it any more or a coarser level would have no element, or after `max_levels` levels.
 ///
 /// Build() is const and thread-safe; it runs in the context's task arena and its result does not
-/// depend on the thread count. Cost: ~50 ms for the 173K-vertex Armadillo on 2 cores (see the
-/// .cpp).
+/// depend on the thread count. Cost: a small part of a hierarchical run (docs/benchmarks.md,
+/// "Hierarchy construction and up-sampling"; the .cpp says what keeps it there).
 class OctreeHierarchy final : public Hierarchy {
  public:
   static constexpr std::string_view kName = "octree";

@@ -48,7 +48,7 @@ class CholmodSolver final : public LinearSolver {
     /// PartialSupernodalFactor::FactorAll: CHOLMOD's left-looking supernodal algorithm with the
     /// same values (bit for bit), independent subtrees of the elimination tree on the run's
     /// threads, reading A through the permutation (cholmod_factorize first makes permuted
-    /// copies of A): armadillo-bend's finest matrix 0.093 s vs 0.178 s (docs/solvers.md).
+    /// copies of A): about twice as fast on armadillo-bend's finest matrix (docs/solvers.md).
     kParallel,
     kCholmod,  ///< cholmod_factorize.
   };
@@ -65,15 +65,14 @@ class CholmodSolver final : public LinearSolver {
 
   struct Options {
     /// Factorization kind. "auto" = supernodal factorization converted to a simplicial factor
-    /// for the solves: 174K-vertex cotangent Laplacian, AMD, 1 thread: simplicial
-    /// 1.3–1.9 s + 30–40 ms per 3-column solve, supernodal 0.32–0.50 s + 48–56 ms (.cpp table);
-    /// auto gets the supernodal factorization time and the simplicial solve time.
+    /// for the solves: the supernodal factorization is faster than the simplicial one, the
+    /// simplicial solves faster than the supernodal ones; auto gets the supernodal factorization
+    /// time and the simplicial solve time (docs/results.md, "Solver choice and presets").
     Mode mode = Mode::kAuto;
-    /// Fill-reducing ordering. AMD, measured: METIS gives 15% fewer nonzeros in L on surface
-    /// meshes (6.1M vs 7.3M at 174K vertices) but its analysis, redone on every Factorize(),
-    /// costs 1.3–1.5 s vs 0.2–0.3 s; analysis + factor + 100 solves took 5.1–6.2 s with METIS,
-    /// 4.6–5.9 s with AMD (a tie at 300 solves). "metis" pays off for volume meshes and long
-    /// runs (27K cube, 300 solves: 6.5 s vs 8.0 s).
+    /// Fill-reducing ordering. AMD: METIS gives ~15% fewer nonzeros in L on surface meshes, but
+    /// its analysis, redone on every Factorize(), costs several times AMD's, which a surface
+    /// mesh's solves repay only after a few hundred of them (docs/benchmarks.md). "metis" pays
+    /// off for volume meshes and long runs.
     Ordering ordering = Ordering::kAmd;
     /// Pivots d_k ≤ pivot_tolerance · A_kk count as zero (numerically singular A); in [0, 1),
     /// 0 rejects only non-positive pivots. Measured: |d| / A_kk ≤ 1.5e-12 for singular grid
@@ -90,9 +89,9 @@ class CholmodSolver final : public LinearSolver {
     /// factorization (which ask for CHOLMOD_OMP_NUM_THREADS = 4 threads whatever the machine
     /// has) and the BLAS it calls (OpenBLAS: one thread per core); 0 leaves both as the
     /// environment sets them. harap parallelizes with TBB, and these threads only compete with
-    /// it: on armadillo-bend's finest level (2-core VM, docs/benchmarks.md) 1 factors 1.4×
-    /// faster than 0 alone, and 2.8× faster with a second factorization running beside it, as
-    /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
+    /// it: 1 factors faster than 0 alone, and far faster with a second factorization running
+    /// beside it, as in the hierarchical optimizer's setup (docs/benchmarks.md, "CHOLMOD's own
+    /// threads"). The BLAS thread count is process-wide: the last
     /// Factorize() sets it.
     int native_threads = 1;
     /// Refactor()'s route. kNumeric, kUpdate and kPartial, and kAuto after PrepareForRefactor(),
@@ -179,12 +178,12 @@ class CholmodSolver final : public LinearSolver {
   void PrepareForRefactor() override;
 
   /// Seconds per factor entry touched by the deletions and by the additions of an update before
-  /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
+  /// any was measured; measured on a 2-core VM on armadillo-bend's finest matrix with a
   /// ball of 1% of the vertices (docs/solvers.md).
   static constexpr double kDefaultDeleteSecondsPerEntry = 0.8e-9;
   static constexpr double kDefaultAddSecondsPerEntry = 0.8e-9;
-  /// Seconds per flop of a partial refactorization before one was measured (the same edit:
-  /// 85 ms for 3.8e8 flops, docs/session.md).
+  /// Seconds per flop of a partial refactorization before one was measured (measured on the
+  /// same edit; docs/solvers.md).
   static constexpr double kDefaultPartialSecondsPerFlop = 2e-10;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).

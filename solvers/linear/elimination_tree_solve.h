@@ -27,7 +27,7 @@ struct LdltFactorView {
 ///
 /// Why: the global step solves with the same factor hundreds of times, three columns at once, and
 /// a single-threaded triangular solve is the largest part of an iteration on large meshes
-/// (armadillo, 173K vertices: 31 ms of ~65 ms). Columns in disjoint subtrees of the elimination
+/// (docs/benchmarks.md, "One classic iteration"). Columns in disjoint subtrees of the elimination
 /// tree never touch each other's unknowns. After a post-ordered analysis (CHOLMOD's default)
 /// every subtree is a contiguous column range, and so is every chain of the tree (a column whose
 /// parent has no other child). Setup() cuts the tree into blocks: leaf subtrees small enough to

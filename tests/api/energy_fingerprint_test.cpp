@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Energy fingerprints: a fixed list of runs whose final energies are recorded in
 // tests/data/energy_fingerprints.txt. A refactoring of the optimizers, level solvers, energies or
-// linear solvers must leave them unchanged (issue 20: "bit-identical before and after").
+// linear solvers must leave them unchanged, bit for bit.
 //
 // Bit-identical holds on the machine that recorded the file (one thread, the same BLAS kernel):
 // run with HARAP_EXACT_ENERGIES=1 to require it. Elsewhere a different BLAS kernel (CHOLMOD's

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Issue 6 end to end: mesh checks in runs and reports, welding, configuration errors with their
-// location, and running out of memory under `ulimit -v`.
+// Robustness end to end (docs/robustness.md): mesh checks in runs and reports, welding,
+// configuration errors with their location, and running out of memory under `ulimit -v`.
 #include <unistd.h>
 
 #include <catch2/catch.hpp>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Issue 24, the `harap deform` walkthrough of a new user: output formats and unwritable paths
+// The `harap deform` walkthrough of a new user: output formats and unwritable paths
 // fail before solving, a mesh given as a scenario says so, repaired meshes are summarized as
 // solved, warnings for results that mislead, output that says what it measured (direct solvers,
 // --version, list KIND, pieces, hierarchical iterations), progress phases, and Ctrl-C.

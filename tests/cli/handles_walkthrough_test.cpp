@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// A new user's walkthroughs (issue 24): `harap handles` before solving, absolute coordinates,
+// A new user's walkthroughs: `harap handles` before solving, absolute coordinates,
 // per-vertex targets, the deformation benchmark's .sel/.def files, refining a non-manifold mesh.
 // Small generated meshes only.
 #include <fmt/format.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Helpers shared by the io tests: scratch directories, file writing, topology checks.
+// Utilities shared by the io tests: scratch directories, file writing, topology checks.
 #pragma once
 
 #include <unistd.h>

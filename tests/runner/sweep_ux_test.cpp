@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// `harap run` / `harap report` for a new user (issue 24): the whole config, figures included,
+// `harap run` / `harap report` for a new user: the whole config, figures included,
 // is checked before any run; runs are named in the progress; comparisons across different
 // energies are flagged; a sweep killed with SIGKILL resumes keeping every finished run and
 // leaves no partial file.

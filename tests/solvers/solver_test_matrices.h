@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
-// Matrices and helpers shared by the linear-solver tests.
+// Matrices and checks shared by the linear-solver tests.
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
