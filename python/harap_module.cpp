@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The compiled part of the Python package `harap` (harap._harap): converts numpy arrays to and
 // from harap's types and calls the library (api/deform.h, api/library.h,
-// api/session.h, framework/io). No algorithm lives here; python/harap/__init__.py is the
+// api/session.h, io/). No algorithm lives here; python/harap/__init__.py is the
 // public API.
 //
 // Threads and signals: a solve runs on a worker thread with the GIL released. The calling thread
