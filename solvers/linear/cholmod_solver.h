@@ -9,6 +9,8 @@
 
 namespace harap {
 
+struct CholmodFactorization;  // cholmod_factorization.h
+
 /// Sparse Cholesky factorization A = P' L D L' P (simplicial) or A = P' L L' P (supernodal) with
 /// CHOLMOD [Chen, Davis, Hager & Rajamanickam 2008], then X = A⁻¹ B by two triangular solves.
 ///
@@ -40,7 +42,7 @@ class CholmodSolver final : public LinearSolver {
   };
   enum class Ordering {
     kMetis,  ///< METIS nested dissection: least fill on meshes, but the slowest analysis.
-    kAmd,    ///< Approximate minimum degree: fast analysis, 10–20% more fill on 2D meshes.
+    kAmd,    ///< Approximate minimum degree: fast analysis, more fill than METIS on meshes.
     kBest,   ///< CHOLMOD's default: AMD, then METIS too if AMD's fill is high; keeps the best.
   };
   /// Who computes a supernodal numeric factorization (modes auto and supernodal).
@@ -48,7 +50,8 @@ class CholmodSolver final : public LinearSolver {
     /// PartialSupernodalFactor::FactorAll: CHOLMOD's left-looking supernodal algorithm with the
     /// same values (bit for bit), independent subtrees of the elimination tree on the run's
     /// threads, reading A through the permutation (cholmod_factorize first makes permuted
-    /// copies of A): armadillo-bend's finest matrix 0.093 s vs 0.178 s (docs/solvers.md).
+    /// copies of A, which is most of what this saves; docs/solvers.md, "Why numeric =
+    /// parallel").
     kParallel,
     kCholmod,  ///< cholmod_factorize.
   };
@@ -65,19 +68,22 @@ class CholmodSolver final : public LinearSolver {
 
   struct Options {
     /// Factorization kind. "auto" = supernodal factorization converted to a simplicial factor
-    /// for the solves: 174K-vertex cotangent Laplacian, AMD, 1 thread: simplicial
-    /// 1.3–1.9 s + 30–40 ms per 3-column solve, supernodal 0.32–0.50 s + 48–56 ms (.cpp table);
-    /// auto gets the supernodal factorization time and the simplicial solve time.
+    /// for the solves. The supernodal (BLAS) factorization is several times faster than the
+    /// simplicial one, while 3 right-hand sides are too few for its dense blocks to pay in the
+    /// solves, where a simplicial factor is faster. ARAP factors once and solves 5–300 times, so
+    /// neither pure mode suits all runs; converting (cholmod_change_factor, O(nnz(L))) gets the
+    /// supernodal factorization time and the simplicial solve time (docs/solvers.md, "Why mode
+    /// auto").
     Mode mode = Mode::kAuto;
-    /// Fill-reducing ordering. AMD, measured: METIS gives 15% fewer nonzeros in L on surface
-    /// meshes (6.1M vs 7.3M at 174K vertices) but its analysis, redone on every Factorize(),
-    /// costs 1.3–1.5 s vs 0.2–0.3 s; analysis + factor + 100 solves took 5.1–6.2 s with METIS,
-    /// 4.6–5.9 s with AMD (a tie at 300 solves). "metis" pays off for volume meshes and long
-    /// runs (27K cube, 300 solves: 6.5 s vs 8.0 s).
+    /// Fill-reducing ordering. AMD: METIS gives fewer nonzeros in L on surface meshes, so faster
+    /// solves, but its analysis, redone on every Factorize(), costs more than those solves save
+    /// unless a factor serves hundreds of them. "metis" pays off for volume meshes (more fill to
+    /// save) and long runs (docs/solvers.md, "Why mode auto", has both orderings).
     Ordering ordering = Ordering::kAmd;
     /// Pivots d_k ≤ pivot_tolerance · A_kk count as zero (numerically singular A); in [0, 1),
-    /// 0 rejects only non-positive pivots. Measured: |d| / A_kk ≤ 1.5e-12 for singular grid
-    /// Laplacians up to 90K unknowns, ≥ 0.15 for pinned ones; SPD needs 0 < d_k ≤ A_kk.
+    /// 0 rejects only non-positive pivots. The default lies between roundoff and real pivots: on
+    /// grid Laplacians up to 90K unknowns |d| / A_kk ≤ 1.5e-12 when singular, ≥ 0.15 when
+    /// pinned; SPD needs 0 < d_k ≤ A_kk.
     double pivot_tolerance = 1e-10;
     /// Solve with a simplicial factor (modes auto and simplicial) by substitution over
     /// independent subtrees of the elimination tree on all the context's threads
@@ -90,17 +96,16 @@ class CholmodSolver final : public LinearSolver {
     /// factorization (which ask for CHOLMOD_OMP_NUM_THREADS = 4 threads whatever the machine
     /// has) and the BLAS it calls (OpenBLAS: one thread per core); 0 leaves both as the
     /// environment sets them. harap parallelizes with TBB, and these threads only compete with
-    /// it: on armadillo-bend's finest level (2-core VM, docs/benchmarks.md) 1 factors 1.4×
-    /// faster than 0 alone, and 2.8× faster with a second factorization running beside it, as
-    /// in the hierarchical optimizer's setup. The BLAS thread count is process-wide: the last
-    /// Factorize() sets it.
+    /// it, the more so when a second factorization runs beside this one, as in the hierarchical
+    /// optimizer's setup (docs/solvers.md, "Why native_threads = 1"). The BLAS thread count is
+    /// process-wide: the last Factorize() sets it.
     int native_threads = 1;
     /// Refactor()'s route. kNumeric, kUpdate and kPartial, and kAuto after PrepareForRefactor(),
     /// keep a copy of the analysis (the symbolic factor, a few MB) and of the factored matrix (12
     /// bytes per nonzero of A) between calls, to reuse the one and to check the pattern and find
     /// the changed rows' old values with the other; in mode auto kPartial, and every route but
     /// kFull after PrepareForRefactor(), also keep the numeric supernodal factor (8 bytes per entry
-    /// of its dense blocks: 66 MB on armadillo-bend's finest level) that kPartial refactors in
+    /// of its dense blocks; its size on a large mesh: docs/session.md) that kPartial refactors in
     /// part. kAuto without PrepareForRefactor() (one-shot runs) keeps none, and its Refactor()
     /// factors from scratch. kUpdate needs a simplicial factor (modes auto and simplicial).
     RefactorChoice refactor = RefactorChoice::kAuto;
@@ -158,7 +163,8 @@ class CholmodSolver final : public LinearSolver {
   /// recomputes only its supernodes on the elimination-tree paths from the changed columns to the
   /// root and those with a changed row (PartialSupernodalFactor: every other column of L is
   /// provably unchanged), then copies those columns into the simplicial factor (the solve's plan
-  /// kept). On a mesh the paths hold the large separators: 40–45% of the work for a local edit.
+  /// kept). On a mesh the paths hold the large separators, so even a local edit recomputes a
+  /// large share of the work (docs/solvers.md measures it).
   /// After a kUpdate the kept supernodal factor is stale; the next kNumeric refreshes it.
   ///
   /// Rule of kAuto: the route with the lowest estimated time among kPartial (when its supernodal
@@ -179,12 +185,13 @@ class CholmodSolver final : public LinearSolver {
   void PrepareForRefactor() override;
 
   /// Seconds per factor entry touched by the deletions and by the additions of an update before
-  /// any was measured; measured on the 2-vCPU test VM on armadillo-bend's finest matrix with a
-  /// ball of 1% of the vertices (docs/solvers.md).
+  /// any was measured: what an update of armadillo-bend's finest matrix with a ball of 1% of the
+  /// vertices measured (docs/solvers.md, "Refactoring after handle edits").
   static constexpr double kDefaultDeleteSecondsPerEntry = 0.8e-9;
   static constexpr double kDefaultAddSecondsPerEntry = 0.8e-9;
-  /// Seconds per flop of a partial refactorization before one was measured (the same edit:
-  /// 85 ms for 3.8e8 flops, docs/session.md).
+  /// Seconds per flop of a partial refactorization before one was measured: what the partial
+  /// refactorization of the same edit measured (docs/solvers.md, "Refactoring after handle
+  /// edits").
   static constexpr double kDefaultPartialSecondsPerFlop = 2e-10;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).
@@ -242,8 +249,7 @@ class CholmodSolver final : public LinearSolver {
                          const Context& context) override;
   RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                                const Context& context) override;
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<CholmodFactorization> factorization_;
 };
 
 }  // namespace harap
