@@ -27,14 +27,14 @@ struct LdltFactorView {
 ///
 /// Why: the global step solves with the same factor hundreds of times, three columns at once, and
 /// a single-threaded triangular solve is the largest part of an iteration on large meshes
-/// (armadillo, 173K vertices: 31 ms of ~65 ms). Columns in disjoint subtrees of the elimination
-/// tree never touch each other's unknowns. After a post-ordered analysis (CHOLMOD's default)
-/// every subtree is a contiguous column range, and so is every chain of the tree (a column whose
-/// parent has no other child). Setup() cuts the tree into blocks: leaf subtrees small enough to
-/// balance the threads, and the chains above them (the separators of a nested dissection). Blocks
-/// form a tree; sibling blocks run in parallel, recursively, so only the root chain is
-/// inherently sequential (each level of a nested dissection holds a similar share of the factor,
-/// so a fixed "sequential top" would cost a lot).
+/// (docs/benchmarks.md has the kernels of one iteration side by side). Columns in disjoint subtrees
+/// of the elimination tree never touch each other's unknowns. After a post-ordered analysis
+/// (CHOLMOD's default) every subtree is a contiguous column range, and so is every chain of the
+/// tree (a column whose parent has no other child). Setup() cuts the tree into blocks: leaf
+/// subtrees small enough to balance the threads, and the chains above them (the separators of a
+/// nested dissection). Blocks form a tree; sibling blocks run in parallel, recursively, so only the
+/// root chain is inherently sequential (each level of a nested dissection holds a similar share of
+/// the factor, so a fixed "sequential top" would cost a lot).
 ///
 /// Both passes are column-oriented and read the factor in place (no transposed copy). Updates of
 /// a block's columns to rows above the block go to slots owned by the block (Setup() renumbers
@@ -83,6 +83,15 @@ class EliminationTreeSolve {
     int slots_begin = 0, slots_end = 0;        ///< its slots (they stand for rows ≥ end)
     int gather_begin = 0, gather_end = 0;      ///< into gather_slot_: slots aimed at its rows
   };
+
+  struct Tree;  // elimination_tree_solve.cpp
+
+  // Setup()'s steps: the tree of factor_ (and the pivots); the cut into blocks (block_of: each
+  // column's block); the block tree and its critical path; the slots and their gather order.
+  Tree ReadTree();
+  void MakeBlocks(const Tree& tree, int num_threads, std::vector<int>& block_of);
+  void LinkBlocks(const Tree& tree, const std::vector<int>& block_of);
+  void AssignSlots(const std::vector<int>& block_of);
 
   template <int kColumns>
   void SolveInPlace(int columns, const Context& context);
