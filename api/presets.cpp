@@ -37,7 +37,8 @@ ConfigNode TableAt(const ConfigNode& config, std::string_view dotted_path) {
 }  // namespace
 
 const std::vector<Preset>& Presets() {
-  // "fast": measured on all five shared scenes and smooth ARAP on two (docs/results.md, issue 23).
+  // "fast": the fastest configuration measured on all five shared scenes and smooth ARAP on two
+  // (docs/results.md).
   static const std::vector<Preset> presets = {
       {"fast",
        "the fastest configuration measured at tolerance 1e-6: the hierarchical optimizer with "
@@ -47,8 +48,7 @@ const std::vector<Preset>& Presets() {
        "(converting it for faster solves does not pay off in so few); Cholesky on the coarse "
        "levels, whose solutions must be accurate (paper Section 5.2); fixed coarse constraint "
        "targets and Anderson acceleration (5), "
-       "which then takes effect and halves the coarse levels' iterations (docs/results.md, "
-       "issue 23)",
+       "which then takes effect and halves the coarse levels' iterations (docs/results.md)",
        {{"optimizer.type", "\"hierarchical\""}},
        {{"solver.level_0.type", "\"adaptive\""},
         {"solver.level_0.expected_solves", "4"},

@@ -18,11 +18,10 @@
 #include "framework/error.h"
 #include "hierarchies/builders/octree_hierarchy.h"
 
-// Cost: the decimation dominates and is sequential (one priority queue): ~18 s of CPU for the
-// 173K-vertex armadillo-bend mesh, ~41 s for the 437K-vertex Dragon (HierarchyBuild benchmark on
-// the loaded shared machine; the octree takes 0.1–0.6 s). Most of it is OpenMesh's legality test
-// is_collapse_ok(), which DecimaterT calls for every outgoing halfedge of every vertex around
-// each collapse. See docs/results.md ("Octree vs edge collapse").
+// Cost: the decimation dominates and is sequential (one priority queue), so this builds orders
+// of magnitude slower than the octree (docs/results.md, "Octree vs edge collapse", with the
+// command). Most of it is OpenMesh's legality test is_collapse_ok(), which DecimaterT calls for
+// every outgoing halfedge of every vertex around each collapse.
 
 namespace harap {
 namespace {

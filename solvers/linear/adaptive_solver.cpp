@@ -133,8 +133,8 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     // - the matrix serves more solves than the expected_solves the choice assumed. Counting
     //   flops alone underrates CG: its sparse products run at a fraction of the factorization's
     //   dense-kernel speed, and its inexact steps cost the caller extra global steps, each with
-    //   its own local step (dragon-lift refined to 1.75M/7M vertices iterated 17/38 steps at
-    //   level 0 before the flops caught up; docs/results.md, issue 23); or
+    //   its own local step (on the largest scale scenarios, many steps at level 0 before the
+    //   flops caught up: the fast preset in docs/results.md); or
     // - the last CG solve left more than max_unresolved of its correction undone: its steps are
     //   too inexact for the premise (dragon-lift's second step, from 437K vertices up).
     may_switch_ = false;
