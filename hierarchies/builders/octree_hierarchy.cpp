@@ -20,14 +20,13 @@
 
 #include "framework/error.h"
 
-// Cost (2-core VM, Release, min of repeated builds; the first build of a process pays ~10–40 ms
-// more for fresh pages): Armadillo Loop-refined once (173K vertices, 6 levels) 50 ms with the
-// topology check, 41 ms without, of which ~19 ms are the level-0 analysis (unique edges for Ē,
-// bounding box, Eq. 2) and ~18 ms level 1; Dragon (437K vertices, 7 levels) 115 ms / 84 ms.
-// What keeps it there: one pass per task over the elements with the per-vertex data they touch
-// prefetched; clusters by union–find (no adjacency lists; level 0 walks the unique edges it has
-// bucketed for Ē anyway); counting sorts instead of comparison sorts or hashing; scratch buffers
-// sized once on level 0 and never zero-filled when they are overwritten anyway.
+// Cost: a small part of a hierarchical run (docs/benchmarks.md, "Hierarchy construction", has
+// the times and the command). The levels shrink geometrically, so level 0's analysis (unique
+// edges for Ē, bounding box, Eq. 2) and level 1 take most of it. What keeps it low: one pass per
+// task over the elements with the per-vertex data they touch prefetched; clusters by union–find (no
+// adjacency lists; level 0 walks the unique edges it has bucketed for Ē anyway); counting sorts
+// instead of comparison sorts or hashing; scratch buffers sized once on level 0 and never
+// zero-filled when they are overwritten anyway.
 
 namespace harap {
 namespace {
