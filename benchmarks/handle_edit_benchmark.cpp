@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Handle edits of an interactive session (issue 21) on armadillo-bend's finest level: the
+// Handle edits of an interactive session (docs/session.md) on armadillo-bend's finest level: the
 // masked global-step matrix (all vertices; the scenario's handles' rows and columns replaced by
 // the identity's, pattern unchanged) is factored, then a ball of 1% of the vertices becomes
 // constrained and is released again, each edit one LinearSolver::Refactor():
@@ -94,7 +94,8 @@ struct EditFixture {
   }
 };
 
-// A ball of 1% of the vertices (the edit of issue 21), and one of 0.01% (17 vertices).
+// A ball of 1% of the vertices (the edit docs/solvers.md measures), and one of 0.01% (17
+// vertices).
 EditFixture& Fixture(bool small = false) {
   if (small) {
     static EditFixture fixture(1e-4);

@@ -6,7 +6,7 @@
 namespace harap::benchmarks {
 
 /// Registers HierarchyBuild_<hierarchy>/<mesh>: Hierarchy::Build with default options, octree
-/// against edge_collapse (issue 4, the paper's Fig. 18), on a generated 170K-vertex cylinder and,
+/// against edge_collapse (the paper's Fig. 18), on a generated 170K-vertex cylinder and,
 /// when present under `shared_dir`, the armadillo-bend and dragon-lift scenario meshes. Meshes are
 /// loaded on first use, so filtered-out benchmarks cost nothing.
 void RegisterHierarchyBenchmarks(const std::filesystem::path& shared_dir);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Interactive sessions (issue 21) on armadillo-bend, hierarchical optimizer, the run config's
-// defaults (octree, rotations upsampler, CHOLMOD), 2 threads, as `harap drag` runs them:
+// Interactive sessions (docs/session.md) on armadillo-bend, hierarchical optimizer, the run
+// config's defaults (octree, rotations upsampler, CHOLMOD), 2 threads, as `harap drag` runs them:
 //
 //   SessionFrame/armadillo-bend     one warm frame: SetTargets() + Solve() to 1e-6, the targets
 //                                    alternating between the poses of frames 29 and 30 of 30

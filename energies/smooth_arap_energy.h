@@ -49,7 +49,8 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   };
 
   struct Options {
-    /// Weight of the Laplacian term, in [0, 1) (default as issue 7 asks).
+    /// Weight of the Laplacian term, in [0, 1) (default: the weight of the Fig. 10 comparison,
+    /// docs/results.md).
     double lambda = 0.99;
     RotationFit rotation_fit = RotationFit::kWholeEnergy;
     /// M has mean 1 over the input mesh (true: the same energy on every hierarchy level) or over
