@@ -137,12 +137,13 @@ class CholmodSolver final : public LinearSolver {
 
   bool is_direct() const override { return true; }
 
-  /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below):
-  /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
-  /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
-  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull). For handle edits
-  /// of a masked matrix, name only the rows of the vertices that become or stop being handles:
-  /// their neighbours' changed entries lie in those columns, and every row named costs work.
+  /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below; the routes are
+  /// in cholmod_refactor_routes.h): Brings the factor up to date for `a` (same pattern, values
+  /// changed only in the rows and columns `changed_rows`) by the route Options::refactor names; a
+  /// different pattern (or no earlier Factorize(), or refactor = "full") factors from scratch
+  /// (kFull). For handle edits of a masked matrix, name only the rows of the vertices that become
+  /// or stop being handles: their neighbours' changed entries lie in those columns, and every row
+  /// named costs work.
   ///
   /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
   /// supernodes); in mode auto the supernodal factor's values go straight into the simplicial
