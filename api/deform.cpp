@@ -145,6 +145,57 @@ nlohmann::json MeshChecksJson(const DeformOutcome& outcome) {
   return result;
 }
 
+// Per level: size, iterations, energy, time, the linear solves, the level solver's measures and,
+// with --diagnostics, the spectrum.
+nlohmann::json LevelsJson(const DeformOutcome& outcome) {
+  using nlohmann::json;
+  const OptimizeResult& r = outcome.result;
+  json levels = json::array();
+  for (size_t k = 0; k < r.levels.size(); ++k) {
+    const LevelResult& level = r.levels[k];
+    const SolveStatistics& solves = level.linear_solves;
+    json entry = {
+        {"level", level.level},
+        {"vertices", level.vertices},
+        {"faces", level.elements},
+        {"unknowns", level.unknowns},
+        {"iterations", level.iterations},
+        {"energy", level.energy},
+        {"seconds", level.seconds},
+        {"converged", level.converged},
+        {"solver", k < outcome.level_solvers.size() ? outcome.level_solvers[k] : ""},
+        {"solves", solves.solves},
+        {"solver_iterations", solves.iterations},
+        // null: no solve measured its residual (direct solvers by default).
+        {"max_relative_residual",
+         solves.residuals_computed > 0 ? json(solves.max_relative_residual) : json(nullptr)},
+        {"last_relative_residual",
+         solves.residuals_computed > 0 ? json(solves.last_relative_residual) : json(nullptr)},
+        {"solve_seconds", solves.seconds}};
+    // The level solver's own measures (inverted_elements, newton_steps, ...); counts as integers.
+    for (const auto& [name, value] : level.measures) {
+      const bool count = value == std::floor(value) && std::abs(value) < 9.0e15;
+      entry[name] = count ? json(static_cast<long long>(value)) : json(value);
+    }
+    if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
+      auto describe = [](const ExtremeEigenvalues& e) {
+        return json{{"lambda_min", e.smallest},
+                    {"lambda_max", e.largest},
+                    {"condition_number", e.condition_number()},
+                    {"converged", e.converged},
+                    {"products", e.products},
+                    {"solves", e.solves},
+                    {"seconds", e.seconds}};
+      };
+      entry["spectrum"] = {{"matrix", describe(it->second.matrix)},
+                           {"jacobi", describe(it->second.jacobi)},
+                           {"seconds", it->second.seconds}};
+    }
+    levels.push_back(entry);
+  }
+  return levels;
+}
+
 }  // namespace
 
 std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outcome,
@@ -193,50 +244,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
     handles.push_back({{"name", handle.name}, {"vertices", handle.vertices.size()}});
   }
   report["handles"] = handles;
-  json levels = json::array();
-  for (size_t k = 0; k < r.levels.size(); ++k) {
-    const LevelResult& level = r.levels[k];
-    const SolveStatistics& solves = level.linear_solves;
-    json entry = {
-        {"level", level.level},
-        {"vertices", level.vertices},
-        {"faces", level.elements},
-        {"unknowns", level.unknowns},
-        {"iterations", level.iterations},
-        {"energy", level.energy},
-        {"seconds", level.seconds},
-        {"converged", level.converged},
-        {"solver", k < outcome.level_solvers.size() ? outcome.level_solvers[k] : ""},
-        {"solves", solves.solves},
-        {"solver_iterations", solves.iterations},
-        // null: no solve measured its residual (direct solvers by default).
-        {"max_relative_residual",
-         solves.residuals_computed > 0 ? json(solves.max_relative_residual) : json(nullptr)},
-        {"last_relative_residual",
-         solves.residuals_computed > 0 ? json(solves.last_relative_residual) : json(nullptr)},
-        {"solve_seconds", solves.seconds}};
-    // The level solver's own measures (inverted_elements, newton_steps, ...); counts as integers.
-    for (const auto& [name, value] : level.measures) {
-      const bool count = value == std::floor(value) && std::abs(value) < 9.0e15;
-      entry[name] = count ? json(static_cast<long long>(value)) : json(value);
-    }
-    if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
-      auto describe = [](const ExtremeEigenvalues& e) {
-        return json{{"lambda_min", e.smallest},
-                    {"lambda_max", e.largest},
-                    {"condition_number", e.condition_number()},
-                    {"converged", e.converged},
-                    {"products", e.products},
-                    {"solves", e.solves},
-                    {"seconds", e.seconds}};
-      };
-      entry["spectrum"] = {{"matrix", describe(it->second.matrix)},
-                           {"jacobi", describe(it->second.jacobi)},
-                           {"seconds", it->second.seconds}};
-    }
-    levels.push_back(entry);
-  }
-  report["levels"] = levels;
+  report["levels"] = LevelsJson(outcome);
   // Remarks about the input (scenario loading) first, then those of the run.
   std::vector<std::string> notes = scenario.notes;
   notes.insert(notes.end(), r.notes.begin(), r.notes.end());

@@ -255,21 +255,7 @@ void SingleThreadedNativeLibrariesUnderMemoryLimit(char** argv) {
   execv("/proc/self/exe", argv);  // returns only if it failed: carry on as we are
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
-  CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
-  app.require_subcommand(1);
-
-  app.set_version_flag("--version", VersionString(), "print the version and exit");
-  auto* list = app.add_subcommand("list", "list every registered piece with its options");
-  std::string list_kind;
-  list->add_option("kind", list_kind,
-                   "only this kind: optimizers, energies, solvers, hierarchies, upsamplers, "
-                   "level_solvers, mesh, builtins");
-
-  DeformArguments args;
+CLI::App* AddDeformCommand(CLI::App& app, DeformArguments& args) {
   auto* deform = app.add_subcommand("deform", "deform a mesh as a scenario file describes");
   deform->add_option("scenario", args.scenario, "scenario TOML file")->required();
   deform->add_option("--config", args.config_file,
@@ -302,32 +288,36 @@ int main(int argc, char** argv) {
                    "global-step matrix and of its Jacobi scaling (Spectra; after the run)");
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
+  return deform;
+}
 
-  DragCommandArguments drag_args;
-  auto* drag = AddDragCommand(app, drag_args);
-
-  std::string hierarchy_out;
+// `harap hierarchy` shares deform's arguments (scenario, hierarchy, config, settings, threads).
+CLI::App* AddHierarchyCommand(CLI::App& app, DeformArguments& args, std::string& out) {
   auto* hierarchy = app.add_subcommand("hierarchy",
                                        "build a scenario's mesh hierarchy, write each "
                                        "level as PLY, print a per-level table");
   hierarchy->add_option("scenario", args.scenario, "scenario TOML file")->required();
-  hierarchy->add_option("--out", hierarchy_out, "folder for level_<l>.ply files");
+  hierarchy->add_option("--out", out, "folder for level_<l>.ply files");
   hierarchy->add_option("--hierarchy", args.hierarchy, "hierarchy name (default octree)");
   hierarchy->add_option("--config", args.config_file, "TOML file with a [hierarchy] table");
   hierarchy->add_option("--set", args.settings, "set an option, e.g. hierarchy.min_vertices=500");
   hierarchy->add_option("--threads", args.threads, "worker threads (default: all cores)");
+  return hierarchy;
+}
 
-  std::string handles_scenario, handles_out;
+CLI::App* AddHandlesCommand(CLI::App& app, std::string& scenario, std::string& out) {
   auto* handles = app.add_subcommand(
       "handles",
       "show what a scenario's handles select and where they go, without solving: "
       "bounding box, per handle vertex count, centroid and motion; --out writes the "
       "mesh with the handles coloured");
-  handles->add_option("scenario", handles_scenario, "scenario TOML file")->required();
-  handles->add_option("--out", handles_out,
+  handles->add_option("scenario", scenario, "scenario TOML file")->required();
+  handles->add_option("--out", out,
                       "write the rest mesh as PLY with each handle's vertices coloured");
+  return handles;
+}
 
-  RunArguments run_args;
+CLI::App* AddRunCommand(CLI::App& app, RunArguments& run_args) {
   auto* run = app.add_subcommand("run",
                                  "run an experiment config: every scenario x variant x grid "
                                  "combination, with resume (docs/experiments.md)");
@@ -343,8 +333,10 @@ int main(int argc, char** argv) {
                   "only scenarios whose name matches this shell pattern (repeatable)");
   run->add_flag("--retry-failed", run_args.retry_failed, "run failed runs again");
   run->add_flag("--quiet,-q", run_args.quiet, "no progress output");
+  return run;
+}
 
-  ReportArguments report_args;
+CLI::App* AddReportCommand(CLI::App& app, ReportArguments& report_args) {
   auto* report = app.add_subcommand("report",
                                     "merge the shards of a run folder into results.csv "
                                     "and write report.md with figures and pictures");
@@ -354,6 +346,34 @@ int main(int argc, char** argv) {
   report->add_option("--python", report_args.python,
                      "Python interpreter (default /usr/bin/python3)");
   report->add_flag("--no-render", report_args.no_render, "skip the mesh pictures");
+  return report;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
+  CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
+  app.require_subcommand(1);
+
+  app.set_version_flag("--version", VersionString(), "print the version and exit");
+  auto* list = app.add_subcommand("list", "list every registered piece with its options");
+  std::string list_kind;
+  list->add_option("kind", list_kind,
+                   "only this kind: optimizers, energies, solvers, hierarchies, upsamplers, "
+                   "level_solvers, mesh, builtins");
+  DeformArguments args;
+  AddDeformCommand(app, args);
+  DragCommandArguments drag_args;
+  auto* drag = AddDragCommand(app, drag_args);
+  std::string hierarchy_out;
+  auto* hierarchy = AddHierarchyCommand(app, args, hierarchy_out);
+  std::string handles_scenario, handles_out;
+  auto* handles = AddHandlesCommand(app, handles_scenario, handles_out);
+  RunArguments run_args;
+  auto* run = AddRunCommand(app, run_args);
+  ReportArguments report_args;
+  auto* report = AddReportCommand(app, report_args);
 
   try {
     app.parse(argc, argv);

@@ -421,13 +421,108 @@ MeshRepairOptions MeshRepairOptions::FromConfig(const ConfigNode& node) {
   return options;
 }
 
+namespace {
+
+// What PreparedProblem changes: which vertex each input vertex becomes (before compaction), the
+// elements in those vertices and which of them are kept.
+struct RepairPlan {
+  std::vector<Index> representative;
+  Elements elements;
+  std::vector<bool> keep;
+  Index welded = 0;     // vertices welded into an earlier one
+  Index collapsed = 0;  // elements welding left with two equal corners
+  Index dropped = 0;    // repeated elements left out
+  bool changes() const { return welded > 0 || collapsed > 0 || dropped > 0; }
+};
+
+RepairPlan PlanRepair(const Mesh& mesh, const MeshCheckReport& checks,
+                      const MeshRepairOptions& options) {
+  RepairPlan plan;
+  const std::vector<bool> referenced = ReferencedVertices(mesh);
+  plan.representative.resize(mesh.num_vertices());
+  std::iota(plan.representative.begin(), plan.representative.end(), 0);
+  if (options.weld_duplicates && checks.duplicate_vertices.count > 0) {
+    const std::vector<Index> earlier = EarlierDuplicateVertex(mesh, referenced);
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (earlier[v] != kNoVertex) {
+        plan.representative[v] = earlier[v];
+        ++plan.welded;
+      }
+    }
+  }
+  Elements& elements = plan.elements;
+  elements = mesh.elements;
+  for (Index e = 0; e < elements.rows(); ++e) {
+    for (int a = 0; a < elements.cols(); ++a) elements(e, a) = plan.representative[elements(e, a)];
+  }
+  std::vector<bool>& keep = plan.keep;
+  keep.assign(elements.rows(), true);
+  for (Index e = 0; e < elements.rows(); ++e) {
+    for (int a = 0; a < elements.cols() && keep[e]; ++a) {
+      for (int b = 0; b < a; ++b) {
+        if (elements(e, a) == elements(e, b)) {
+          keep[e] = false;  // welding merged two of its corners: it had no area anyway
+          ++plan.collapsed;
+          break;
+        }
+      }
+    }
+  }
+  // Without welding the elements are the checked ones, so the check's count says whether any
+  // repeat; welding can make new repeats, so then they are searched again.
+  if (options.drop_duplicate_elements && (plan.welded > 0 || checks.duplicate_elements.count > 0)) {
+    const std::vector<Index> earlier = EarlierDuplicateElement(elements, mesh.num_vertices());
+    for (Index e = 0; e < elements.rows(); ++e) {
+      if (keep[e] && earlier[e] != kNoVertex) {
+        keep[e] = false;
+        ++plan.dropped;
+      }
+    }
+  }
+  return plan;
+}
+
+// Each finding's action, for the report and the summary (short: they are printed one line per
+// finding).
+void DescribeActions(const RepairPlan& plan, const MeshRepairOptions& options, bool triangles,
+                     MeshCheckReport& checks) {
+  const char* element = triangles ? "face" : "tetrahedron";
+  checks.non_finite_vertices.action = "rejected";
+  checks.unreferenced_vertices.action = "not solved for, kept at their initial positions";
+  checks.duplicate_vertices.action =
+      plan.welded > 0
+          ? fmt::format("welded into the earlier vertex, which both follow{}",
+                        plan.collapsed > 0 ? fmt::format("; {} {}s collapsed by welding left out",
+                                                         plan.collapsed, element)
+                                           : std::string())
+          : "kept separate, so the surface may open there; --set mesh.weld_duplicates=true "
+            "merges them";
+  checks.degenerate_elements.action = "zero weight in the energy";
+  checks.duplicate_elements.action =
+      options.drop_duplicate_elements
+          ? fmt::format(
+                "{} copies left out of the solve (mesh.drop_duplicate_elements = false "
+                "keeps them)",
+                plan.dropped)
+          : "kept: each copy adds its energy";
+  checks.boundary_edges.action = "fine: open surfaces are allowed";
+  const char* no_manifold_needed =
+      "fine: the energy needs no manifold connectivity (only `refine` does)";
+  checks.non_manifold_edges.action = no_manifold_needed;
+  checks.non_manifold_vertices.action = no_manifold_needed;
+  checks.inconsistent_orientation.action =
+      triangles ? "fine: cotangent weights and rotation fitting ignore face orientation"
+                : "reported only";
+}
+
+}  // namespace
+
 PreparedProblem::PreparedProblem(const DeformationProblem& problem,
                                  const MeshRepairOptions& options)
     : problem_(problem) {
   HARAP_CHECK(problem.mesh != nullptr, "DeformationProblem without a mesh");
   const Mesh& mesh = *problem.mesh;
   checks_ = CheckMesh(mesh, problem.constraints.indices);
-  const bool triangles = mesh.kind() == ElementKind::kTriangle;
 
   if (checks_.non_finite_vertices.count > 0) {
     const Index v = checks_.non_finite_vertices.examples.front()[0];
@@ -438,108 +533,63 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
         checks_.non_finite_vertices.count));
   }
 
-  // Which vertex each input vertex becomes (before compaction) and which elements are kept.
-  const std::vector<bool> referenced = ReferencedVertices(mesh);
-  std::vector<Index> representative(mesh.num_vertices());
-  std::iota(representative.begin(), representative.end(), 0);
-  Index welded = 0;
-  if (options.weld_duplicates && checks_.duplicate_vertices.count > 0) {
-    const std::vector<Index> earlier = EarlierDuplicateVertex(mesh, referenced);
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-      if (earlier[v] != kNoVertex) {
-        representative[v] = earlier[v];
-        ++welded;
-      }
-    }
-  }
-  Elements elements = mesh.elements;
-  for (Index e = 0; e < elements.rows(); ++e) {
-    for (int a = 0; a < elements.cols(); ++a) elements(e, a) = representative[elements(e, a)];
-  }
-  std::vector<bool> keep(elements.rows(), true);
-  Index collapsed = 0, dropped = 0;
-  for (Index e = 0; e < elements.rows(); ++e) {
-    for (int a = 0; a < elements.cols() && keep[e]; ++a) {
-      for (int b = 0; b < a; ++b) {
-        if (elements(e, a) == elements(e, b)) {
-          keep[e] = false;  // welding merged two of its corners: it had no area anyway
-          ++collapsed;
-          break;
-        }
-      }
-    }
-  }
-  // Without welding the elements are the checked ones, so the check's count says whether any
-  // repeat; welding can make new repeats, so then they are searched again.
-  if (options.drop_duplicate_elements && (welded > 0 || checks_.duplicate_elements.count > 0)) {
-    const std::vector<Index> earlier = EarlierDuplicateElement(elements, mesh.num_vertices());
-    for (Index e = 0; e < elements.rows(); ++e) {
-      if (keep[e] && earlier[e] != kNoVertex) {
-        keep[e] = false;
-        ++dropped;
-      }
-    }
-  }
-
-  // Actions, for the report and the summary (short: they are printed one line per finding).
-  const char* element = triangles ? "face" : "tetrahedron";
-  checks_.non_finite_vertices.action = "rejected";
-  checks_.unreferenced_vertices.action = "not solved for, kept at their initial positions";
-  checks_.duplicate_vertices.action =
-      welded > 0 ? fmt::format("welded into the earlier vertex, which both follow{}",
-                               collapsed > 0 ? fmt::format("; {} {}s collapsed by welding left out",
-                                                           collapsed, element)
-                                             : std::string())
-                 : "kept separate, so the surface may open there; --set mesh.weld_duplicates=true "
-                   "merges them";
-  checks_.degenerate_elements.action = "zero weight in the energy";
-  checks_.duplicate_elements.action =
-      options.drop_duplicate_elements
-          ? fmt::format(
-                "{} copies left out of the solve (mesh.drop_duplicate_elements = false "
-                "keeps them)",
-                dropped)
-          : "kept: each copy adds its energy";
-  checks_.boundary_edges.action = "fine: open surfaces are allowed";
-  const char* no_manifold_needed =
-      "fine: the energy needs no manifold connectivity (only `refine` does)";
-  checks_.non_manifold_edges.action = no_manifold_needed;
-  checks_.non_manifold_vertices.action = no_manifold_needed;
-  checks_.inconsistent_orientation.action =
-      triangles ? "fine: cotangent weights and rotation fitting ignore face orientation"
-                : "reported only";
-
-  changed_ = welded > 0 || collapsed > 0 || dropped > 0;
+  const RepairPlan plan = PlanRepair(mesh, checks_, options);
+  DescribeActions(plan, options, mesh.kind() == ElementKind::kTriangle, checks_);
+  changed_ = plan.changes();
   if (!changed_) return;
 
   // Compact: welded-away vertices disappear, every other vertex keeps its relative order.
   std::vector<Index> compact(mesh.num_vertices(), kNoVertex);
   Index kept_vertices = 0;
   for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    if (representative[v] == v) compact[v] = kept_vertices++;
+    if (plan.representative[v] == v) compact[v] = kept_vertices++;
   }
   solved_vertex_.resize(mesh.num_vertices());
-  for (Index v = 0; v < mesh.num_vertices(); ++v) solved_vertex_[v] = compact[representative[v]];
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    solved_vertex_[v] = compact[plan.representative[v]];
+  }
 
   repaired_mesh_.planar = mesh.planar;
   repaired_mesh_.vertices.resize(kept_vertices, 3);
   for (Index v = 0; v < mesh.num_vertices(); ++v) {
     if (compact[v] != kNoVertex) repaired_mesh_.vertices.row(compact[v]) = mesh.vertices.row(v);
   }
-  const Index kept_elements = static_cast<Index>(std::count(keep.begin(), keep.end(), true));
+  const Elements& elements = plan.elements;
+  const Index kept_elements =
+      static_cast<Index>(std::count(plan.keep.begin(), plan.keep.end(), true));
   repaired_mesh_.elements.resize(kept_elements, elements.cols());
   for (Index e = 0, row = 0; e < elements.rows(); ++e) {
-    if (!keep[e]) continue;
+    if (!plan.keep[e]) continue;
     for (int a = 0; a < elements.cols(); ++a) {
       repaired_mesh_.elements(row, a) = compact[elements(e, a)];
     }
     ++row;
   }
   problem_.mesh = &repaired_mesh_;
+  SetSolvedConstraints(problem, kept_vertices);
+  if (problem.initial) {
+    Positions initial(kept_vertices, 3);
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (compact[v] != kNoVertex) initial.row(compact[v]) = problem.initial->row(v);
+    }
+    problem_.initial = std::move(initial);
+  }
 
+  // What is left after the repair (e.g. a soup that welding joined into one surface), for the
+  // summary: the solved mesh is what the energy sees. Each finding keeps the input's action.
+  repaired_checks_ = CheckMesh(repaired_mesh_, problem_.constraints.indices);
+  const std::vector<const MeshFinding*> input_findings = std::as_const(checks_).Findings();
+  const std::vector<MeshFinding*> repaired_findings = repaired_checks_.Findings();
+  for (size_t k = 0; k < repaired_findings.size(); ++k) {
+    repaired_findings[k]->action = input_findings[k]->action;
+  }
+}
+
+void PreparedProblem::SetSolvedConstraints(const DeformationProblem& problem,
+                                           Index solved_vertices) {
   // Constraints on merged vertices must agree.
   const Constraints& input = problem.constraints;
-  std::vector<Index> constraint_of(kept_vertices, kNoVertex);
+  std::vector<Index> constraint_of(solved_vertices, kNoVertex);
   std::vector<std::pair<Index, Index>> solved_constraints;  // (solved vertex, input row)
   for (size_t k = 0; k < input.indices.size(); ++k) {
     const Index v = input.indices[k];
@@ -567,22 +617,6 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
     problem_.constraints.indices.push_back(solved_constraints[k].first);
     problem_.constraints.targets.row(static_cast<Index>(k)) =
         input.targets.row(solved_constraints[k].second);
-  }
-  if (problem.initial) {
-    Positions initial(kept_vertices, 3);
-    for (Index v = 0; v < mesh.num_vertices(); ++v) {
-      if (compact[v] != kNoVertex) initial.row(compact[v]) = problem.initial->row(v);
-    }
-    problem_.initial = std::move(initial);
-  }
-
-  // What is left after the repair (e.g. a soup that welding joined into one surface), for the
-  // summary: the solved mesh is what the energy sees. Each finding keeps the input's action.
-  repaired_checks_ = CheckMesh(repaired_mesh_, problem_.constraints.indices);
-  const std::vector<const MeshFinding*> input_findings = std::as_const(checks_).Findings();
-  const std::vector<MeshFinding*> repaired_findings = repaired_checks_.Findings();
-  for (size_t k = 0; k < repaired_findings.size(); ++k) {
-    repaired_findings[k]->action = input_findings[k]->action;
   }
 }
 

@@ -115,6 +115,10 @@ class PreparedProblem {
   std::vector<std::string> RepairedSummary() const;
 
  private:
+  /// problem_'s constraints in the solved numbering (solved_vertex_ set, `solved_vertices` of
+  /// them); throws InputError if two welded vertices have different targets.
+  void SetSolvedConstraints(const DeformationProblem& problem, Index solved_vertices);
+
   MeshCheckReport checks_;
   MeshCheckReport repaired_checks_;
   Mesh repaired_mesh_;

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -26,9 +27,11 @@ using namespace io_internal;
 // OFF (ASCII): header `OFF` (or COFF, NOFF, STOFF, ...), counts `nv nf ne`, then one vertex per
 // line (x y z, further values ignored) and one face per line (n i1 ... in, 0-based).
 
-Mesh ParseOff(std::string_view data, const std::string& what) {
-  RawMesh raw;
-  LineReader lines(data);
+namespace {
+
+// Reads the header line and the counts that follow it: {vertices, faces}.
+std::array<int64_t, 2> ReadOffCounts(LineReader& lines, std::string_view data,
+                                     const std::string& what) {
   std::string_view line;
   if (!lines.NextContent(line)) Fail(what, "empty file (no OFF header)");
   const std::string header(NextToken(line));
@@ -62,7 +65,7 @@ Mesh ParseOff(std::string_view data, const std::string& what) {
       Fail(what, "the file ends after the OFF header (no vertex/face counts)");
     }
   }
-  int64_t counts[2] = {0, 0};
+  std::array<int64_t, 2> counts = {0, 0};
   for (int64_t& count : counts) {
     const std::string_view token = NextToken(counts_line);
     if (!ParseInteger(token, count) || count < 0) {
@@ -70,15 +73,23 @@ Mesh ParseOff(std::string_view data, const std::string& what) {
                              lines.line_number(), Quote(token)));
     }
   }
-  const int64_t num_vertices = counts[0];
-  const int64_t num_faces = counts[1];
   // Each vertex line has at least 6 bytes ("0 0 0\n"): a larger count cannot be right, and
   // checking it here keeps a corrupt header from triggering a huge allocation.
-  if (num_vertices > static_cast<int64_t>(data.size() / 6) + 1) {
+  if (counts[0] > static_cast<int64_t>(data.size() / 6) + 1) {
     Fail(what, fmt::format("truncated file: the header declares {} vertices, more than a file of "
                            "{} bytes can hold",
-                           num_vertices, data.size()));
+                           counts[0], data.size()));
   }
+  return counts;
+}
+
+}  // namespace
+
+Mesh ParseOff(std::string_view data, const std::string& what) {
+  RawMesh raw;
+  LineReader lines(data);
+  const auto [num_vertices, num_faces] = ReadOffCounts(lines, data, what);
+  std::string_view line;
   raw.xyz.reserve(static_cast<size_t>(num_vertices) * 3);
   for (int64_t v = 0; v < num_vertices; ++v) {
     if (!lines.NextContent(line)) {

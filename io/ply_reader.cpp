@@ -307,65 +307,69 @@ class PlyBodyReader {
   const std::string& what_;
 };
 
-}  // namespace
-
-Mesh ParsePly(std::string_view data, const std::string& what) {
-  const PlyHeader header = ParsePlyHeader(data, what);
-  const std::string_view body = data.substr(header.data_offset);
-  const bool binary = header.format != PlyFormat::kAscii;
-
-  // Locate the vertex coordinates and the face index list.
+// Where ParsePly finds what it keeps: the vertex element and its x, y, z properties, the face
+// element and its index list.
+struct PlyLayout {
   const PlyElement* vertex_element = nullptr;
   const PlyElement* face_element = nullptr;
   int coordinate_slot[3] = {-1, -1, -1};
   int index_slot = -1;
+};
+
+PlyLayout LocatePlyData(const PlyHeader& header, const std::string& what) {
+  PlyLayout layout;
   for (const PlyElement& element : header.elements) {
     // A second 'vertex' or 'face' element would leave the slots below pointing into the first
     // one's property list (found by fuzzing: a heap overflow); no writer produces one.
-    if ((element.name == "vertex" && vertex_element) || (element.name == "face" && face_element)) {
+    if ((element.name == "vertex" && layout.vertex_element) ||
+        (element.name == "face" && layout.face_element)) {
       Fail(what, fmt::format("PLY header declares the element '{}' twice", element.name));
     }
     if (element.name == "vertex") {
-      vertex_element = &element;
+      layout.vertex_element = &element;
       for (size_t p = 0; p < element.properties.size(); ++p) {
         const PlyProperty& property = element.properties[p];
         for (int d = 0; d < 3; ++d) {
           if (property.name == std::string(1, static_cast<char>('x' + d)) && !property.is_list) {
-            coordinate_slot[d] = static_cast<int>(p);
+            layout.coordinate_slot[d] = static_cast<int>(p);
           }
         }
       }
     } else if (element.name == "face") {
-      face_element = &element;
+      layout.face_element = &element;
       for (size_t p = 0; p < element.properties.size(); ++p) {
         const PlyProperty& property = element.properties[p];
         if (property.is_list &&
             (property.name == "vertex_indices" || property.name == "vertex_index")) {
-          index_slot = static_cast<int>(p);
+          layout.index_slot = static_cast<int>(p);
         }
       }
     }
   }
-  if (!vertex_element) Fail(what, "PLY header declares no 'vertex' element");
+  if (!layout.vertex_element) Fail(what, "PLY header declares no 'vertex' element");
   for (int d = 0; d < 3; ++d) {
-    if (coordinate_slot[d] < 0) {
+    if (layout.coordinate_slot[d] < 0) {
       Fail(what, fmt::format("PLY 'vertex' element has no scalar property '{}'",
                              static_cast<char>('x' + d)));
     }
   }
-  if (!face_element || face_element->count == 0) {
+  if (!layout.face_element || layout.face_element->count == 0) {
     Fail(what, fmt::format("no faces: the PLY file declares {} vertices but no faces",
-                           vertex_element->count));
+                           layout.vertex_element->count));
   }
-  if (index_slot < 0) {
+  if (layout.index_slot < 0) {
     Fail(what, "PLY 'face' element has no list property 'vertex_indices' (or 'vertex_index')");
   }
-  if (!IsIntegerType(face_element->properties[index_slot].type)) {
+  if (!IsIntegerType(layout.face_element->properties[layout.index_slot].type)) {
     Fail(what, "PLY face property 'vertex_indices' has a floating-point type");
   }
+  return layout;
+}
 
-  // A lower bound on the bytes each item needs, so that a corrupt count fails before it makes us
-  // reserve gigabytes. (ASCII: one character per value and a separator between values.)
+// A lower bound on the bytes each item needs, so that a corrupt count fails before it makes us
+// reserve gigabytes. (ASCII: one character per value and a separator between values.)
+void CheckPlyCounts(const PlyHeader& header, std::string_view body, const std::string& what) {
+  const bool binary = header.format != PlyFormat::kAscii;
   for (const PlyElement& element : header.elements) {
     size_t min_bytes = 0;
     for (const PlyProperty& property : element.properties) {
@@ -378,73 +382,92 @@ Mesh ParsePly(std::string_view data, const std::string& what) {
                              element.count, element.name, body.size()));
     }
   }
+}
 
-  RawMesh raw;
-  raw.origin_kind = "face";
-  raw.xyz.reserve(static_cast<size_t>(vertex_element->count) * 3);
-  raw.corners.reserve(static_cast<size_t>(face_element->count) * 3);
-  raw.origin.reserve(static_cast<size_t>(face_element->count));
-  std::vector<int64_t> polygon;
-  PlyBodyReader reader(data, header, what);
-  raw.location_kind = reader.location_kind();
-  auto truncated = [&](const PlyElement& element, int64_t item) {
+// Reads item `item` of `element` into `raw`: a vertex's coordinates, a face's polygon; every
+// other property is skipped. `polygon` is a workspace.
+void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElement& element,
+                 int64_t item, RawMesh& raw, std::vector<int64_t>& polygon,
+                 const std::string& what) {
+  const bool is_vertex = &element == layout.vertex_element;
+  const bool is_face = &element == layout.face_element;
+  const auto truncated = [&] {
     Fail(what, fmt::format("truncated PLY data: the file ends inside element '{}' (item {} of "
                            "{}, at {})",
                            element.name, item, element.count, reader.Where()));
   };
+  const int64_t item_location = reader.Location();
+  double xyz[3] = {0.0, 0.0, 0.0};
+  for (size_t p = 0; p < element.properties.size(); ++p) {
+    const PlyProperty& property = element.properties[p];
+    if (!property.is_list) {
+      int slot = -1;
+      for (int d = 0; d < 3; ++d) {
+        slot = layout.coordinate_slot[d] == static_cast<int>(p) ? d : slot;
+      }
+      const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
+                                             : reader.Skip(property.type);
+      if (!ok) truncated();
+      continue;
+    }
+    const std::string count_where = reader.Where();
+    int64_t count = 0;
+    if (!reader.ReadInteger(property.count_type, count)) truncated();
+    if (count < 0) {
+      Fail(what, fmt::format("{}: PLY element '{}' item {}: negative list length {}", count_where,
+                             element.name, item, count));
+    }
+    if (!is_face || static_cast<int>(p) != layout.index_slot) {
+      if (!reader.Skip(property.type, static_cast<uint64_t>(count))) truncated();
+      continue;
+    }
+    if (count < 3) {
+      Fail(what, fmt::format("{}: face {}: face has {} vertices (at least 3 are needed)",
+                             count_where, item, count));
+    }
+    polygon.clear();
+    for (int64_t i = 0; i < count; ++i) {
+      int64_t index = 0;
+      if (!reader.ReadInteger(property.type, index)) truncated();
+      polygon.push_back(index);
+    }
+    raw.AddPolygon(polygon, item);
+    raw.location.resize(raw.origin.size(), item_location);
+  }
+  if (is_vertex) {
+    if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
+      Fail(what, fmt::format("{} {}: non-finite coordinate: vertex {} (0-based) is ({}, {}, "
+                             "{})",
+                             raw.location_kind, item_location, item, xyz[0], xyz[1], xyz[2]));
+    }
+    raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+  }
+}
+
+}  // namespace
+
+Mesh ParsePly(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const PlyLayout layout = LocatePlyData(header, what);
+  CheckPlyCounts(header, data.substr(header.data_offset), what);
+
+  RawMesh raw;
+  raw.origin_kind = "face";
+  raw.xyz.reserve(static_cast<size_t>(layout.vertex_element->count) * 3);
+  raw.corners.reserve(static_cast<size_t>(layout.face_element->count) * 3);
+  raw.origin.reserve(static_cast<size_t>(layout.face_element->count));
+  std::vector<int64_t> polygon;
+  PlyBodyReader reader(data, header, what);
+  raw.location_kind = reader.location_kind();
   bool vertices_done = false;
   for (const PlyElement& element : header.elements) {
-    const bool is_vertex = &element == vertex_element;
-    const bool is_face = &element == face_element;
     if (element.properties.empty()) continue;  // nothing stored per item
     for (int64_t item = 0; item < element.count; ++item) {
-      const int64_t item_location = reader.Location();
-      double xyz[3] = {0.0, 0.0, 0.0};
-      for (size_t p = 0; p < element.properties.size(); ++p) {
-        const PlyProperty& property = element.properties[p];
-        if (!property.is_list) {
-          int slot = -1;
-          for (int d = 0; d < 3; ++d) slot = coordinate_slot[d] == static_cast<int>(p) ? d : slot;
-          const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
-                                                 : reader.Skip(property.type);
-          if (!ok) truncated(element, item);
-          continue;
-        }
-        const std::string count_where = reader.Where();
-        int64_t count = 0;
-        if (!reader.ReadInteger(property.count_type, count)) truncated(element, item);
-        if (count < 0) {
-          Fail(what, fmt::format("{}: PLY element '{}' item {}: negative list length {}",
-                                 count_where, element.name, item, count));
-        }
-        if (!is_face || static_cast<int>(p) != index_slot) {
-          if (!reader.Skip(property.type, static_cast<uint64_t>(count))) truncated(element, item);
-          continue;
-        }
-        if (count < 3) {
-          Fail(what, fmt::format("{}: face {}: face has {} vertices (at least 3 are needed)",
-                                 count_where, item, count));
-        }
-        polygon.clear();
-        for (int64_t i = 0; i < count; ++i) {
-          int64_t index = 0;
-          if (!reader.ReadInteger(property.type, index)) truncated(element, item);
-          polygon.push_back(index);
-        }
-        raw.AddPolygon(polygon, item);
-        raw.location.resize(raw.origin.size(), item_location);
-      }
-      if (is_vertex) {
-        if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2])) {
-          Fail(what, fmt::format("{} {}: non-finite coordinate: vertex {} (0-based) is ({}, {}, "
-                                 "{})",
-                                 raw.location_kind, item_location, item, xyz[0], xyz[1], xyz[2]));
-        }
-        raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
-      }
+      ReadPlyItem(reader, layout, element, item, raw, polygon, what);
     }
-    vertices_done = vertices_done || is_vertex;
-    if (is_face && vertices_done) break;  // later elements hold nothing we use
+    vertices_done = vertices_done || &element == layout.vertex_element;
+    // Later elements hold nothing we use.
+    if (&element == layout.face_element && vertices_done) break;
   }
   return BuildMesh(raw, what);
 }

@@ -298,10 +298,18 @@ class ScenarioTextReader {
                 "'select' must be a table (select.slab = {...}, select.ball = {...}, "
                 "select.indices = [...] or select.index_file = \"...\")");
     }
-    toml.CheckKeys(*selection, {"slab", "ball", "indices", "index_file"}, "'select'");
+    ParseSelection(toml, *selection, spec);
+    ParseMotion(toml, table, spec);
+    return spec;
+  }
+
+  // The one selection of a handle's `select` table (slab, ball, indices or index_file).
+  void ParseSelection(const TomlReader& toml, const toml::table& selection,
+                      HandleSpec& spec) const {
+    toml.CheckKeys(selection, {"slab", "ball", "indices", "index_file"}, "'select'");
     // toml++ iterates keys in sorted order; report them in the order written.
     std::vector<std::pair<toml::source_position, std::string>> written;
-    for (const auto& [key, value] : *selection) {
+    for (const auto& [key, value] : selection) {
       written.emplace_back(key.source().begin, std::string(key.str()));
     }
     std::sort(written.begin(), written.end(), [](const auto& x, const auto& y) {
@@ -316,37 +324,11 @@ class ScenarioTextReader {
                                             kinds.size(), fmt::join(kinds, ", ")));
     }
     const std::string& kind = kinds.front();
-    const toml::node& body = *selection->get(kind);
+    const toml::node& body = *selection.get(kind);
     if (kind == "slab") {
-      spec.kind = SelectionKind::kSlab;
-      const toml::table* slab = body.as_table();
-      if (!slab) toml.Fail(body, "select.slab must be a table {axis, from, to}");
-      UnitsInsideSelection(toml, *slab, "select.slab");
-      toml.CheckKeys(*slab, {"axis", "from", "to"}, "select.slab");
-      const toml::node& axis = toml.Required(*slab, "axis", "select.slab");
-      const std::string axis_name = axis.value_or(std::string());
-      if (axis_name != "x" && axis_name != "y" && axis_name != "z") {
-        toml.Fail(axis, "select.slab axis must be \"x\", \"y\" or \"z\"");
-      }
-      spec.axis = axis_name[0] - 'x';
-      spec.from = toml.Number(toml.Required(*slab, "from", "select.slab"), "select.slab from");
-      spec.to = toml.Number(toml.Required(*slab, "to", "select.slab"), "select.slab to");
-      if (spec.from > spec.to) {
-        toml.Fail(body, fmt::format("select.slab has from = {} > to = {}", spec.from, spec.to));
-      }
+      ParseSlab(toml, body, spec);
     } else if (kind == "ball") {
-      spec.kind = SelectionKind::kBall;
-      const toml::table* ball = body.as_table();
-      if (!ball) toml.Fail(body, "select.ball must be a table {center, radius}");
-      UnitsInsideSelection(toml, *ball, "select.ball");
-      toml.CheckKeys(*ball, {"center", "radius"}, "select.ball");
-      spec.ball_center =
-          Vector3(toml, toml.Required(*ball, "center", "select.ball"), "select.ball center");
-      spec.radius =
-          toml.Number(toml.Required(*ball, "radius", "select.ball"), "select.ball radius");
-      if (spec.radius < 0.0) {
-        toml.Fail(*ball->get("radius"), "select.ball radius must be >= 0");
-      }
+      ParseBall(toml, body, spec);
     } else if (kind == "indices") {
       spec.kind = SelectionKind::kIndices;
       const toml::array* indices = body.as_array();
@@ -365,8 +347,43 @@ class ScenarioTextReader {
       spec.index_file = Resolve(body.as_string()->get());
       spec.index_file_where = toml_.Where(body);
     }
+  }
 
-    // Motion.
+  static void ParseSlab(const TomlReader& toml, const toml::node& body, HandleSpec& spec) {
+    spec.kind = SelectionKind::kSlab;
+    const toml::table* slab = body.as_table();
+    if (!slab) toml.Fail(body, "select.slab must be a table {axis, from, to}");
+    UnitsInsideSelection(toml, *slab, "select.slab");
+    toml.CheckKeys(*slab, {"axis", "from", "to"}, "select.slab");
+    const toml::node& axis = toml.Required(*slab, "axis", "select.slab");
+    const std::string axis_name = axis.value_or(std::string());
+    if (axis_name != "x" && axis_name != "y" && axis_name != "z") {
+      toml.Fail(axis, "select.slab axis must be \"x\", \"y\" or \"z\"");
+    }
+    spec.axis = axis_name[0] - 'x';
+    spec.from = toml.Number(toml.Required(*slab, "from", "select.slab"), "select.slab from");
+    spec.to = toml.Number(toml.Required(*slab, "to", "select.slab"), "select.slab to");
+    if (spec.from > spec.to) {
+      toml.Fail(body, fmt::format("select.slab has from = {} > to = {}", spec.from, spec.to));
+    }
+  }
+
+  static void ParseBall(const TomlReader& toml, const toml::node& body, HandleSpec& spec) {
+    spec.kind = SelectionKind::kBall;
+    const toml::table* ball = body.as_table();
+    if (!ball) toml.Fail(body, "select.ball must be a table {center, radius}");
+    UnitsInsideSelection(toml, *ball, "select.ball");
+    toml.CheckKeys(*ball, {"center", "radius"}, "select.ball");
+    spec.ball_center =
+        Vector3(toml, toml.Required(*ball, "center", "select.ball"), "select.ball center");
+    spec.radius = toml.Number(toml.Required(*ball, "radius", "select.ball"), "select.ball radius");
+    if (spec.radius < 0.0) {
+      toml.Fail(*ball->get("radius"), "select.ball radius must be >= 0");
+    }
+  }
+
+  // A handle's motion: target = "initial", rotate, translate.
+  static void ParseMotion(const TomlReader& toml, const toml::table& table, HandleSpec& spec) {
     if (const toml::node* target = table.get("target")) {
       if (target->value_or(std::string()) != "initial") {
         toml.Fail(*target,
@@ -399,7 +416,6 @@ class ScenarioTextReader {
       spec.has_translation = true;
       spec.translation = Vector3(toml, *translate, "translate");
     }
-    return spec;
   }
 
   TomlReader toml_;

@@ -117,43 +117,88 @@ Mesh LoopSubdivide(const Mesh& mesh, int steps, std::string* note) {
 
 namespace {
 
+// The undirected edges of a triangle mesh: each edge's vertices and the range of its triangle
+// sides in `sides` (sorted by (min, max, face), so each edge's faces are consecutive).
+struct EdgeTable {
+  struct Side {
+    Index a, b, face, opposite;
+  };
+  std::vector<Side> sides;
+  std::vector<std::pair<Index, Index>> edges;
+  std::vector<std::pair<size_t, size_t>> ranges;
+
+  explicit EdgeTable(const Mesh& mesh) {
+    const Index f_count = mesh.num_elements();
+    sides.reserve(3 * static_cast<size_t>(f_count));
+    for (Index f = 0; f < f_count; ++f) {
+      for (int k = 0; k < 3; ++k) {
+        const Index u = mesh.elements(f, k), v = mesh.elements(f, (k + 1) % 3);
+        sides.push_back({std::min(u, v), std::max(u, v), f, mesh.elements(f, (k + 2) % 3)});
+      }
+    }
+    std::sort(sides.begin(), sides.end(), [](const Side& x, const Side& y) {
+      return std::tie(x.a, x.b, x.face) < std::tie(y.a, y.b, y.face);
+    });
+    for (size_t i = 0; i < sides.size();) {
+      size_t j = i;
+      while (j < sides.size() && sides[j].a == sides[i].a && sides[j].b == sides[i].b) ++j;
+      edges.emplace_back(sides[i].a, sides[i].b);
+      ranges.emplace_back(i, j);
+      i = j;
+    }
+  }
+  Index size() const { return static_cast<Index>(edges.size()); }
+  Index Find(Index u, Index v) const {
+    const std::pair<Index, Index> key(std::min(u, v), std::max(u, v));
+    return static_cast<Index>(std::lower_bound(edges.begin(), edges.end(), key) - edges.begin());
+  }
+};
+
+// Per vertex, how many fans its faces form (connected through the two-triangle edges at the
+// vertex): 1 on a manifold vertex.
+std::vector<Index> FanCounts(const Mesh& mesh, const EdgeTable& table) {
+  const Index n = mesh.num_vertices();
+  const Index f_count = mesh.num_elements();
+  // Union the faces at a vertex across its two-triangle edges; count components per vertex.
+  DisjointSets<size_t> fans(3 * static_cast<size_t>(f_count));  // corners (f, k) = 3f + k
+  auto corner_of = [&](Index f, Index v) {
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.elements(f, k) == v) return static_cast<size_t>(3 * f + k);
+    }
+    return static_cast<size_t>(3 * f);
+  };
+  for (Index e = 0; e < table.size(); ++e) {
+    const auto [first, last] = table.ranges[e];
+    if (last - first != 2) continue;
+    for (const Index v : {table.edges[e].first, table.edges[e].second}) {
+      fans.Unite(corner_of(table.sides[first].face, v), corner_of(table.sides[first + 1].face, v));
+    }
+  }
+  std::vector<Index> fan_count(n, 0);
+  std::vector<std::vector<size_t>> roots(n);
+  for (Index f = 0; f < f_count; ++f) {
+    for (int k = 0; k < 3; ++k)
+      roots[mesh.elements(f, k)].push_back(fans.Find(static_cast<size_t>(3 * f + k)));
+  }
+  for (Index v = 0; v < n; ++v) {
+    std::sort(roots[v].begin(), roots[v].end());
+    fan_count[v] =
+        static_cast<Index>(std::unique(roots[v].begin(), roots[v].end()) - roots[v].begin());
+  }
+  return fan_count;
+}
+
 // One round of the crease variant on a mesh whose vertices are all referenced.
 Mesh CreasedRound(const Mesh& mesh, Index* non_manifold_edges, Index* non_manifold_vertices) {
   const Index n = mesh.num_vertices();
   const Index f_count = mesh.num_elements();
-  // Undirected edges: (min, max, face) sorted, so each edge's faces are consecutive.
-  struct Corner {
-    Index a, b, face, opposite;
-  };
-  std::vector<Corner> sides;
-  sides.reserve(3 * static_cast<size_t>(f_count));
-  for (Index f = 0; f < f_count; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const Index u = mesh.elements(f, k), v = mesh.elements(f, (k + 1) % 3);
-      sides.push_back({std::min(u, v), std::max(u, v), f, mesh.elements(f, (k + 2) % 3)});
-    }
-  }
-  std::sort(sides.begin(), sides.end(), [](const Corner& x, const Corner& y) {
-    return std::tie(x.a, x.b, x.face) < std::tie(y.a, y.b, y.face);
-  });
-  // Edge e: its vertices, its faces' range in `sides`; `edge_of_side[f*3+k]` for the new faces.
-  std::vector<std::pair<Index, Index>> edges;
-  std::vector<std::pair<size_t, size_t>> ranges;
-  for (size_t i = 0; i < sides.size();) {
-    size_t j = i;
-    while (j < sides.size() && sides[j].a == sides[i].a && sides[j].b == sides[i].b) ++j;
-    edges.emplace_back(sides[i].a, sides[i].b);
-    ranges.emplace_back(i, j);
-    i = j;
-  }
-  const Index e_count = static_cast<Index>(edges.size());
-  auto edge_index = [&](Index u, Index v) {
-    const std::pair<Index, Index> key(std::min(u, v), std::max(u, v));
-    return static_cast<Index>(std::lower_bound(edges.begin(), edges.end(), key) - edges.begin());
-  };
+  const EdgeTable table(mesh);
+  const auto& sides = table.sides;
+  const auto& edges = table.edges;
+  const auto& ranges = table.ranges;
+  const Index e_count = table.size();
 
-  // Per vertex: neighbours (through edges), crease edges, and whether its faces form one fan
-  // (connected through the two-triangle edges at the vertex).
+  // Per vertex: neighbours (through edges), crease edges, and whether its faces form one fan.
   std::vector<std::vector<Index>> neighbours(n), crease_neighbours(n);
   Index counted_edges = 0;
   for (Index e = 0; e < e_count; ++e) {
@@ -168,34 +213,7 @@ Mesh CreasedRound(const Mesh& mesh, Index* non_manifold_edges, Index* non_manifo
     }
     counted_edges += faces > 2;
   }
-  // Fans: union the faces at a vertex across its two-triangle edges; count components per vertex.
-  DisjointSets<size_t> fans(3 * static_cast<size_t>(f_count));  // corners (f, k) = 3f + k
-  auto corner_of = [&](Index f, Index v) {
-    for (int k = 0; k < 3; ++k) {
-      if (mesh.elements(f, k) == v) return static_cast<size_t>(3 * f + k);
-    }
-    return static_cast<size_t>(3 * f);
-  };
-  for (Index e = 0; e < e_count; ++e) {
-    const auto [first, last] = ranges[e];
-    if (last - first != 2) continue;
-    for (const Index v : {edges[e].first, edges[e].second}) {
-      fans.Unite(corner_of(sides[first].face, v), corner_of(sides[first + 1].face, v));
-    }
-  }
-  std::vector<Index> fan_count(n, 0);
-  {
-    std::vector<std::vector<size_t>> roots(n);
-    for (Index f = 0; f < f_count; ++f) {
-      for (int k = 0; k < 3; ++k)
-        roots[mesh.elements(f, k)].push_back(fans.Find(static_cast<size_t>(3 * f + k)));
-    }
-    for (Index v = 0; v < n; ++v) {
-      std::sort(roots[v].begin(), roots[v].end());
-      fan_count[v] =
-          static_cast<Index>(std::unique(roots[v].begin(), roots[v].end()) - roots[v].begin());
-    }
-  }
+  const std::vector<Index> fan_count = FanCounts(mesh, table);
 
   Mesh result;
   result.vertices.resize(n + e_count, 3);
@@ -235,7 +253,7 @@ Mesh CreasedRound(const Mesh& mesh, Index* non_manifold_edges, Index* non_manifo
   result.elements.resize(4 * f_count, 3);
   for (Index f = 0; f < f_count; ++f) {
     const Index a = mesh.elements(f, 0), b = mesh.elements(f, 1), c = mesh.elements(f, 2);
-    const Index ab = n + edge_index(a, b), bc = n + edge_index(b, c), ca = n + edge_index(c, a);
+    const Index ab = n + table.Find(a, b), bc = n + table.Find(b, c), ca = n + table.Find(c, a);
     result.elements.row(4 * f) << a, ab, ca;
     result.elements.row(4 * f + 1) << ab, b, bc;
     result.elements.row(4 * f + 2) << ca, bc, c;

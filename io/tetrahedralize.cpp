@@ -62,15 +62,16 @@ struct CompactSurface {
   double enclosed_volume = 0.0;
 };
 
-CompactSurface PrepareSurface(const Mesh& surface, std::string_view what) {
-  if (surface.kind() != ElementKind::kTriangle) {
-    Fail(what, "tetrahedralize needs a triangle surface, but the mesh has tetrahedra already");
-  }
-  const Index num_triangles = surface.num_elements();
-  auto position = [&](Index v) -> Eigen::Vector3d { return surface.vertices.row(v).transpose(); };
+Eigen::Vector3d Position(const Mesh& surface, Index v) {
+  return surface.vertices.row(v).transpose();
+}
 
-  // Closed and consistently oriented: every edge is used by exactly two triangles, once in each
-  // direction. Directed edges sorted by their undirected key make each edge a run.
+// Fails unless every triangle has an area and the surface is closed and consistently oriented:
+// every edge is used by exactly two triangles, once in each direction.
+void CheckClosedSurface(const Mesh& surface, std::string_view what) {
+  const Index num_triangles = surface.num_elements();
+  const auto position = [&](Index v) { return Position(surface, v); };
+  // Directed edges sorted by their undirected key make each edge a run.
   struct DirectedEdge {
     Index low, high;
     bool forward;  // low -> high in the triangle
@@ -140,7 +141,35 @@ CompactSurface PrepareSurface(const Mesh& surface, std::string_view what) {
                    "; TetGen fills closed, consistently oriented surfaces (the boundary "
                    "of a solid)");
   }
+}
 
+// Coincident vertices: TetGen would merge them and lose the vertex a handle may refer to.
+void CheckNoCoincidentVertices(const Mesh& surface, const std::vector<Index>& vertices,
+                               std::string_view what) {
+  std::vector<Index> order(vertices);
+  std::sort(order.begin(), order.end(), [&](Index a, Index b) {
+    const Positions& x = surface.vertices;
+    return std::make_tuple(x(a, 0), x(a, 1), x(a, 2)) < std::make_tuple(x(b, 0), x(b, 1), x(b, 2));
+  });
+  for (size_t i = 1; i < order.size(); ++i) {
+    if (surface.vertices.row(order[i]) == surface.vertices.row(order[i - 1])) {
+      const Index a = std::min(order[i], order[i - 1]);
+      const Index b = std::max(order[i], order[i - 1]);
+      Fail(what, fmt::format("vertices {} and {} coincide (at {}, {}, {}); TetGen would merge "
+                             "them",
+                             a, b, surface.vertices(a, 0), surface.vertices(a, 1),
+                             surface.vertices(a, 2)));
+    }
+  }
+}
+
+CompactSurface PrepareSurface(const Mesh& surface, std::string_view what) {
+  if (surface.kind() != ElementKind::kTriangle) {
+    Fail(what, "tetrahedralize needs a triangle surface, but the mesh has tetrahedra already");
+  }
+  CheckClosedSurface(surface, what);
+  const Index num_triangles = surface.num_elements();
+  const auto position = [&](Index v) { return Position(surface, v); };
   CompactSurface compact;
   const std::vector<bool> referenced = ReferencedVertices(surface);
   std::vector<int> to_compact(static_cast<size_t>(surface.num_vertices()), -1);
@@ -150,25 +179,7 @@ CompactSurface PrepareSurface(const Mesh& surface, std::string_view what) {
     compact.original.push_back(v);
     for (int d = 0; d < 3; ++d) compact.points.push_back(surface.vertices(v, d));
   }
-  // Coincident vertices: TetGen would merge them and lose the vertex a handle may refer to.
-  {
-    std::vector<Index> order(compact.original);
-    std::sort(order.begin(), order.end(), [&](Index a, Index b) {
-      const Positions& x = surface.vertices;
-      return std::make_tuple(x(a, 0), x(a, 1), x(a, 2)) <
-             std::make_tuple(x(b, 0), x(b, 1), x(b, 2));
-    });
-    for (size_t i = 1; i < order.size(); ++i) {
-      if (surface.vertices.row(order[i]) == surface.vertices.row(order[i - 1])) {
-        const Index a = std::min(order[i], order[i - 1]);
-        const Index b = std::max(order[i], order[i - 1]);
-        Fail(what, fmt::format("vertices {} and {} coincide (at {}, {}, {}); TetGen would merge "
-                               "them",
-                               a, b, surface.vertices(a, 0), surface.vertices(a, 1),
-                               surface.vertices(a, 2)));
-      }
-    }
-  }
+  CheckNoCoincidentVertices(surface, compact.original, what);
   double six_volume = 0.0;
   compact.triangles.reserve(static_cast<size_t>(num_triangles) * 3);
   for (Index f = 0; f < num_triangles; ++f) {

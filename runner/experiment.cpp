@@ -254,8 +254,40 @@ class ExperimentParser {
                      "energy", "solver", "hierarchy", "upsampler"},
                     "the top level");
     experiment_.source_text = std::string(text);
+    ParseDescription(root);
 
-    // [experiment] and [report] go to the report script as they are.
+    // [scenarios]
+    const toml::table* scenarios = root["scenarios"].as_table();
+    if (!scenarios) Fail("no [scenarios] table (files = [...] or [[scenarios.folder]])");
+    toml_.CheckKeys(*scenarios, {"relative_to", "files", "folder"}, "[scenarios]");
+    paths_base_ = (base_ / toml_.String(*scenarios, "relative_to", ".")).lexically_normal();
+    ParseScenarioFiles(*scenarios);
+    ParseFolders(*scenarios);
+    if (experiment_.scenarios.empty()) Fail("[scenarios] names no scenario");
+
+    if (const toml::table* run = root["run"].as_table()) ParseRunSettings(*run);
+    const std::string base_text = BaseTablesText(root);
+    const std::vector<Variant> variants = ParseVariants(root);
+    const std::vector<GridAxis> axes = ParseGrid(root);
+    ExpandRuns(base_text, variants, axes);
+    if (const toml::node* report = root.get("report")) {
+      ValidateReport(*report->as_table(), !root.contains("variant"));
+    }
+    WarnAboutDifferentEnergies();
+    return std::move(experiment_);
+  }
+
+ private:
+  // A [[variant]]: its name and its run-config settings (dotted key, TOML literal).
+  struct Variant {
+    std::string name;
+    std::vector<std::pair<std::string, std::string>> settings;
+  };
+  // A [grid] axis: dotted key and its values.
+  using GridAxis = std::pair<std::string, std::vector<const toml::node*>>;
+
+  // [experiment] and [report], which go to the report script as they are.
+  void ParseDescription(const toml::table& root) {
     nlohmann::json report_json = nlohmann::json::object();
     if (const toml::table* meta = root["experiment"].as_table()) {
       toml_.CheckKeys(*meta, {"name", "title", "description"}, "[experiment]");
@@ -276,37 +308,29 @@ class ExperimentParser {
       report_json["report"] = nlohmann::json::object();
     }
     experiment_.report_json = report_json.dump();
-    const toml::node* report_node = root.get("report");
+  }
 
-    // [scenarios]
-    const toml::table* scenarios = root["scenarios"].as_table();
-    if (!scenarios) Fail("no [scenarios] table (files = [...] or [[scenarios.folder]])");
-    toml_.CheckKeys(*scenarios, {"relative_to", "files", "folder"}, "[scenarios]");
-    paths_base_ = (base_ / toml_.String(*scenarios, "relative_to", ".")).lexically_normal();
-    ParseScenarioFiles(*scenarios);
-    ParseFolders(*scenarios);
-    if (experiment_.scenarios.empty()) Fail("[scenarios] names no scenario");
-
-    // [run]
-    if (const toml::table* run = root["run"].as_table()) {
-      toml_.CheckKeys(*run, {"threads", "save_mesh", "timeout"}, "[run]");
-      if (const toml::node* threads = run->get("threads")) {
-        if (!threads->is_integer() || threads->as_integer()->get() < 0) {
-          Fail(*threads, "'threads' must be an integer >= 0 (0: cores / --jobs)");
-        }
-        experiment_.settings.threads = static_cast<int>(threads->as_integer()->get());
+  // [run]
+  void ParseRunSettings(const toml::table& run) {
+    toml_.CheckKeys(run, {"threads", "save_mesh", "timeout"}, "[run]");
+    if (const toml::node* threads = run.get("threads")) {
+      if (!threads->is_integer() || threads->as_integer()->get() < 0) {
+        Fail(*threads, "'threads' must be an integer >= 0 (0: cores / --jobs)");
       }
-      if (const toml::node* save = run->get("save_mesh")) {
-        if (!save->is_boolean()) Fail(*save, "'save_mesh' must be true or false");
-        experiment_.settings.save_mesh = save->as_boolean()->get();
-      }
-      if (const toml::node* timeout = run->get("timeout")) {
-        experiment_.settings.timeout = toml_.Number(*timeout, "timeout");
-        if (experiment_.settings.timeout < 0) Fail(*timeout, "'timeout' must be >= 0 seconds");
-      }
+      experiment_.settings.threads = static_cast<int>(threads->as_integer()->get());
     }
+    if (const toml::node* save = run.get("save_mesh")) {
+      if (!save->is_boolean()) Fail(*save, "'save_mesh' must be true or false");
+      experiment_.settings.save_mesh = save->as_boolean()->get();
+    }
+    if (const toml::node* timeout = run.get("timeout")) {
+      experiment_.settings.timeout = toml_.Number(*timeout, "timeout");
+      if (experiment_.settings.timeout < 0) Fail(*timeout, "'timeout' must be >= 0 seconds");
+    }
+  }
 
-    // Base run tables.
+  // The base run tables ([optimizer], [energy], ...) as TOML text, which every run starts from.
+  std::string BaseTablesText(const toml::table& root) const {
     toml::table base_tables;
     for (const char* table : kRunTables) {
       if (const toml::node* node = root.get(table)) {
@@ -316,12 +340,11 @@ class ExperimentParser {
     }
     std::ostringstream base_text;
     base_text << base_tables;
+    return base_text.str();
+  }
 
-    // [[variant]]
-    struct Variant {
-      std::string name;
-      std::vector<std::pair<std::string, std::string>> settings;
-    };
+  // [[variant]]; one unnamed variant without settings when there is none.
+  std::vector<Variant> ParseVariants(const toml::table& root) const {
     std::vector<Variant> variants;
     if (const toml::node* node = root.get("variant")) {
       const toml::array* array = node->as_array();
@@ -347,9 +370,12 @@ class ExperimentParser {
       }
     }
     if (variants.empty()) variants.push_back({});
+    return variants;
+  }
 
-    // [grid]: dotted key -> array of values.
-    std::vector<std::pair<std::string, std::vector<const toml::node*>>> axes;
+  // [grid]: dotted key -> array of values.
+  std::vector<GridAxis> ParseGrid(const toml::table& root) {
+    std::vector<GridAxis> axes;
     if (const toml::node* node = root.get("grid")) {
       const toml::table* grid = node->as_table();
       if (!grid) Fail(*node, "[grid] must be a table of KEY = [values]");
@@ -367,8 +393,13 @@ class ExperimentParser {
         experiment_.grid_keys.push_back(key);
       }
     }
+    return axes;
+  }
 
-    // Expand: scenarios × variants × grid (first grid key slowest).
+  // The runs: scenarios × variants × grid (first grid key slowest), each validated once per
+  // distinct run config and identified by its scenario and config.
+  void ExpandRuns(const std::string& base_text, const std::vector<Variant>& variants,
+                  const std::vector<GridAxis>& axes) {
     const Registries registries = MakeBuiltinRegistries();
     std::set<std::string> validated;  // run configs already checked
     size_t combinations = 1;
@@ -377,32 +408,7 @@ class ExperimentParser {
     for (size_t s = 0; s < experiment_.scenarios.size(); ++s) {
       for (const Variant& variant : variants) {
         for (size_t c = 0; c < combinations; ++c) {
-          ExperimentRun run;
-          run.index = static_cast<int>(experiment_.runs.size());
-          run.scenario = static_cast<int>(s);
-          run.variant = variant.name;
-          run.parameters = variant.settings;
-          std::vector<std::string> label_parts;
-          if (!variant.name.empty()) label_parts.push_back(variant.name);
-          size_t rest = c;
-          std::vector<size_t> choice(axes.size());
-          for (size_t a = axes.size(); a-- > 0;) {
-            choice[a] = rest % axes[a].second.size();
-            rest /= axes[a].second.size();
-          }
-          for (size_t a = 0; a < axes.size(); ++a) {
-            const toml::node& value = *axes[a].second[choice[a]];
-            run.parameters.emplace_back(axes[a].first, Literal(value));
-            const std::string& key = axes[a].first;
-            // "solver.type" reads best as "solver", other keys by their last part.
-            const std::string short_key = key.ends_with(".type") ? key.substr(0, key.size() - 5)
-                                                                 : key.substr(key.rfind('.') + 1);
-            label_parts.push_back(fmt::format("{}={}", short_key, Display(value)));
-          }
-          run.label = fmt::format("{}", fmt::join(label_parts, ", "));
-          ConfigNode config = ConfigNode::Parse(base_text.str(), source_);
-          for (const auto& [key, literal] : run.parameters) config.Set(key, literal);
-          run.config_toml = config.ToToml();
+          ExperimentRun run = MakeRun(s, variant, axes, c, base_text);
           if (validated.insert(run.config_toml).second) Validate(registries, run);
           const uint64_t hash = Fnv1a(identities_[s] + "\n" + run.config_toml);
           run.id = fmt::format("{}-{:08x}", experiment_.scenarios[s].name,
@@ -417,12 +423,41 @@ class ExperimentParser {
         }
       }
     }
-    if (report_node) ValidateReport(*report_node->as_table(), !root.contains("variant"));
-    WarnAboutDifferentEnergies();
-    return std::move(experiment_);
   }
 
- private:
+  // Run `combination` of the grid for scenario `s` and `variant`: its parameters, label and
+  // run config.
+  ExperimentRun MakeRun(size_t s, const Variant& variant, const std::vector<GridAxis>& axes,
+                        size_t combination, const std::string& base_text) const {
+    ExperimentRun run;
+    run.index = static_cast<int>(experiment_.runs.size());
+    run.scenario = static_cast<int>(s);
+    run.variant = variant.name;
+    run.parameters = variant.settings;
+    std::vector<std::string> label_parts;
+    if (!variant.name.empty()) label_parts.push_back(variant.name);
+    size_t rest = combination;
+    std::vector<size_t> choice(axes.size());
+    for (size_t a = axes.size(); a-- > 0;) {
+      choice[a] = rest % axes[a].second.size();
+      rest /= axes[a].second.size();
+    }
+    for (size_t a = 0; a < axes.size(); ++a) {
+      const toml::node& value = *axes[a].second[choice[a]];
+      run.parameters.emplace_back(axes[a].first, Literal(value));
+      const std::string& key = axes[a].first;
+      // "solver.type" reads best as "solver", other keys by their last part.
+      const std::string short_key =
+          key.ends_with(".type") ? key.substr(0, key.size() - 5) : key.substr(key.rfind('.') + 1);
+      label_parts.push_back(fmt::format("{}={}", short_key, Display(value)));
+    }
+    run.label = fmt::format("{}", fmt::join(label_parts, ", "));
+    ConfigNode config = ConfigNode::Parse(base_text, source_);
+    for (const auto& [key, literal] : run.parameters) config.Set(key, literal);
+    run.config_toml = config.ToToml();
+    return run;
+  }
+
   // [report] as the report script reads it (report.py), so that a typo fails now and not after
   // the runs: known keys and figure names (one list for both sides), compare/panel naming a
   // [grid] key (or "variant"), value types.

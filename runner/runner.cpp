@@ -380,6 +380,20 @@ class Sweep {
     return file;
   }
 
+  // Why a run's child process failed: the timeout, the signal, or the error its log ends with.
+  std::string ChildError(const ProcessResult& child, const fs::path& log_file) const {
+    std::string error = ErrorFromLog(log_file);
+    if (child.timed_out) {
+      error = fmt::format("killed after the timeout of {} s", experiment_.settings.timeout);
+    } else if (child.signal) {
+      error = fmt::format("killed by signal {} ({}){}", child.signal, strsignal(child.signal),
+                          error.empty() ? "" : ": " + error);
+    } else if (error.empty()) {
+      error = fmt::format("exit code {} without a message", child.exit_code);
+    }
+    return error;
+  }
+
   json Execute(const ExperimentRun& run) {
     const ExperimentScenario& scenario = experiment_.scenarios[run.scenario];
     const fs::path runs = dir_ / "runs";
@@ -459,16 +473,7 @@ class Sweep {
         info["status"] = child.timed_out ? "timeout" : "failed";
         info["exit_code"] = child.exit_code;
         if (child.signal) info["signal"] = child.signal;
-        std::string error = ErrorFromLog(log_file);
-        if (child.timed_out) {
-          error = fmt::format("killed after the timeout of {} s", experiment_.settings.timeout);
-        } else if (child.signal) {
-          error = fmt::format("killed by signal {} ({}){}", child.signal, strsignal(child.signal),
-                              error.empty() ? "" : ": " + error);
-        } else if (error.empty()) {
-          error = fmt::format("exit code {} without a message", child.exit_code);
-        }
-        info["error"] = error;
+        info["error"] = ChildError(child, log_file);
         info["log"] = "runs/" + log_file.filename().string();
       }
     } catch (const std::exception& error) {

@@ -23,7 +23,8 @@ Eigen::Matrix3d ClosestRotation(const Eigen::Matrix3d& m, const Eigen::Matrix3d&
   // rotation this takes 1–3 steps. Steps that leave the region where H is positive definite
   // (a poor warm start, reflections) go to the SVD.
   // Plain scalar code: this runs once or twice per vertex per iteration, and Eigen's generic
-  // 3×3 expressions cost about twice as many instructions here (measured with callgrind).
+  // 3×3 expressions compile to more instructions here (callgrind; the kernel's cost is in
+  // docs/benchmarks.md, "Rotation fitting").
   double r[3][3], a[3][3];
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {

@@ -18,6 +18,17 @@ namespace {
 
 constexpr Index kGrain = 2048;
 
+// body(i) for every i in [0, count), in tasks of kGrain items on the context's threads.
+template <class Body>
+void ForEachIndex(Index count, const Context& context, Body&& body) {
+  context.Run([&] {
+    tbb::parallel_for(tbb::blocked_range<Index>(0, count, kGrain),
+                      [&](const tbb::blocked_range<Index>& range) {
+                        for (Index i = range.begin(); i != range.end(); ++i) body(i);
+                      });
+  });
+}
+
 // M_s(u) = Σ_j u_j c_sjᵀ  (deformed × rest), c_sj = coefficients[p] (site-major).
 inline Eigen::Matrix3d Covariance(const RotationCoupling& coupling,
                                   const std::vector<Eigen::Vector3d>& coefficients,
@@ -183,18 +194,12 @@ void AssembleCoupledRhs(const RotationCoupling& coupling, const Rotations& rotat
                         Positions& rhs, const Context& context) {
   HARAP_CHECK(rhs.rows() == coupling.num_vertices, "rhs has {} rows for {} vertices", rhs.rows(),
               coupling.num_vertices);
-  context.Run([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<Index>(0, coupling.num_vertices, kGrain),
-        [&](const tbb::blocked_range<Index>& range) {
-          for (Index j = range.begin(); j != range.end(); ++j) {
-            Eigen::Vector3d b = Eigen::Vector3d::Zero();
-            for (Index p = coupling.vertex_offsets[j]; p < coupling.vertex_offsets[j + 1]; ++p) {
-              b.noalias() += rotations[coupling.vertex_sites[p]] * coupling.vertex_coefficients[p];
-            }
-            rhs.row(j) = b.transpose();
-          }
-        });
+  ForEachIndex(coupling.num_vertices, context, [&](Index j) {
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    for (Index p = coupling.vertex_offsets[j]; p < coupling.vertex_offsets[j + 1]; ++p) {
+      b.noalias() += rotations[coupling.vertex_sites[p]] * coupling.vertex_coefficients[p];
+    }
+    rhs.row(j) = b.transpose();
   });
 }
 
@@ -250,25 +255,19 @@ std::vector<Eigen::Matrix3d> TwistMetrics(const RotationCoupling& coupling, cons
   HARAP_CHECK(rest.rows() == coupling.num_vertices, "{} rest positions for {} vertices",
               rest.rows(), coupling.num_vertices);
   std::vector<Eigen::Matrix3d> metric(coupling.num_sites);
-  context.Run([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
-        [&](const tbb::blocked_range<Index>& range) {
-          for (Index s = range.begin(); s != range.end(); ++s) {
-            const Eigen::Matrix3d covariance = Covariance(coupling, rest, s);
-            metric[s].setZero();
-            if (coupling.planar) {
-              const double sum = covariance(0, 0) + covariance(1, 1);
-              const double scale = covariance.topLeftCorner<2, 2>().cwiseAbs().maxCoeff();
-              if (sum > kRelativeFloor * scale) metric[s](2, 2) = 1.0 / std::sqrt(sum);
-              continue;
-            }
-            const Eigen::Matrix3d symmetric = 0.5 * (covariance + covariance.transpose());
-            metric[s] = SpectralFunction(
-                symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric,
-                [](double nu, double floor) { return nu > floor ? 1.0 / std::sqrt(nu) : 0.0; });
-          }
-        });
+  ForEachIndex(coupling.num_sites, context, [&](Index s) {
+    const Eigen::Matrix3d covariance = Covariance(coupling, rest, s);
+    metric[s].setZero();
+    if (coupling.planar) {
+      const double sum = covariance(0, 0) + covariance(1, 1);
+      const double scale = covariance.topLeftCorner<2, 2>().cwiseAbs().maxCoeff();
+      if (sum > kRelativeFloor * scale) metric[s](2, 2) = 1.0 / std::sqrt(sum);
+      return;
+    }
+    const Eigen::Matrix3d symmetric = 0.5 * (covariance + covariance.transpose());
+    metric[s] = SpectralFunction(
+        symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric,
+        [](double nu, double floor) { return nu > floor ? 1.0 / std::sqrt(nu) : 0.0; });
   });
   return metric;
 }
@@ -285,44 +284,36 @@ void PrepareCoupledRotationDerivative(const RotationCoupling& coupling, const Po
   HARAP_CHECK(!twist_metric || static_cast<Index>(twist_metric->size()) == coupling.num_sites,
               "{} twist metrics for {} sites", twist_metric->size(), coupling.num_sites);
   curvature.resize(coupling.num_sites);
-  context.Run([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
-        [&](const tbb::blocked_range<Index>& range) {
-          for (Index s = range.begin(); s != range.end(); ++s) {
-            const Eigen::Matrix3d stretch = rotations[s].transpose() * Covariance(coupling, u, s);
-            Eigen::Matrix3d& k = curvature[s];
-            if (coupling.planar) {
-              const double sum = stretch(0, 0) + stretch(1, 1);
-              k.setZero();
-              if (twist_metric) {
-                const double w = (*twist_metric)[s](2, 2);
-                k(2, 2) = w * w * ClampedTwist(sum * w * w);
-              } else if (sum >
-                         kRelativeFloor * stretch.topLeftCorner<2, 2>().cwiseAbs().maxCoeff()) {
-                k(2, 2) = 1.0 / sum;
-              }
-              continue;
-            }
-            const Eigen::Matrix3d symmetric = 0.5 * (stretch + stretch.transpose());
-            const Eigen::Matrix3d pair_sums =
-                symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric;
-            if (!twist_metric) {
-              k = SpectralFunction(pair_sums, [](double lambda, double floor) {
-                return lambda > floor ? 1.0 / lambda : 0.0;
-              });
-              continue;
-            }
-            // K̃ = W B̃ W with W = N^-½: the eigenvalues μ of W (tr S I − S) W are the pair sums
-            // relative to rest, β = 1/μ those of N^½ K N^½.
-            const Eigen::Matrix3d& w = (*twist_metric)[s];
-            const Eigen::Matrix3d relative = w * pair_sums * w;
-            k = w *
-                SpectralFunction(0.5 * (relative + relative.transpose()),
-                                 [](double mu, double) { return ClampedTwist(mu); }) *
-                w;
-          }
-        });
+  ForEachIndex(coupling.num_sites, context, [&](Index s) {
+    const Eigen::Matrix3d stretch = rotations[s].transpose() * Covariance(coupling, u, s);
+    Eigen::Matrix3d& k = curvature[s];
+    if (coupling.planar) {
+      const double sum = stretch(0, 0) + stretch(1, 1);
+      k.setZero();
+      if (twist_metric) {
+        const double w = (*twist_metric)[s](2, 2);
+        k(2, 2) = w * w * ClampedTwist(sum * w * w);
+      } else if (sum > kRelativeFloor * stretch.topLeftCorner<2, 2>().cwiseAbs().maxCoeff()) {
+        k(2, 2) = 1.0 / sum;
+      }
+      return;
+    }
+    const Eigen::Matrix3d symmetric = 0.5 * (stretch + stretch.transpose());
+    const Eigen::Matrix3d pair_sums = symmetric.trace() * Eigen::Matrix3d::Identity() - symmetric;
+    if (!twist_metric) {
+      k = SpectralFunction(pair_sums, [](double lambda, double floor) {
+        return lambda > floor ? 1.0 / lambda : 0.0;
+      });
+      return;
+    }
+    // K̃ = W B̃ W with W = N^-½: the eigenvalues μ of W (tr S I − S) W are the pair sums relative
+    // to rest, β = 1/μ those of N^½ K N^½.
+    const Eigen::Matrix3d& w = (*twist_metric)[s];
+    const Eigen::Matrix3d relative = w * pair_sums * w;
+    k = w *
+        SpectralFunction(0.5 * (relative + relative.transpose()),
+                         [](double mu, double) { return ClampedTwist(mu); }) *
+        w;
   });
 }
 
@@ -337,19 +328,13 @@ void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions
   HARAP_CHECK(v.rows() == coupling.num_vertices, "{} directions for {} vertices", v.rows(),
               coupling.num_vertices);
   d_rotations.resize(coupling.num_sites);
-  context.Run([&] {
-    tbb::parallel_for(
-        tbb::blocked_range<Index>(0, coupling.num_sites, kGrain),
-        [&](const tbb::blocked_range<Index>& range) {
-          for (Index s = range.begin(); s != range.end(); ++s) {
-            const Eigen::Matrix3d x = rotations[s].transpose() * Covariance(coupling, v, s);
-            const Eigen::Vector3d axial(x(2, 1) - x(1, 2), x(0, 2) - x(2, 0), x(1, 0) - x(0, 1));
-            const Eigen::Vector3d w = curvature[s] * axial;
-            Eigen::Matrix3d cross;
-            cross << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
-            d_rotations[s].noalias() = rotations[s] * cross;
-          }
-        });
+  ForEachIndex(coupling.num_sites, context, [&](Index s) {
+    const Eigen::Matrix3d x = rotations[s].transpose() * Covariance(coupling, v, s);
+    const Eigen::Vector3d axial(x(2, 1) - x(1, 2), x(0, 2) - x(2, 0), x(1, 0) - x(0, 1));
+    const Eigen::Vector3d w = curvature[s] * axial;
+    Eigen::Matrix3d cross;
+    cross << 0.0, -w(2), w(1), w(2), 0.0, -w(0), -w(1), w(0), 0.0;
+    d_rotations[s].noalias() = rotations[s] * cross;
   });
 }
 

@@ -20,12 +20,13 @@
 
 #include "framework/error.h"
 
-// Cost: measured in docs/benchmarks.md ("Hierarchy construction and up-sampling"); level 0's
-// analysis (unique edges for Ē, bounding box, Eq. 2) and level 1 take most of it. What keeps it
-// low: one pass per task over the elements with the per-vertex data they touch
-// prefetched; clusters by union–find (no adjacency lists; level 0 walks the unique edges it has
-// bucketed for Ē anyway); counting sorts instead of comparison sorts or hashing; scratch buffers
-// sized once on level 0 and never zero-filled when they are overwritten anyway.
+// Cost: a small part of a hierarchical run (docs/benchmarks.md, "Hierarchy construction", has
+// the times and the command). The levels shrink geometrically, so level 0's analysis (unique
+// edges for Ē, bounding box, Eq. 2) and level 1 take most of it. What keeps it low: one pass per
+// task over the elements with the per-vertex data they touch prefetched; clusters by union–find (no
+// adjacency lists; level 0 walks the unique edges it has bucketed for Ē anyway); counting sorts
+// instead of comparison sorts or hashing; scratch buffers sized once on level 0 and never
+// zero-filled when they are overwritten anyway.
 
 namespace harap {
 namespace {
@@ -285,8 +286,6 @@ class Builder {
   /// Level 0: referenced vertices, bounding box, mean unique edge length Ē, Eq. (2)–(3).
   void SetUpFinestLevel(const Mesh& mesh) {
     const Index n = mesh.num_vertices();
-    const std::size_t m = std::size_t(mesh.num_elements());
-    const Index* e = mesh.elements.data();
     parts_ = std::max(1, tbb::this_task_arena::max_concurrency());
 
     // Row-major positions: the finest members' sums on level 0 (one member each).
@@ -294,9 +293,18 @@ class Builder {
     ParallelFor(n, [&](std::size_t i) {
       for (int d = 0; d < 3; ++d) xyz[3 * i + d] = mesh.vertices(i, d);
     });
+    BucketEdges(mesh);
+    const EdgeStatistics stats = MeasureUniqueEdges(n, xyz);
+    SetUpGrid(n, xyz, stats);
+    level0_ = true;
+  }
 
-    // Referenced vertices, and the element edges bucketed by their smaller end (counting sort;
-    // after the fill, bucket i is [end[i − 1], end[i]) with end[−1] = 0).
+  /// Marks the referenced vertices, and buckets the element edges by their smaller end (counting
+  /// sort; after the fill, bucket i is [end[i − 1], end[i]) with end[−1] = 0).
+  void BucketEdges(const Mesh& mesh) {
+    const Index n = mesh.num_vertices();
+    const std::size_t m = std::size_t(mesh.num_elements());
+    const Index* e = mesh.elements.data();
     referenced_.assign(n, 0);
     Index* end = edge_end_.Resize(std::size_t(n) + 1);
     std::fill_n(end, std::size_t(n) + 1, 0);
@@ -317,9 +325,18 @@ class Builder {
         }
       }
     }
+  }
 
-    // Ē over the unique edges, whose ends are compacted to the front of each bucket (ending at
-    // unique_end[a]). Also the bounding box. Fixed blocks, summed in order.
+  struct EdgeStatistics {
+    double mean_edge = 0.0;  ///< Ē
+    Eigen::Vector3d lo, hi;  ///< the bounding box of the referenced vertices
+  };
+
+  /// Ē over the unique edges, whose ends are compacted to the front of each bucket (ending at
+  /// unique_end[a]). Also the bounding box. Fixed blocks, summed in order.
+  EdgeStatistics MeasureUniqueEdges(Index n, const double* xyz) {
+    const Index* end = edge_end_.data();
+    Index* edges = edges_.data();
     struct BlockResult {
       double length = 0.0;
       std::size_t edges = 0;
@@ -369,9 +386,14 @@ class Builder {
       total.lo = total.lo.cwiseMin(r.lo);
       total.hi = total.hi.cwiseMax(r.hi);
     }
-    const double mean_edge = total.edges ? total.length / double(total.edges) : 0.0;
-    const Eigen::Vector3d lo = total.lo, hi = total.hi;
+    return {total.edges ? total.length / double(total.edges) : 0.0, total.lo, total.hi};
+  }
 
+  /// The grid of cells of edge length ≤ Ē over the bounding box, and each vertex's cell, Eq. (2).
+  void SetUpGrid(Index n, const double* xyz, const EdgeStatistics& stats) {
+    const double mean_edge = stats.mean_edge;
+    const Eigen::Vector3d& lo = stats.lo;
+    const Eigen::Vector3d& hi = stats.hi;
     grid_.origin = lo;
     std::array<double, 3> extent = {0.0, 0.0, 0.0};
     std::array<double, 3> top = {0.0, 0.0, 0.0};  // 2^q − 1
@@ -404,7 +426,6 @@ class Builder {
       }
       cells[i] = PackCell(w[0], w[1], w[2]);
     });
-    level0_ = true;
   }
 
   bool Referenced(Index i) const { return !level0_ || referenced_[i]; }
@@ -488,40 +509,10 @@ class Builder {
     HierarchyLevel& fine_level = hierarchy_.levels.back();
     const Mesh& fine = fine_level.mesh;
     const Index n = fine.num_vertices();
-    const std::size_t m = std::size_t(fine.num_elements());
-    const Index* e = fine.elements.data();
     const Index* label = label_.data();
-
-    // Eq. (5)/(10): an element survives iff its vertices lie in K different clusters. The
-    // survivors' clusters, in element order: each block writes its survivors where its elements
-    // start, then the blocks are moved together.
-    if (level0_) survivors_.swap(edges_);  // the level-0 edge buckets are no longer needed
-    Index* survivors = survivors_.Resize(m * K);
-    const std::size_t blocks = (m + kBlock - 1) / kBlock;
-    std::vector<Index> block_count(blocks, 0);
-    ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
-      Index* out = survivors + first * K;
-      for (std::size_t t = first * K; t < last * K; t += K) {
-        PrefetchAhead<K>(label, e, t, last * K);
-        std::array<Index, K> c;
-        for (int a = 0; a < K; ++a) c[a] = label[e[t + a]];
-        bool distinct = true;
-        for (int a = 0; a < K; ++a) {
-          for (int b = a + 1; b < K; ++b) distinct = distinct && c[a] != c[b];
-        }
-        for (int a = 0; a < K; ++a) out[a] = c[a];
-        out += distinct ? K : 0;
-      }
-      block_count[block] = Index((out - survivors - first * K) / K);
-    });
-    Index num_survivors = 0;
-    for (std::size_t block = 0; block < blocks; ++block) {
-      // Moving down, in block order, never overwrites a block not yet moved.
-      std::memmove(survivors + std::size_t(num_survivors) * K, survivors + block * kBlock * K,
-                   std::size_t(block_count[block]) * K * sizeof(Index));
-      num_survivors += block_count[block];
-    }
+    const Index num_survivors = CollectSurvivors(fine);
     if (num_survivors == 0) return false;
+    const Index* survivors = survivors_.data();
 
     // Duplicates out; the used clusters (marked 0) compacted into coarse indices.
     Index* coarse_of = coarse_of_.Resize(num_clusters_);
@@ -557,7 +548,60 @@ class Builder {
     });
     if (unresolved > 0) MapToClosestSurvivor(fine, fine_level, unresolved);
 
-    // Per-vertex state of the coarse level: cell, sum and count of the finest members.
+    SetCoarseState(fine_level, num_coarse);
+    current_shift_ = shift;
+    coarse.vertices.resize(num_coarse, 3);
+    ParallelFor(num_coarse, [&](std::size_t c) {
+      for (int d = 0; d < 3; ++d) coarse.vertices(c, d) = sums_[3 * c + d] / double(counts_[c]);
+    });
+    if (options_.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized) {
+      SetQuantizedPositions(coarse);
+    }
+    if (coarse.planar) coarse.vertices.col(2).setZero();
+    hierarchy_.levels.push_back(std::move(coarse_level));
+    return true;
+  }
+
+  /// Eq. (5)/(10): an element survives iff its vertices lie in K different clusters. Writes the
+  /// survivors' clusters, in element order, to survivors_ and returns their number: each block
+  /// writes its survivors where its elements start, then the blocks are moved together.
+  Index CollectSurvivors(const Mesh& fine) {
+    const std::size_t m = std::size_t(fine.num_elements());
+    const Index* e = fine.elements.data();
+    const Index* label = label_.data();
+    if (level0_) survivors_.swap(edges_);  // the level-0 edge buckets are no longer needed
+    Index* survivors = survivors_.Resize(m * K);
+    const std::size_t blocks = (m + kBlock - 1) / kBlock;
+    std::vector<Index> block_count(blocks, 0);
+    ForEachBlock(m, kBlock, [&](std::size_t block, std::size_t first, std::size_t last) {
+      Index* out = survivors + first * K;
+      for (std::size_t t = first * K; t < last * K; t += K) {
+        PrefetchAhead<K>(label, e, t, last * K);
+        std::array<Index, K> c;
+        for (int a = 0; a < K; ++a) c[a] = label[e[t + a]];
+        bool distinct = true;
+        for (int a = 0; a < K; ++a) {
+          for (int b = a + 1; b < K; ++b) distinct = distinct && c[a] != c[b];
+        }
+        for (int a = 0; a < K; ++a) out[a] = c[a];
+        out += distinct ? K : 0;
+      }
+      block_count[block] = Index((out - survivors - first * K) / K);
+    });
+    Index num_survivors = 0;
+    for (std::size_t block = 0; block < blocks; ++block) {
+      // Moving down, in block order, never overwrites a block not yet moved.
+      std::memmove(survivors + std::size_t(num_survivors) * K, survivors + block * kBlock * K,
+                   std::size_t(block_count[block]) * K * sizeof(Index));
+      num_survivors += block_count[block];
+    }
+    return num_survivors;
+  }
+
+  /// The per-vertex state of the coarse level (`num_coarse` vertices, mapped from `fine_level`):
+  /// cell, sum and count of the finest members.
+  void SetCoarseState(const HierarchyLevel& fine_level, Index num_coarse) {
+    const Index n = fine_level.mesh.num_vertices();
     std::uint64_t* coarse_cells = coarse_cells_.Resize(num_coarse);
     double* coarse_sums = coarse_sums_.Resize(3 * std::size_t(num_coarse));
     Index* coarse_counts = coarse_counts_.Resize(num_coarse);
@@ -575,18 +619,6 @@ class Builder {
     sums_.swap(coarse_sums_);
     counts_.swap(coarse_counts_);
     level0_ = false;
-    current_shift_ = shift;
-
-    coarse.vertices.resize(num_coarse, 3);
-    ParallelFor(num_coarse, [&](std::size_t c) {
-      for (int d = 0; d < 3; ++d) coarse.vertices(c, d) = sums_[3 * c + d] / double(counts_[c]);
-    });
-    if (options_.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized) {
-      SetQuantizedPositions(coarse);
-    }
-    if (coarse.planar) coarse.vertices.col(2).setZero();
-    hierarchy_.levels.push_back(std::move(coarse_level));
-    return true;
   }
 
   /// Sets keep_[s] = 0 for each survivor whose cluster set equals that of an earlier survivor

@@ -58,20 +58,17 @@ namespace harap {
 ///     integer coordinates (clipped to the bounding box). The clusters of a cell split by the
 ///     topology check would all get the same centre (zero-length edges, zero-area elements), so
 ///     they take their means instead.
-///   Measured on the shared scenarios (hierarchical optimizer, spokes_and_rims, cholmod,
-///   rotations upsampler, default tolerance), "mean" needs about half the finest-level
-///   iterations (armadillo-bend 6 vs 12, lucy-bend 4 vs 9, buddha-twist 3 vs 6–9, bunny-ears
-///   4 vs 8) for final energies within ~1% (lower with "mean" on dragon-lift, −10%, and
-///   cylinder-bend, −25%). Quantized levels also hold exactly degenerate elements:
-///   ~1% zero-area triangles on Armadillo's level 1 (three cells in a row) and 14–36% flat
-///   tetrahedra on the WRAPD tetrahedral meshes (four cells in a plane); mean: none.
+///   Why "mean": it starts the finest level closer to its solution, so that level (the
+///   costliest) needs fewer iterations for a similar or lower energy (docs/results.md, "Octree
+///   coarse positions", with the command), and the cell centres of neighbouring clusters can lie
+///   on a line (three cells in a row: a zero-area triangle) or in a plane (four cells: a flat
+///   tetrahedron), which the means of distinct clusters almost never do.
 ///
 /// Building stops when the coarsest level has at most `min_vertices` vertices, when no shift
 /// reduces it any more or a coarser level would have no element, or after `max_levels` levels.
 ///
 /// Build() is const and thread-safe; it runs in the context's task arena and its result does not
-/// depend on the thread count. Cost: a small part of a hierarchical run (docs/benchmarks.md,
-/// "Hierarchy construction and up-sampling"; the .cpp says what keeps it there).
+/// depend on the thread count. Its cost: docs/benchmarks.md ("Hierarchy construction").
 class OctreeHierarchy final : public Hierarchy {
  public:
   static constexpr std::string_view kName = "octree";

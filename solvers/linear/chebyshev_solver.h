@@ -45,9 +45,9 @@ namespace harap {
 /// Why "budget": A degree-k Chebyshev
 ///    polynomial cannot damp modes below about λ_hi/k² anyway; spreading it over the whole
 ///    spectrum [λ_min, λ_hi] of a mesh matrix (κ ≈ 1e5) leaves every mode nearly undamped
-///    (|p| ≤ 1/T_k(σ) ≈ 0.99 for k = 30). Measured on the armadillo's finest level (warm start
-///    after 5 iterations): A-norm error after 30 steps 0.59–0.61 of the start with λ_lo in
-///    [1e-3, 3.6e-3] ∋ λ_hi/k², 0.69 with the exact λ_min = 1.2e-5 (docs/solvers.md).
+///    (|p| ≤ 1/T_k(σ) ≈ 0.99 for k = 30). On the armadillo's finest level a λ_lo near λ_hi/k²
+///    leaves a smaller A-norm error after 30 steps than the exact λ_min (docs/solvers.md,
+///    "chebyshev", has the table).
 /// Either interval may extend below the spectrum's true low end: modes there are still damped
 /// (|p| < 1 on (0, λ_hi]), only more slowly, so the A-norm error never grows.
 /// The bounds are computed once per matrix (a hash of it is kept, so refactoring the same matrix

@@ -9,6 +9,8 @@
 
 namespace harap {
 
+struct CholmodFactorization;  // cholmod_factorization.h
+
 /// Sparse Cholesky factorization A = P' L D L' P (simplicial) or A = P' L L' P (supernodal) with
 /// CHOLMOD [Chen, Davis, Hager & Rajamanickam 2008], then X = A⁻¹ B by two triangular solves.
 ///
@@ -40,7 +42,7 @@ class CholmodSolver final : public LinearSolver {
   };
   enum class Ordering {
     kMetis,  ///< METIS nested dissection: least fill on meshes, but the slowest analysis.
-    kAmd,    ///< Approximate minimum degree: fast analysis, 10–20% more fill on 2D meshes.
+    kAmd,    ///< Approximate minimum degree: fast analysis, more fill than METIS on meshes.
     kBest,   ///< CHOLMOD's default: AMD, then METIS too if AMD's fill is high; keeps the best.
   };
   /// Who computes a supernodal numeric factorization (modes auto and supernodal).
@@ -48,7 +50,8 @@ class CholmodSolver final : public LinearSolver {
     /// PartialSupernodalFactor::FactorAll: CHOLMOD's left-looking supernodal algorithm with the
     /// same values (bit for bit), independent subtrees of the elimination tree on the run's
     /// threads, reading A through the permutation (cholmod_factorize first makes permuted
-    /// copies of A): about twice as fast on armadillo-bend's finest matrix (docs/solvers.md).
+    /// copies of A, which is most of what this saves; docs/solvers.md, "Why numeric =
+    /// parallel").
     kParallel,
     kCholmod,  ///< cholmod_factorize.
   };
@@ -65,18 +68,22 @@ class CholmodSolver final : public LinearSolver {
 
   struct Options {
     /// Factorization kind. "auto" = supernodal factorization converted to a simplicial factor
-    /// for the solves: the supernodal factorization is faster than the simplicial one, the
-    /// simplicial solves faster than the supernodal ones; auto gets the supernodal factorization
-    /// time and the simplicial solve time (docs/results.md, "Solver choice and presets").
+    /// for the solves. The supernodal (BLAS) factorization is several times faster than the
+    /// simplicial one, while 3 right-hand sides are too few for its dense blocks to pay in the
+    /// solves, where a simplicial factor is faster. ARAP factors once and solves 5–300 times, so
+    /// neither pure mode suits all runs; converting (cholmod_change_factor, O(nnz(L))) gets the
+    /// supernodal factorization time and the simplicial solve time (docs/solvers.md, "Why mode
+    /// auto").
     Mode mode = Mode::kAuto;
-    /// Fill-reducing ordering. AMD: METIS gives ~15% fewer nonzeros in L on surface meshes, but
-    /// its analysis, redone on every Factorize(), costs several times AMD's, which a surface
-    /// mesh's solves repay only after a few hundred of them (docs/benchmarks.md). "metis" pays
-    /// off for volume meshes and long runs.
+    /// Fill-reducing ordering. AMD: METIS gives fewer nonzeros in L on surface meshes, so faster
+    /// solves, but its analysis, redone on every Factorize(), costs more than those solves save
+    /// unless a factor serves hundreds of them. "metis" pays off for volume meshes (more fill to
+    /// save) and long runs (docs/solvers.md, "Why mode auto", has both orderings).
     Ordering ordering = Ordering::kAmd;
     /// Pivots d_k ≤ pivot_tolerance · A_kk count as zero (numerically singular A); in [0, 1),
-    /// 0 rejects only non-positive pivots. Measured: |d| / A_kk ≤ 1.5e-12 for singular grid
-    /// Laplacians up to 90K unknowns, ≥ 0.15 for pinned ones; SPD needs 0 < d_k ≤ A_kk.
+    /// 0 rejects only non-positive pivots. The default lies between roundoff and real pivots: on
+    /// grid Laplacians up to 90K unknowns |d| / A_kk ≤ 1.5e-12 when singular, ≥ 0.15 when
+    /// pinned; SPD needs 0 < d_k ≤ A_kk.
     double pivot_tolerance = 1e-10;
     /// Solve with a simplicial factor (modes auto and simplicial) by substitution over
     /// independent subtrees of the elimination tree on all the context's threads
@@ -89,17 +96,16 @@ class CholmodSolver final : public LinearSolver {
     /// factorization (which ask for CHOLMOD_OMP_NUM_THREADS = 4 threads whatever the machine
     /// has) and the BLAS it calls (OpenBLAS: one thread per core); 0 leaves both as the
     /// environment sets them. harap parallelizes with TBB, and these threads only compete with
-    /// it: 1 factors faster than 0 alone, and far faster with a second factorization running
-    /// beside it, as in the hierarchical optimizer's setup (docs/benchmarks.md, "CHOLMOD's own
-    /// threads"). The BLAS thread count is process-wide: the last
-    /// Factorize() sets it.
+    /// it, the more so when a second factorization runs beside this one, as in the hierarchical
+    /// optimizer's setup (docs/solvers.md, "Why native_threads = 1"). The BLAS thread count is
+    /// process-wide: the last Factorize() sets it.
     int native_threads = 1;
     /// Refactor()'s route. kNumeric, kUpdate and kPartial, and kAuto after PrepareForRefactor(),
     /// keep a copy of the analysis (the symbolic factor, a few MB) and of the factored matrix (12
     /// bytes per nonzero of A) between calls, to reuse the one and to check the pattern and find
     /// the changed rows' old values with the other; in mode auto kPartial, and every route but
     /// kFull after PrepareForRefactor(), also keep the numeric supernodal factor (8 bytes per entry
-    /// of its dense blocks: 66 MB on armadillo-bend's finest level) that kPartial refactors in
+    /// of its dense blocks; its size on a large mesh: docs/session.md) that kPartial refactors in
     /// part. kAuto without PrepareForRefactor() (one-shot runs) keeps none, and its Refactor()
     /// factors from scratch. kUpdate needs a simplicial factor (modes auto and simplicial).
     RefactorChoice refactor = RefactorChoice::kAuto;
@@ -131,12 +137,13 @@ class CholmodSolver final : public LinearSolver {
 
   bool is_direct() const override { return true; }
 
-  /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below):
-  /// Brings the factor up to date for `a` (same pattern, values changed only in the rows and
-  /// columns `changed_rows`) by the route Options::refactor names; a different pattern (or no
-  /// earlier Factorize(), or refactor = "full") factors from scratch (kFull). For handle edits
-  /// of a masked matrix, name only the rows of the vertices that become or stop being handles:
-  /// their neighbours' changed entries lie in those columns, and every row named costs work.
+  /// Refactor(), LinearSolver's public call, done by RefactorImpl (private, below; the routes are
+  /// in cholmod_refactor_routes.h): Brings the factor up to date for `a` (same pattern, values
+  /// changed only in the rows and columns `changed_rows`) by the route Options::refactor names; a
+  /// different pattern (or no earlier Factorize(), or refactor = "full") factors from scratch
+  /// (kFull). For handle edits of a masked matrix, name only the rows of the vertices that become
+  /// or stop being handles: their neighbours' changed entries lie in those columns, and every row
+  /// named costs work.
   ///
   /// kNumeric factors the values with a copy of the last analysis (ordering, elimination tree,
   /// supernodes); in mode auto the supernodal factor's values go straight into the simplicial
@@ -157,7 +164,8 @@ class CholmodSolver final : public LinearSolver {
   /// recomputes only its supernodes on the elimination-tree paths from the changed columns to the
   /// root and those with a changed row (PartialSupernodalFactor: every other column of L is
   /// provably unchanged), then copies those columns into the simplicial factor (the solve's plan
-  /// kept). On a mesh the paths hold the large separators: 40–45% of the work for a local edit.
+  /// kept). On a mesh the paths hold the large separators, so even a local edit recomputes a
+  /// large share of the work (docs/solvers.md measures it).
   /// After a kUpdate the kept supernodal factor is stale; the next kNumeric refreshes it.
   ///
   /// Rule of kAuto: the route with the lowest estimated time among kPartial (when its supernodal
@@ -178,12 +186,13 @@ class CholmodSolver final : public LinearSolver {
   void PrepareForRefactor() override;
 
   /// Seconds per factor entry touched by the deletions and by the additions of an update before
-  /// any was measured; measured on a 2-core VM on armadillo-bend's finest matrix with a
-  /// ball of 1% of the vertices (docs/solvers.md).
+  /// any was measured: what an update of armadillo-bend's finest matrix with a ball of 1% of the
+  /// vertices measured (docs/solvers.md, "Refactoring after handle edits").
   static constexpr double kDefaultDeleteSecondsPerEntry = 0.8e-9;
   static constexpr double kDefaultAddSecondsPerEntry = 0.8e-9;
-  /// Seconds per flop of a partial refactorization before one was measured (measured on the
-  /// same edit; docs/solvers.md).
+  /// Seconds per flop of a partial refactorization before one was measured: what the partial
+  /// refactorization of the same edit measured (docs/solvers.md, "Refactoring after handle
+  /// edits").
   static constexpr double kDefaultPartialSecondsPerFlop = 2e-10;
 
   /// What the last successful Factorize() produced (for experiments and benchmarks).
@@ -241,8 +250,7 @@ class CholmodSolver final : public LinearSolver {
                          const Context& context) override;
   RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                                const Context& context) override;
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<CholmodFactorization> factorization_;
 };
 
 }  // namespace harap

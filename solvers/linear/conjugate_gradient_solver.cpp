@@ -103,16 +103,14 @@ void ConjugateGradientSolver::ApplyIncompleteCholesky(const double* r, double* z
 }
 
 template <int K>
-SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
-                                                    Eigen::Index first) {
+std::array<iterative::ColumnValues, 3> ConjugateGradientSolver::Start(const double* b,
+                                                                      const double* x) {
   const Index n = static_cast<Index>(a_.rows());
   double* r = r_.Reserve(n, K);
   double* z = z_.Reserve(n, K);
   double* p = p_.Reserve(n, K);
-  double* q = q_.Reserve(n, K);
   const bool jacobi = incomplete_cholesky_ == nullptr;
   const double* inverse_diagonal = inverse_diagonal_.data();
-
   // r = b − A x, and with Jacobi z = D⁻¹ r, p = z.
   auto start = SumRows<3>(n, [&](Index i, auto& sums) {
     double ax[K];
@@ -129,16 +127,59 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
       }
     }
   });
-  ColumnValues rz = start[2];
   if (!jacobi) {
     ApplyIncompleteCholesky<K>(r, z);
-    rz = SumRows<1>(n, [&](Index i, auto& sums) {
+    start[2] = SumRows<1>(n, [&](Index i, auto& sums) {
       for (int c = 0; c < K; ++c) {
         p[i * K + c] = z[i * K + c];
         sums[0][c] += r[i * K + c] * z[i * K + c];
       }
     })[0];
   }
+  return start;
+}
+
+template <int K>
+void ConjugateGradientSolver::EstimateUnresolved(
+    const iterative::ColumnConvergence& convergence, const ColumnValues& step_energy,
+    const std::array<std::array<double, 2 * kUnresolvedWindow>, K>& last_terms, int iterations,
+    Eigen::Index first) {
+  // The terms after the last ones, extrapolated as a geometric series of blocks of
+  // kUnresolvedWindow terms whose ratio is that of the last two blocks' sums (sums, not single
+  // terms: CG's terms are not monotone).
+  if (first == 0) unresolved_fraction_ = 0.0;
+  const int m = iterations;
+  constexpr int kRing = 2 * kUnresolvedWindow;
+  if (m < kRing) return;
+  for (int c = 0; c < K; ++c) {
+    if (!convergence.active(c) || !(step_energy[c] > 0.0)) continue;
+    double recent = 0.0, previous = 0.0;
+    for (int j = 0; j < kUnresolvedWindow; ++j) {
+      recent += last_terms[c][(m - 1 - j) % kRing];
+      previous += last_terms[c][(m - 1 - kUnresolvedWindow - j) % kRing];
+    }
+    const double ratio = recent / previous;
+    if (!(ratio < 1.0)) {  // not decaying (or no terms to compare)
+      unresolved_fraction_ = 1.0;
+      continue;
+    }
+    const double tail = recent * ratio / (1.0 - ratio);
+    unresolved_fraction_ = std::max(unresolved_fraction_, tail / (tail + step_energy[c]));
+  }
+}
+
+template <int K>
+SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
+                                                    Eigen::Index first) {
+  const Index n = static_cast<Index>(a_.rows());
+  const auto start = Start<K>(b, x);
+  double* r = r_.data();
+  double* z = z_.data();
+  double* p = p_.data();
+  double* q = q_.Reserve(n, K);
+  const bool jacobi = incomplete_cholesky_ == nullptr;
+  const double* inverse_diagonal = inverse_diagonal_.data();
+  ColumnValues rz = start[2];
   iterative::ColumnConvergence convergence(K, start[0], start[1], options_.limits.tolerance);
 
   SolveSummary summary;
@@ -211,28 +252,10 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
       }
     });
   }
-  // unresolved_fraction(): the terms after the last ones, extrapolated as a geometric series of
-  // blocks of kUnresolvedWindow terms whose ratio is that of the last two blocks' sums (sums,
-  // not single terms: CG's terms are not monotone).
-  if (first == 0) unresolved_fraction_ = 0.0;
-  const int m = summary.iterations;
-  constexpr int kRing = 2 * kUnresolvedWindow;
-  if (summary.success() && m >= kRing) {
-    for (int c = 0; c < K; ++c) {
-      if (!convergence.active(c) || !(step_energy[c] > 0.0)) continue;
-      double recent = 0.0, previous = 0.0;
-      for (int j = 0; j < kUnresolvedWindow; ++j) {
-        recent += last_terms[c][(m - 1 - j) % kRing];
-        previous += last_terms[c][(m - 1 - kUnresolvedWindow - j) % kRing];
-      }
-      const double ratio = recent / previous;
-      if (!(ratio < 1.0)) {  // not decaying (or no terms to compare)
-        unresolved_fraction_ = 1.0;
-        continue;
-      }
-      const double tail = recent * ratio / (1.0 - ratio);
-      unresolved_fraction_ = std::max(unresolved_fraction_, tail / (tail + step_energy[c]));
-    }
+  if (summary.success()) {
+    EstimateUnresolved<K>(convergence, step_energy, last_terms, summary.iterations, first);
+  } else if (first == 0) {
+    unresolved_fraction_ = 0.0;
   }
   // The recurrence residual r_k drifts from b − A x_k (badly so on singular systems); report
   // the true one, for one more pass over A per solve.

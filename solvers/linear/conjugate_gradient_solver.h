@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/IterativeLinearSolvers>
+#include <array>
 #include <memory>
 #include <string_view>
 
@@ -71,6 +72,17 @@ class ConjugateGradientSolver final
   /// CG on the row-major blocks b and x (the columns [first, first + K) of the solve).
   template <int K>
   SolveSummary SolveGathered(const double* b, double* x, Eigen::Index first);
+  /// SolveGathered()'s start: r = b − A x, z = M⁻¹ r, p = z; returns per column ‖b‖², ‖r‖², rᵀz.
+  template <int K>
+  std::array<iterative::ColumnValues, 3> Start(const double* b, const double* x);
+  /// Sets unresolved_fraction() from a successful solve's `iterations` (the first block of
+  /// columns, `first` = 0, resets it; later blocks raise it): `step_energy` holds each column's
+  /// Σ α_j r_jᵀz_j, `last_terms` its last 2 · kUnresolvedWindow terms (a ring).
+  template <int K>
+  void EstimateUnresolved(
+      const iterative::ColumnConvergence& convergence, const iterative::ColumnValues& step_energy,
+      const std::array<std::array<double, 2 * kUnresolvedWindow>, K>& last_terms, int iterations,
+      Eigen::Index first);
   /// z = M⁻¹ r for the incomplete Cholesky preconditioner (sequential).
   template <int K>
   void ApplyIncompleteCholesky(const double* r, double* z);

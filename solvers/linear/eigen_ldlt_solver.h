@@ -27,8 +27,9 @@ class EigenLdltSolver final : public LinearSolver {
 
   struct Options {
     /// Pivots d_k ≤ pivot_tolerance · A_kk count as zero (numerically singular A); in [0, 1),
-    /// 0 rejects only non-positive pivots. Measured: |d| / A_kk ≤ 1.5e-12 for singular grid
-    /// Laplacians up to 90K unknowns, ≥ 0.15 for pinned ones; SPD needs 0 < d_k ≤ A_kk.
+    /// 0 rejects only non-positive pivots. The default lies between roundoff and real pivots: on
+    /// grid Laplacians up to 90K unknowns |d| / A_kk ≤ 1.5e-12 when singular, ≥ 0.15 when
+    /// pinned; SPD needs 0 < d_k ≤ A_kk.
     double pivot_tolerance = 1e-10;
     /// Compute max over columns of ‖b − A x‖ / ‖b‖ in every Solve() (keeps a copy of A; slow).
     bool check_residual = false;

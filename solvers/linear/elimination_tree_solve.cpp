@@ -57,6 +57,19 @@ bool EliminationTreeSolve::Rebind(const LdltFactorView& factor) {
   return true;
 }
 
+// The elimination tree of a factor (parent = first row below the diagonal) with what the cut
+// needs of each subtree.
+struct EliminationTreeSolve::Tree {
+  std::vector<Index> parent;            ///< -1 for a root
+  std::vector<double> subtree_work;     ///< factor entries of the subtree (one pass each way)
+  std::vector<Index> first_descendant;  ///< the lowest column of the subtree
+  std::vector<Index> num_children;
+  double total_work = 0.0;
+  /// Every subtree numbered contiguously (CHOLMOD's post-ordered analysis); without that, the
+  /// solve is one sequential block.
+  bool postordered = true;
+};
+
 void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) {
   const Index n = factor.n;
   HARAP_CHECK(n >= 0 && factor.column_start && factor.column_count && factor.row && factor.value,
@@ -64,73 +77,88 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
   n_ = n;
   factor_ = factor;
   pattern_hash_ = PatternHash(factor);
-  const int* start = factor.column_start;
-  const int* count = factor.column_count;
+  permutation_.assign(n, 0);
+  for (Index k = 0; k < n; ++k) permutation_[k] = factor.permutation ? factor.permutation[k] : k;
+  const Tree tree = ReadTree();
+  std::vector<int> block_of(n, -1);
+  MakeBlocks(tree, num_threads, block_of);
+  LinkBlocks(tree, block_of);
+  AssignSlots(block_of);
+  work_.clear();
+}
 
-  // Pivots and the elimination tree (parent = first row below the diagonal).
+EliminationTreeSolve::Tree EliminationTreeSolve::ReadTree() {
+  const Index n = n_;
+  const int* start = factor_.column_start;
+  const int* count = factor_.column_count;
+  Tree tree;
+  // Pivots and the elimination tree.
   inverse_pivot_.resize(n);
-  std::vector<Index> parent(n, -1);
-  std::vector<double> subtree_work(n);
-  double total_work = 0.0;
+  tree.parent.assign(n, -1);
+  tree.subtree_work.resize(n);
   for (Index j = 0; j < n; ++j) {
     HARAP_CHECK(count[j] >= 1, "column {} of the factor is empty", j);
-    const double pivot = factor.value[start[j]];
-    HARAP_CHECK(factor.row[start[j]] == j && pivot > 0.0 && std::isfinite(pivot),
+    const double pivot = factor_.value[start[j]];
+    HARAP_CHECK(factor_.row[start[j]] == j && pivot > 0.0 && std::isfinite(pivot),
                 "column {} of the factor does not start with a positive pivot", j);
     inverse_pivot_[j] = 1.0 / pivot;
     Index first_row = n;
     for (int e = start[j] + 1; e < start[j] + count[j]; ++e) {
-      const int i = factor.row[e];
+      const int i = factor_.row[e];
       HARAP_CHECK(i > j && i < n, "entry ({}, {}) of the factor is not below the diagonal", i, j);
       first_row = std::min(first_row, i);
     }
-    parent[j] = first_row < n ? first_row : -1;
-    subtree_work[j] = count[j];  // one pass each way over the column
-    total_work += count[j];
+    tree.parent[j] = first_row < n ? first_row : -1;
+    tree.subtree_work[j] = count[j];  // one pass each way over the column
+    tree.total_work += count[j];
   }
-  permutation_.assign(n, 0);
-  for (Index k = 0; k < n; ++k) permutation_[k] = factor.permutation ? factor.permutation[k] : k;
-
-  std::vector<Index> first_descendant(n), subtree_size(n, 1), num_children(n, 0);
-  for (Index j = 0; j < n; ++j) first_descendant[j] = j;
+  tree.first_descendant.resize(n);
+  tree.num_children.assign(n, 0);
+  std::vector<Index> subtree_size(n, 1);
+  for (Index j = 0; j < n; ++j) tree.first_descendant[j] = j;
   // Children have smaller indices than their parents, so one ascending sweep accumulates.
   for (Index j = 0; j < n; ++j) {
-    if (parent[j] < 0) continue;
-    subtree_work[parent[j]] += subtree_work[j];
-    subtree_size[parent[j]] += subtree_size[j];
-    ++num_children[parent[j]];
-    first_descendant[parent[j]] = std::min(first_descendant[parent[j]], first_descendant[j]);
+    const Index p = tree.parent[j];
+    if (p < 0) continue;
+    tree.subtree_work[p] += tree.subtree_work[j];
+    subtree_size[p] += subtree_size[j];
+    ++tree.num_children[p];
+    tree.first_descendant[p] = std::min(tree.first_descendant[p], tree.first_descendant[j]);
   }
-  // A post-ordered tree numbers every subtree contiguously; without that, one sequential block.
-  bool postordered = true;
-  for (Index j = 0; j < n && postordered; ++j) {
-    postordered = j - first_descendant[j] + 1 == subtree_size[j];
+  for (Index j = 0; j < n && tree.postordered; ++j) {
+    tree.postordered = j - tree.first_descendant[j] + 1 == subtree_size[j];
   }
+  return tree;
+}
 
+void EliminationTreeSolve::MakeBlocks(const Tree& tree, int num_threads,
+                                      std::vector<int>& block_of) {
+  const Index n = n_;
   // Cut from the roots down, always the heaviest subtree, moving its root above the cut.
   std::vector<Index> child_head(n, -1), next_sibling(n, -1), roots;
   for (Index j = n - 1; j >= 0; --j) {
-    if (parent[j] < 0) {
+    if (tree.parent[j] < 0) {
       roots.push_back(j);
     } else {
-      next_sibling[j] = child_head[parent[j]];
-      child_head[parent[j]] = j;
+      next_sibling[j] = child_head[tree.parent[j]];
+      child_head[tree.parent[j]] = j;
     }
   }
   std::vector<unsigned char> above_cut(n, 0);
   std::vector<Index> leaf_roots;
-  if (postordered) {
+  if (tree.postordered) {
     using Entry = std::pair<double, Index>;  // (subtree work, root)
     std::priority_queue<Entry> heaviest;
-    for (Index root : roots) heaviest.emplace(subtree_work[root], root);
-    const double task_limit = std::max(
-        kMinTaskWork, total_work / std::max(kMinTasks, kTasksPerThread * std::max(1, num_threads)));
+    for (Index root : roots) heaviest.emplace(tree.subtree_work[root], root);
+    const double task_limit =
+        std::max(kMinTaskWork,
+                 tree.total_work / std::max(kMinTasks, kTasksPerThread * std::max(1, num_threads)));
     while (!heaviest.empty() && heaviest.top().first > task_limit) {
       const Index root = heaviest.top().second;
       heaviest.pop();
       above_cut[root] = 1;
       for (Index child = child_head[root]; child >= 0; child = next_sibling[child]) {
-        heaviest.emplace(subtree_work[child], child);
+        heaviest.emplace(tree.subtree_work[child], child);
       }
     }
     for (; !heaviest.empty(); heaviest.pop()) leaf_roots.push_back(heaviest.top().second);
@@ -138,39 +166,38 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
 
   // Blocks: leaf subtrees, and the chains above the cut; all contiguous column ranges.
   blocks_.clear();
-  std::vector<int> block_of(n, -1);
   const auto add_block = [&](Index begin, Index end) {
     for (Index j = begin; j < end; ++j) block_of[j] = static_cast<int>(blocks_.size());
     blocks_.push_back({begin, end});
   };
-  if (!postordered) {
+  if (!tree.postordered) {
     if (n > 0) add_block(0, n);
-  } else {
-    std::sort(leaf_roots.begin(), leaf_roots.end());
-    for (Index root : leaf_roots) add_block(first_descendant[root], root + 1);
-    for (Index j = 0; j < n; ++j) {
-      if (!above_cut[j]) continue;
-      // j continues the chain of its only child j − 1 (post-order puts it right after).
-      if (j > 0 && above_cut[j - 1] && parent[j - 1] == j && num_children[j] == 1) {
-        blocks_[block_of[j - 1]].end = j + 1;
-        block_of[j] = block_of[j - 1];
-      } else {
-        add_block(j, j + 1);
-      }
+    return;
+  }
+  std::sort(leaf_roots.begin(), leaf_roots.end());
+  for (Index root : leaf_roots) add_block(tree.first_descendant[root], root + 1);
+  for (Index j = 0; j < n; ++j) {
+    if (!above_cut[j]) continue;
+    // j continues the chain of its only child j − 1 (post-order puts it right after).
+    if (j > 0 && above_cut[j - 1] && tree.parent[j - 1] == j && tree.num_children[j] == 1) {
+      blocks_[block_of[j - 1]].end = j + 1;
+      block_of[j] = block_of[j - 1];
+    } else {
+      add_block(j, j + 1);
     }
   }
-  // The block tree.
+}
+
+void EliminationTreeSolve::LinkBlocks(const Tree& tree, const std::vector<int>& block_of) {
   const int num_blocks = static_cast<int>(blocks_.size());
-  std::vector<int> block_parent(num_blocks, -1);
   std::vector<std::vector<int>> children(num_blocks);
   root_blocks_.clear();
   for (int b = 0; b < num_blocks; ++b) {
-    const Index p = parent[blocks_[b].end - 1];
-    block_parent[b] = p < 0 ? -1 : block_of[p];
-    if (block_parent[b] < 0) {
+    const Index p = tree.parent[blocks_[b].end - 1];
+    if (p < 0) {
       root_blocks_.push_back(b);
     } else {
-      children[block_parent[b]].push_back(b);
+      children[block_of[p]].push_back(b);
     }
   }
   block_children_.clear();
@@ -187,16 +214,22 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
   std::vector<double> path(num_blocks, 0.0);
   double critical = 0.0;
   for (int b : by_end) {
-    for (Index j = blocks_[b].begin; j < blocks_[b].end; ++j) path[b] += count[j];
+    for (Index j = blocks_[b].begin; j < blocks_[b].end; ++j) path[b] += factor_.column_count[j];
     double heaviest_child = 0.0;
     for (int c : children[b]) heaviest_child = std::max(heaviest_child, path[c]);
     path[b] += heaviest_child;
     critical = std::max(critical, path[b]);
   }
-  critical_path_fraction_ = total_work > 0.0 ? critical / total_work : 0.0;
+  critical_path_fraction_ = tree.total_work > 0.0 ? critical / tree.total_work : 0.0;
+}
 
+void EliminationTreeSolve::AssignSlots(const std::vector<int>& block_of) {
+  const Index n = n_;
+  const int* start = factor_.column_start;
+  const int* count = factor_.column_count;
+  const int num_blocks = static_cast<int>(blocks_.size());
   // Slots: a block's entries in rows above it get slots of the block's own.
-  row_.assign(factor.row, factor.row + (n > 0 ? start[n] : 0));
+  row_.assign(factor_.row, factor_.row + (n > 0 ? start[n] : 0));
   slot_row_.clear();
   std::vector<int> slot_of_row(n, -1);
   std::vector<Index> touched;
@@ -234,7 +267,6 @@ void EliminationTreeSolve::Setup(const LdltFactorView& factor, int num_threads) 
     gather_slot_.insert(gather_slot_.end(), list.begin(), list.end());
     blocks_[b].gather_end = static_cast<int>(gather_slot_.size());
   }
-  work_.clear();
 }
 
 void EliminationTreeSolve::RefreshPivots() {

@@ -84,6 +84,15 @@ class EliminationTreeSolve {
     int gather_begin = 0, gather_end = 0;      ///< into gather_slot_: slots aimed at its rows
   };
 
+  struct Tree;  // elimination_tree_solve.cpp
+
+  // Setup()'s steps: the tree of factor_ (and the pivots); the cut into blocks (block_of: each
+  // column's block); the block tree and its critical path; the slots and their gather order.
+  Tree ReadTree();
+  void MakeBlocks(const Tree& tree, int num_threads, std::vector<int>& block_of);
+  void LinkBlocks(const Tree& tree, const std::vector<int>& block_of);
+  void AssignSlots(const std::vector<int>& block_of);
+
   template <int kColumns>
   void SolveInPlace(int columns, const Context& context);
 

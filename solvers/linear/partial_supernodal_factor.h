@@ -37,8 +37,8 @@ struct SupernodalFactorView {
 /// values of all other supernodes; the rest of the factor is left as it is.
 ///
 /// What it saves: on a mesh the paths to the root hold the large separator supernodes, so a
-/// local edit still recomputes a large share of the work: Mark() returns it (measured on
-/// armadillo-bend's finest level, AMD: 40–45% of the flops for balls of 17 to 1,729 vertices,
+/// local edit still recomputes a large share of the work: Mark() returns it (the share measured
+/// for small and large edits: docs/solvers.md, "Refactoring after handle edits", and
 /// docs/session.md).
 class PartialSupernodalFactor {
  public:
