@@ -254,7 +254,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   // Creating a level's linear solver reads config tables: two threads take turns.
   const SerializedFactory factory(factory_);
   std::vector<HandleEditResult::Level> done(levels_.size());
-  const Constraints finest{handles_, targets_};
+  const Constraints finest{handles_, targets_, {}};
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
     LevelSolver& solver = *level.solver;
@@ -325,7 +325,7 @@ void DeformationSession::UpdateCoarseTargets(int l) {
   if (l == 0 || !level.targets_stale) return;
   // The constrained vertices are the same (same handles): only the mean targets move.
   level.solver->MoveTargets(
-      MapConstraints(hierarchy_, l, Constraints{handles_, targets_}).mean_target);
+      MapConstraints(hierarchy_, l, Constraints{handles_, targets_, {}}).mean_target);
   level.targets_stale = false;
 }
 
