@@ -379,7 +379,7 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
 
 LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
                                                    bool preview, bool out_of_time,
-                                                   bool start_with_global_step, bool gather) const {
+                                                   bool start_with_global_step) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
   // before every global step with update_constraints).
   LevelSolveRequest request =
@@ -394,11 +394,6 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
   // The paper's approximation: one global solve from the up-sampled rotations, no local step
   // (the energy is left to CurrentEnergy()).
   request.global_step_only = l == 0 && preview && start_with_global_step;
-  if (gather) {
-    // The coarsest rotations, gathered by the finest level's global step itself.
-    request.rotation_source = &preview_map_;
-    request.gathered_rotations = &preview_coarse_rotations_;
-  }
   return request;
 }
 
@@ -508,7 +503,16 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
     had_solution_ = s_.levels_[l]->has_solution;
   }
   LevelSolveRequest Request(int l, bool from_rotations, bool finishing) override {
-    return s_.LevelRequest(l, options_, preview_, finishing, from_rotations, gather_step_);
+    return s_.LevelRequest(l, options_, preview_, finishing, from_rotations);
+  }
+  LevelSolveResult Solve(LevelSolver& solver, LevelState& state, const LevelSolveRequest& request,
+                         const Context& context) override {
+    // The coarsest rotations, gathered by the finest level's global step itself.
+    if (gather_step_) {
+      return solver.GlobalStepFromGathered(state, s_.preview_map_, s_.preview_coarse_rotations_,
+                                           context);
+    }
+    return solver.Solve(state, request, context);
   }
   LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
     Level& level = *s_.levels_[l];
