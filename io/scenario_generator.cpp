@@ -23,10 +23,10 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <numeric>
 #include <queue>
 #include <utility>
 
+#include "framework/disjoint_sets.h"
 #include "framework/error.h"
 #include "io/mesh_io.h"
 #include "io/subdivision.h"
@@ -34,26 +34,6 @@
 namespace harap {
 
 namespace {
-
-// Union-find over the vertices joined by elements.
-class Components {
- public:
-  explicit Components(Index n) : parent_(static_cast<size_t>(n)) {
-    std::iota(parent_.begin(), parent_.end(), Index{0});
-  }
-  Index Find(Index v) {
-    while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
-    return v;
-  }
-  void Join(Index a, Index b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<Index> parent_;
-};
 
 // Edges of the elements as a neighbour list per vertex (each edge once per endpoint).
 std::vector<std::vector<Index>> Neighbours(const Mesh& mesh) {
@@ -159,10 +139,10 @@ std::string GenerateScenarioToml(const Mesh& mesh, const std::string& mesh_refer
         fmt::format("handle fraction {} is outside (0, 0.5)", options.handle_fraction));
   }
   // The largest component: the vertices of elements joined by shared vertices.
-  Components components(mesh.num_vertices());
+  DisjointSets<Index> components(mesh.num_vertices());
   for (Index e = 0; e < mesh.num_elements(); ++e) {
     for (int a = 1; a < mesh.simplex_size(); ++a) {
-      components.Join(mesh.elements(e, 0), mesh.elements(e, a));
+      components.Unite(mesh.elements(e, 0), mesh.elements(e, a));
     }
   }
   const std::vector<bool> referenced = ReferencedVertices(mesh);

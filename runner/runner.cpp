@@ -40,6 +40,7 @@
 #include "framework/error.h"
 #include "io/scenario.h"
 #include "runner/process.h"
+#include "runner/run_folder.h"
 
 namespace harap {
 
@@ -47,6 +48,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using runner_internal::ReadPlan;
+using runner_internal::ReadText;
 using Clock = std::chrono::steady_clock;
 
 // "PID@HOST": what makes a temporary file's name unique among the processes of every host
@@ -76,13 +79,6 @@ void WriteFileAtomically(const fs::path& file, const std::string& content,
     if (!stream) throw InputError(fmt::format("{}: cannot write", temporary.string()));
   }
   fs::rename(temporary, file);
-}
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -557,16 +553,7 @@ void WriteExperimentPlan(const Experiment& experiment, const fs::path& dir) {
 }
 
 MergeSummary MergeResults(const fs::path& dir) {
-  const fs::path plan_file = dir / "experiment.json";
-  if (!fs::exists(plan_file)) {
-    throw InputError(fmt::format("{}: no experiment.json (not a harap run folder)", dir.string()));
-  }
-  json plan;
-  try {
-    plan = json::parse(ReadText(plan_file));
-  } catch (const json::exception& error) {
-    throw InputError(fmt::format("{}: {}", plan_file.string(), error.what()));
-  }
+  const json plan = ReadPlan(dir);
   const std::vector<std::string> grid_keys = plan["grid_keys"];
   MergeSummary summary;
   std::map<int, std::string> rows;

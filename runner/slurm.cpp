@@ -31,6 +31,7 @@
 
 #include "framework/error.h"
 #include "runner/process.h"
+#include "runner/run_folder.h"
 #include "runner/runner.h"
 
 namespace harap {
@@ -39,13 +40,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
-}
+using runner_internal::ReadPlan;
+using runner_internal::ReadText;
 
 bool OnPath(const std::string& program) {
   const char* path = std::getenv("PATH");
@@ -100,16 +96,7 @@ struct PlannedRun {
 };
 
 std::vector<PlannedRun> ReadRuns(const fs::path& dir) {
-  const fs::path plan_file = dir / "experiment.json";
-  if (!fs::exists(plan_file)) {
-    throw InputError(fmt::format("{}: no experiment.json (not a harap run folder)", dir.string()));
-  }
-  json plan;
-  try {
-    plan = json::parse(ReadText(plan_file));
-  } catch (const json::exception& error) {
-    throw InputError(fmt::format("{}: {}", plan_file.string(), error.what()));
-  }
+  const json plan = ReadPlan(dir);
   std::vector<PlannedRun> runs;
   for (const json& entry : plan["runs"]) {
     PlannedRun run;
@@ -191,7 +178,13 @@ std::string ShellScriptHeader(const std::string& job_name, const fs::path& log,
 std::string Submit(const std::vector<std::string>& command) {
   const auto [ok, output] = Capture(command);
   if (!ok) {
-    throw InputError(fmt::format("{} refused the job: {}", fmt::join(command, " "), output));
+    // Without slurm.conf (or SLURM_CONF) the client looks for the controller in DNS and fails.
+    const bool no_cluster = output.find("DNS SRV") != std::string::npos;
+    throw InputError(fmt::format("{} refused the job: {}{}", fmt::join(command, " "), output,
+                                 no_cluster ? fmt::format("\n(no Slurm cluster is configured on "
+                                                          "this machine: {})",
+                                                          kInstallAdvice)
+                                            : ""));
   }
   // --parsable prints "ID" or "ID;CLUSTER".
   const std::string id = output.substr(0, output.find(';'));

@@ -496,14 +496,7 @@ TEST_CASE("harap run --slurm on a real Slurm: a cancelled task resumed, merged =
   INFO(slurm.output);
   REQUIRE(slurm.up);
   // Six runs of about a second each (a fixed number of iterations) in three shards.
-  workspace.Write("slow.toml", R"(
-mesh = { builtin = "cylinder", vertices = 2000 }
-[[handle]]
-select.slab = { axis = "z", from = 0.0, to = 0.05 }
-[[handle]]
-select.slab = { axis = "z", from = 0.95, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
-)");
+  workspace.Write("slow.toml", testing::kSlowCylinderScenario);
   const std::string config = workspace.Write("sweep.toml", R"(
 [scenarios]
 files = ["slow.toml"]
