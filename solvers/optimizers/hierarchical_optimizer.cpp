@@ -87,18 +87,8 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   return request;
 }
 
-Registry<Optimizer>::Factory HierarchicalOptimizer::Factory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers) {
-  return [level_solvers](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::FromConfig(node, *level_solvers));
-  };
-}
-
-Registry<Optimizer>::Factory HierarchicalOptimizer::OneLevelFactory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner) {
-  return [level_solvers, inner](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::OneLevel(node, *level_solvers, inner));
-  };
+void HierarchicalOptimizer::CheckComponents(const ComponentFactory& factory) const {
+  options_.level_solver->CheckCompatible(*factory.MakeEnergy(), /*handle_edits=*/false);
 }
 
 std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& report) {
@@ -203,19 +193,18 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   // start beside everything else (armadillo-bend, 1e-6: 0.9 s instead of 1.2 s,
   // docs/results.md). It needs no hierarchy, so it starts before the hierarchy is built
   // (dragon-lift: 0.17 s earlier); the coarse levels join once the hierarchy is there. Each level
-  // is set up by whichever thread reaches it first; creating components reads config tables, so
-  // the two threads take turns at the factory. Level 0's setup is kept aside until the caller
-  // waits for it: the per-level vectors are sized only after the hierarchy is built.
-  const SerializedFactory serialized_factory(factory);
+  // is set up by whichever thread reaches it first (both use the factory, which is thread-safe).
+  // Level 0's setup is kept aside until the caller waits for it: the per-level vectors are sized
+  // only after the hierarchy is built.
   const bool overlap = options_.overlap_setup && context.arena->max_concurrency() >= 2;
   Cascade::Setup finest_setup;
   LevelSetupPipeline setup(
       {0},
       [&](int l) {
         if (l == 0) {
-          finest_setup = cascade.MakeSetup(0, serialized_factory);
+          finest_setup = cascade.MakeSetup(0, factory);
         } else {
-          cascade.Store(l, cascade.MakeSetup(l, serialized_factory));
+          cascade.Store(l, cascade.MakeSetup(l, factory));
         }
       },
       overlap, context, /*more_levels=*/true);
