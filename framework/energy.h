@@ -87,7 +87,8 @@ class Energy {
   ///
   /// These methods give R'(u)[v], the derivative of the fitted rotations in direction v.
   /// Energies without it (or with an option that fits rotations to a part of the energy, so that
-  /// R(u) does not minimize E) return false.
+  /// R(u) does not minimize E) return false. Answered from the options alone, before Precompute():
+  /// a run checks it when its configuration is resolved.
   virtual bool has_rotation_derivative() const { return false; }
 
   /// With `rotations` fitted to `u` (the local step's result), stores in `curvature` (resized to

@@ -127,6 +127,12 @@ class LevelSolver {
   /// A solver of the same kind with the same options and no state (one per level).
   virtual std::unique_ptr<LevelSolver> CreateAnother() const = 0;
 
+  /// Throws ConfigError naming the option when this solver, with its options, cannot work with
+  /// `energy` (the run's, made by its factory and not yet precomputed) or, with `handle_edits`,
+  /// in an interactive session. A run calls it once, when its configuration is resolved, so such
+  /// combinations fail before any work. Default: every energy, sessions included.
+  virtual void CheckCompatible(const Energy& /*energy*/, bool /*handle_edits*/) const {}
+
   virtual void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                           const Context& context) = 0;
   /// Constrains `constraints.vertices` and factors the level's system (a new linear solver from

@@ -692,8 +692,8 @@ class ExperimentParser {
     const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
       ValidateRunConfig(config);
-      MakeOptimizer(registries, config);
-      RegistryComponentFactory factory(registries, config);
+      const RegistryComponentFactory factory(registries, config);
+      MakeOptimizer(registries, config)->CheckComponents(factory);
     } catch (const Error& error) {
       throw ConfigError(fmt::format("{}: run '{}' is invalid: {}", source_,
                                     run.label.empty() ? "base config" : run.label, error.what()));
