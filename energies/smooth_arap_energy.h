@@ -59,7 +59,8 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   };
 
   explicit SmoothArapEnergy(const Options& options)
-      : CotangentArapEnergy(kName), options_(options) {}
+      : CotangentArapEnergy(kName, WeightOptions{}, /*negative_weights_break_squares=*/false),
+        options_(options) {}
 
   void SetInputMesh(const Mesh& input, const Context& context) override;
 

@@ -574,7 +574,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
       result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
                                           run.iterations, run.energy, level_clock.Seconds(),
                                           run.converged, solver.num_unknowns(), run.linear_solves,
-                                          run.measures});
+                                          run.measures, run.weights});
       if (l == 0) {
         result.energy = run.energy;
         result.iterations = run.iterations;

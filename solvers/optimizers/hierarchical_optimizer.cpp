@@ -281,7 +281,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
     result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
                                         run.iterations, run.energy, cascade.level_seconds[l],
                                         run.converged, solver.num_unknowns(), run.linear_solves,
-                                        run.measures});
+                                        run.measures, run.weights});
     if (l == 0) {
       result.energy = run.energy;
       result.iterations = run.iterations;
