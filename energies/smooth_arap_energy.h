@@ -59,8 +59,7 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
   };
 
   explicit SmoothArapEnergy(const Options& options)
-      : CotangentArapEnergy(kName, WeightOptions{}, /*negative_weights_break_squares=*/false),
-        options_(options) {}
+      : CotangentArapEnergy(kName), options_(options) {}
 
   void SetInputMesh(const Mesh& input, const Context& context) override;
 

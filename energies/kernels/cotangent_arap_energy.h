@@ -44,6 +44,9 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
         name_(name),
         weight_options_(weight_options),
         negative_weights_break_squares_(negative_weights_break_squares) {}
+  /// Raw cotangent weights on every level, for energies that keep a sum of squares with them.
+  explicit CotangentArapEnergy(std::string_view name)
+      : CotangentArapEnergy(name, WeightOptions{}, /*negative_weights_break_squares=*/false) {}
 
   /// One face's data for AddFace: its vertices' rest positions, the ½cot weight of the edge
   /// opposite each corner, and where its 3×3 vertex pairs live in A's value array (entry
