@@ -99,6 +99,7 @@ struct LevelSolveResult {
   /// "newton_steps", "hessian_products"); copied into LevelResult::measures and the report.
   std::map<std::string, double> measures;
   std::vector<std::string> notes;  ///< remarks for the report ("level 2: ...")
+  EnergyWeights weights;           ///< the level energy's weights (Energy::weights())
 };
 
 /// What Constrain() did to the level's factorization.

@@ -78,6 +78,7 @@ struct LevelResult {
     const auto it = measures.find(name);
     return it == measures.end() ? absent : it->second;
   }
+  EnergyWeights weights;  ///< The level energy's weight scheme and negative weights.
 };
 
 /// What the constraint handling did to keep the global system non-singular.

@@ -259,6 +259,7 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
   result.converged = run.converged;
   result.stopped_by_callback = run.stopped_by_callback;
   result.linear_solves = run.linear_solves;
+  result.weights = energy_->weights();
   if (options.anderson > 0) result.measures["accelerated_iterations"] = run.accelerated_iterations;
   if (options.newton > 0) {
     result.measures["newton_steps"] = run.newton_steps;
