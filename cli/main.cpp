@@ -25,6 +25,7 @@
 #include "cli/progress.h"
 #include "cli/scenario_command.h"
 #include "cli/slurm_command.h"
+#include "cli/view_command.h"
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_io.h"
@@ -383,6 +384,8 @@ int main(int argc, char** argv) {
   auto* run = AddRunCommand(app, run_args);
   ReportArguments report_args;
   auto* report = AddReportCommand(app, report_args);
+  ViewArguments view_args;
+  auto* view = AddViewCommand(app, view_args);
 
   try {
     app.parse(argc, argv);
@@ -401,6 +404,7 @@ int main(int argc, char** argv) {
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
     if (*drag) return RunDragCommand(drag_args);
+    if (*view) return RunViewCommand(view_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());
