@@ -12,6 +12,7 @@
 #include "framework/registry.h"
 #include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/hierarchical_optimizer.h"
+#include "solvers/optimizers/level_cascade.h"
 
 namespace harap {
 
@@ -155,6 +156,7 @@ class DeformationSession {
 
  private:
   struct Level;
+  class Frame;
   void ValidateIndices(const std::vector<Index>& indices, const char* what) const;
   void ValidateTargets(const Positions& targets, size_t count, const char* what) const;
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
@@ -196,11 +198,9 @@ class DeformationSession {
   SessionOptions options_;
   Context context_;
   IterationCallback callback_;
-  MeshHierarchy hierarchy_;  ///< classic: empty (level 0 is mesh_)
-  std::unique_ptr<Upsampler> upsampler_;
+  LevelCascade cascade_;  ///< the hierarchy (classic: the mesh alone), level solvers, the loop
   std::vector<std::unique_ptr<Level>> levels_;  ///< per hierarchy level; null if not solved
   std::vector<int> solved_levels_;              ///< coarsest first
-  RotationSite site_ = RotationSite::kVertex;
   double diagonal_ = 0.0;
   std::vector<Index> handles_;
   Positions targets_;
