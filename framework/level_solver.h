@@ -92,6 +92,7 @@ struct LevelSolveResult {
   /// "newton_steps", "hessian_products"); copied into LevelResult::measures and the report.
   std::map<std::string, double> measures;
   std::vector<std::string> notes;  ///< remarks for the report ("level 2: ...")
+  EnergyWeights weights;           ///< the level energy's weights (Energy::weights())
 };
 
 /// What Constrain() did to the level's factorization.
@@ -119,6 +120,12 @@ class LevelSolver {
 
   /// A solver of the same kind with the same options and no state (one per level).
   virtual std::unique_ptr<LevelSolver> CreateAnother() const = 0;
+
+  /// Throws ConfigError naming the option when this solver, with its options, cannot work with
+  /// `energy` (the run's, made by its factory and not yet precomputed) or, with `handle_edits`,
+  /// in an interactive session. A run calls it once, when its configuration is resolved, so such
+  /// combinations fail before any work. Default: every energy, sessions included.
+  virtual void CheckCompatible(const Energy& /*energy*/, bool /*handle_edits*/) const {}
 
   virtual void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                           const Context& context) = 0;

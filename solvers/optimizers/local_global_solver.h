@@ -66,8 +66,6 @@ class LocalGlobalSolver final : public LevelSolver {
   static constexpr std::string_view kName = "local_global";
 
   explicit LocalGlobalSolver(const LocalGlobalOptions& options = {}) : options_(options) {}
-  /// Reads LocalGlobalOptions (ReadLocalGlobalOptions); the caller rejects unknown keys.
-  static std::unique_ptr<LevelSolver> Create(const ConfigNode& node);
 
   /// The P phase only (Precompute()); Constrain() must follow before Run(). `input_mesh`: see
   /// LevelSetup.
@@ -81,6 +79,9 @@ class LocalGlobalSolver final : public LevelSolver {
 
   // LevelSolver.
   std::unique_ptr<LevelSolver> CreateAnother() const override;
+  /// Newton steps need an energy with a rotation derivative and the eliminated system (no
+  /// session).
+  void CheckCompatible(const Energy& energy, bool handle_edits) const override;
   void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                   const Context& context) override;
   /// Eliminated: a new solver from `factory` factors the reduced system. Masked
