@@ -5,10 +5,6 @@
 #include <map>
 #include <mutex>
 
-#ifdef HARAP_HAVE_CHOLMOD
-#include "solvers/linear/adaptive_solver.h"
-#endif
-
 namespace harap {
 
 namespace {
@@ -57,109 +53,105 @@ struct RegistryComponentFactory::Choices {
   std::map<int, bool> direct;
 };
 
+namespace {
+
+// Resolves `key`'s table of `root`. Without such a table, a default the registry lacks (a
+// registry built for a test or an embedding) is an error only if a run asks for the piece.
+template <class Interface>
+Recipe<Interface> ResolvePiece(const Registry<Interface>& registry, const ConfigNode& root,
+                               std::string_view key, const std::string& default_name) {
+  const ConfigNode table = root.Child(key);
+  if (root.Has(key) || registry.Contains(default_name)) {
+    return registry.Resolve(table, default_name);
+  }
+  const std::string problem = fmt::format("unknown {} '{}'; valid names: {}", registry.kind(),
+                                          default_name, fmt::join(registry.Names(), ", "));
+  return Recipe<Interface>(
+      default_name, [problem]() -> std::unique_ptr<Interface> { throw ConfigError(problem); });
+}
+
+}  // namespace
+
 RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
                                                    const ConfigNode& root,
                                                    DefaultComponents defaults)
-    : registries_(registries),
-      root_(root),
-      defaults_(std::move(defaults)),
-      choices_(std::make_shared<Choices>()) {
-  MakeEnergy();
-  // Both solver tables are validated now (the small-system one only if present).
-  const ConfigNode solver = root_.Child("solver");
+    : defaults_(std::move(defaults)), choices_(std::make_shared<Choices>()) {
+  energy_ = registries.energies.Resolve(root.Child("energy"), defaults_.energy);
+  const ConfigNode solver = root.Child("solver");
+  // The sub-tables first: reading them marks them as known to [solver]'s unknown-key check.
+  const ConfigNode small = solver.Child(kSmallSystems);
   if (solver.Has(kSmallSystems)) {
-    const ConfigNode small = solver.Child(kSmallSystems);
-    if (SmallSystemsLimit(small) == 0) {
+    small_systems_limit_ = SmallSystemsLimit(small);
+    if (small_systems_limit_ == 0) {
       throw ConfigError(fmt::format("{}: [solver.small_systems] needs max_unknowns > 0",
                                     small.Where("max_unknowns")));
     }
-    registries_.linear_solvers.Create(small, defaults_.solver);
+    small_systems_ = ResolveSolverTable(registries, small);
   }
   for (int level : LevelTables(solver)) {
-    registries_.linear_solvers.Create(solver.Child(LevelTableKey(level)), defaults_.solver);
+    level_tables_[level] = ResolveSolverTable(registries, solver.Child(LevelTableKey(level)));
   }
-  registries_.linear_solvers.Create(SolverTableFor(-1, std::numeric_limits<Index>::max()),
-                                    defaults_.solver);
-  if (root_.Has("hierarchy")) MakeHierarchy();
-  if (root_.Has("upsampler")) MakeUpsampler();
-  made_hierarchy_ = made_upsampler_ = false;
+  solver_ = ResolveSolverTable(registries, solver);
+  hierarchy_ = ResolvePiece(registries.hierarchies, root, "hierarchy", defaults_.hierarchy);
+  upsampler_ = ResolvePiece(registries.upsamplers, root, "upsampler", defaults_.upsampler);
 }
 
-std::unique_ptr<Energy> RegistryComponentFactory::MakeEnergy() const {
-  return registries_.energies.Create(root_.Child("energy"), defaults_.energy);
+RegistryComponentFactory::SolverTable RegistryComponentFactory::ResolveSolverTable(
+    const Registries& registries, const ConfigNode& table) const {
+  SolverTable resolved;
+  resolved.recipe = registries.linear_solvers.Resolve(table, defaults_.solver);
+  // Creating a solver is cheap (no factorization); it knows whether it is direct.
+  resolved.direct = resolved.recipe.Make()->is_direct();
+  return resolved;
 }
 
-ConfigNode RegistryComponentFactory::SolverTableFor(int level, Index num_unknowns) const {
-  const ConfigNode solver = root_.Child("solver");
-  // Reading the sub-tables also marks them as known to [solver]'s unknown-key check.
-  for (int table_level : LevelTables(solver)) {
-    const ConfigNode table = solver.Child(LevelTableKey(table_level));
-    if (table_level == level) return table;
-  }
-  const ConfigNode small = solver.Child(kSmallSystems);
-  if (solver.Has(kSmallSystems) && num_unknowns <= SmallSystemsLimit(small)) return small;
-  return solver;
+std::unique_ptr<Energy> RegistryComponentFactory::MakeEnergy() const { return energy_.Make(); }
+
+const RegistryComponentFactory::SolverTable& RegistryComponentFactory::SolverTableFor(
+    int level, Index num_unknowns) const {
+  const auto own = level_tables_.find(level);
+  if (own != level_tables_.end()) return own->second;
+  if (small_systems_limit_ > 0 && num_unknowns <= small_systems_limit_) return small_systems_;
+  return solver_;
 }
 
 std::unique_ptr<LinearSolver> RegistryComponentFactory::MakeLinearSolver(int level,
                                                                          Index num_unknowns) const {
-  std::unique_ptr<LinearSolver> solver =
-      registries_.linear_solvers.Create(SolverTableFor(level, num_unknowns), defaults_.solver);
-#ifdef HARAP_HAVE_CHOLMOD
-  if (auto* adaptive = dynamic_cast<AdaptiveSolver*>(solver.get())) {
-    adaptive->set_on_choice([choices = choices_, level](std::string_view used, bool direct) {
-      const std::lock_guard lock(choices->mutex);
-      choices->used[level] = std::string(used);
-      choices->direct[level] = direct;
-    });
-  }
-#endif
+  std::unique_ptr<LinearSolver> solver = SolverTableFor(level, num_unknowns).recipe.Make();
+  solver->set_on_choice([choices = choices_, level](std::string_view used, bool direct) {
+    const std::lock_guard lock(choices->mutex);
+    choices->used[level] = std::string(used);
+    choices->direct[level] = direct;
+  });
   return solver;
 }
 
 std::unique_ptr<Hierarchy> RegistryComponentFactory::MakeHierarchy() const {
   made_hierarchy_ = true;
-  return registries_.hierarchies.Create(root_.Child("hierarchy"), defaults_.hierarchy);
+  return hierarchy_.Make();
 }
 
 std::unique_ptr<Upsampler> RegistryComponentFactory::MakeUpsampler() const {
   made_upsampler_ = true;
-  return registries_.upsamplers.Create(root_.Child("upsampler"), defaults_.upsampler);
+  return upsampler_.Make();
 }
 
-std::string RegistryComponentFactory::energy_name() const {
-  return TypeOf(root_.Child("energy"), defaults_.energy, "energy");
+const std::string& RegistryComponentFactory::solver_name_for(Index num_unknowns) const {
+  return SolverTableFor(-1, num_unknowns).recipe.name();
 }
-std::string RegistryComponentFactory::solver_name() const {
-  return TypeOf(root_.Child("solver"), defaults_.solver, "solver");
-}
-std::string RegistryComponentFactory::solver_name_for(Index num_unknowns) const {
-  return TypeOf(SolverTableFor(-1, num_unknowns), defaults_.solver, "solver");
-}
-std::string RegistryComponentFactory::solver_name_for(int level, Index num_unknowns) const {
-  return TypeOf(SolverTableFor(level, num_unknowns), defaults_.solver, "solver");
+const std::string& RegistryComponentFactory::solver_name_for(int level, Index num_unknowns) const {
+  return SolverTableFor(level, num_unknowns).recipe.name();
 }
 std::string RegistryComponentFactory::solver_used(int level, Index num_unknowns) const {
-  const std::string name = solver_name_for(level, num_unknowns);
+  const std::string& name = solver_name_for(level, num_unknowns);
   const std::lock_guard lock(choices_->mutex);
   const auto it = choices_->used.find(level);
   return it == choices_->used.end() ? name : fmt::format("{}:{}", name, it->second);
 }
 bool RegistryComponentFactory::solver_direct(int level, Index num_unknowns) const {
-  {
-    const std::lock_guard lock(choices_->mutex);
-    const auto it = choices_->direct.find(level);
-    if (it != choices_->direct.end()) return it->second;
-  }
-  // Creating a solver is cheap (no factorization); it knows whether it is direct.
-  return registries_.linear_solvers.Create(SolverTableFor(level, num_unknowns), defaults_.solver)
-      ->is_direct();
-}
-std::string RegistryComponentFactory::hierarchy_name() const {
-  return TypeOf(root_.Child("hierarchy"), defaults_.hierarchy, "hierarchy");
-}
-std::string RegistryComponentFactory::upsampler_name() const {
-  return TypeOf(root_.Child("upsampler"), defaults_.upsampler, "upsampler");
+  const std::lock_guard lock(choices_->mutex);
+  const auto it = choices_->direct.find(level);
+  return it != choices_->direct.end() ? it->second : SolverTableFor(level, num_unknowns).direct;
 }
 
 std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const ConfigNode& root,
@@ -198,7 +190,9 @@ ResolvedRunConfig::ResolvedRunConfig(const Registries& registries, const ConfigN
     : defaults(ValidatedDefaults(registries, config, mesh)),
       optimizer_name(TypeOf(config.Child("optimizer"), defaults.optimizer, "optimizer")),
       optimizer(registries.optimizers.Create(optimizer_name, config.Child("optimizer"))),
-      factory(registries, config, defaults) {}
+      factory(registries, config, defaults) {
+  optimizer->CheckComponents(factory);
+}
 
 void ValidateRunConfig(const ConfigNode& root) {
   for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler", "mesh"}) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -20,7 +21,7 @@ struct DefaultComponents {
   std::string upsampler = "rotations";
 };
 
-/// The ComponentFactory of a run: creates each piece by the `type` of its table in the run's
+/// The ComponentFactory of a run: each piece is made by the `type` of its table in the run's
 /// config (`[energy]`, `[solver]`, `[hierarchy]`, `[upsampler]`) with that table's options.
 ///
 /// Per-level solver choice: an optional `[solver.small_systems]` table names a second solver
@@ -39,10 +40,14 @@ struct DefaultComponents {
 /// level l itself, before the size rule. With type = "adaptive" (AdaptiveSolver) the choice
 /// between factoring and iterating is made per level from CHOLMOD's analysis; the factory
 /// records what each level used (solver_used()).
+///
+/// Every table is parsed and validated once, by the constructor, into recipes (Recipe): option
+/// errors surface there, before any work, and the Make* calls read no configuration, so they may
+/// run on several threads at once (the ComponentFactory contract). A `[hierarchy]` or
+/// `[upsampler]` table the config does not have resolves to its default; if the registries lack
+/// that default, the error waits until a run asks for the piece.
 class RegistryComponentFactory final : public ComponentFactory {
  public:
-  /// Validates the energy and solver tables (and hierarchy/upsampler tables if present) at once,
-  /// so configuration errors surface before any work.
   RegistryComponentFactory(const Registries& registries, const ConfigNode& root,
                            DefaultComponents defaults = {});
 
@@ -53,33 +58,45 @@ class RegistryComponentFactory final : public ComponentFactory {
 
   /// The registry name each table resolves to; solver_name() is `[solver]`'s, whatever the
   /// small-system rule says.
-  std::string energy_name() const;
-  std::string solver_name() const;
+  const std::string& energy_name() const { return energy_.name(); }
+  const std::string& solver_name() const { return solver_.recipe.name(); }
   /// The solver a reduced system of `num_unknowns` unknowns gets (on a level without a
   /// `[solver.level_<l>]` table).
-  std::string solver_name_for(Index num_unknowns) const;
+  const std::string& solver_name_for(Index num_unknowns) const;
   /// The solver level `level` gets, and what it used: for "adaptive", "adaptive:cholmod" or
   /// "adaptive:cg" once the level factored (else the table's type).
-  std::string solver_name_for(int level, Index num_unknowns) const;
+  const std::string& solver_name_for(int level, Index num_unknowns) const;
   std::string solver_used(int level, Index num_unknowns) const;
   /// Whether level `level`'s solver was direct: what an adaptive solver chose, else the kind of
   /// the table's solver.
   bool solver_direct(int level, Index num_unknowns) const;
-  std::string hierarchy_name() const;
-  std::string upsampler_name() const;
-  /// Whether an optimizer asked for a hierarchy / an up-sampler (the checks of the constructor
-  /// do not count), so a summary names exactly the pieces a run used.
+  const std::string& hierarchy_name() const { return hierarchy_.name(); }
+  const std::string& upsampler_name() const { return upsampler_.name(); }
+  /// Whether an optimizer asked for a hierarchy / an up-sampler, so a summary names exactly the
+  /// pieces a run used.
   bool made_hierarchy() const { return made_hierarchy_; }
   bool made_upsampler() const { return made_upsampler_; }
 
  private:
+  /// One resolved solver table and whether its solver is direct (before any factorization).
+  struct SolverTable {
+    Recipe<LinearSolver> recipe;
+    bool direct = false;
+  };
+  SolverTable ResolveSolverTable(const Registries& registries, const ConfigNode& table) const;
   /// The table whose solver a system of `num_unknowns` unknowns gets on level `level` (-1: any
   /// level without its own table).
-  ConfigNode SolverTableFor(int level, Index num_unknowns) const;
+  const SolverTable& SolverTableFor(int level, Index num_unknowns) const;
 
-  const Registries& registries_;
-  ConfigNode root_;
   DefaultComponents defaults_;
+  Recipe<Energy> energy_;
+  SolverTable solver_;  ///< `[solver]`
+  /// `[solver.small_systems]`: its size limit (0: no such table) and solver.
+  Index small_systems_limit_ = 0;
+  SolverTable small_systems_;
+  std::map<int, SolverTable> level_tables_;  ///< `[solver.level_<l>]` by l
+  Recipe<Hierarchy> hierarchy_;
+  Recipe<Upsampler> upsampler_;
   /// What the adaptive solvers chose, by level (shared with the solvers' callbacks, which may
   /// outlive the factory).
   struct Choices;
@@ -95,7 +112,8 @@ DefaultComponents DefaultComponentsFor(const Registries& registries, const Mesh&
 
 /// A run config resolved once for one mesh: validated (ValidateRunConfig), the defaults that
 /// suit the mesh, the optimizer created and named, and the factory of the other pieces (whose
-/// constructor validates their tables). Every error in the config surfaces here, before work.
+/// constructor resolves their tables), and the pieces checked against each other
+/// (Optimizer::CheckComponents). Every error in the config surfaces here, before work.
 struct ResolvedRunConfig {
   ResolvedRunConfig(const Registries& registries, const ConfigNode& config, const Mesh& mesh);
 

@@ -172,6 +172,13 @@ nlohmann::json LevelsJson(const DeformOutcome& outcome) {
         {"last_relative_residual",
          solves.residuals_computed > 0 ? json(solves.last_relative_residual) : json(nullptr)},
         {"solve_seconds", solves.seconds}};
+    // The energy's weights on the level: scheme, and how many edges have a negative weight.
+    if (!level.weights.scheme.empty()) {
+      entry["weights"] = level.weights.scheme;
+      entry["weighted_edges"] = level.weights.edges;
+      entry["negative_weights"] = level.weights.negative_edges;
+      entry["energy_can_be_negative"] = level.weights.can_be_negative;
+    }
     // The level solver's own measures (inverted_elements, newton_steps, ...); counts as integers.
     for (const auto& [name, value] : level.measures) {
       const bool count = value == std::floor(value) && std::abs(value) < 9.0e15;

@@ -100,6 +100,31 @@ std::vector<std::string> RunWarnings(const RunWarningInput& input) {
         vertices, std::max<Index>(4, vertices / 8),
         triangles ? ", or refine the mesh (scenario `refine = 1` or 2)" : ""));
   }
+  // Negative weights: the energy is no longer a sum of squares (docs/energies.md, "Weight
+  // schemes"), so its value and minimizer mean something else than the user expects.
+  std::string negative_levels;
+  for (const LevelResult& level : result.levels) {
+    if (!level.weights.can_be_negative) continue;
+    negative_levels +=
+        fmt::format("{}level {} ({} of {} edges, weights {}, E = {:.6g})",
+                    negative_levels.empty() ? "" : "; ", level.level, level.weights.negative_edges,
+                    level.weights.edges, level.weights.scheme, level.energy);
+  }
+  if (!negative_levels.empty()) {
+    const std::string final_energy =
+        result.energy < 0.0 ? fmt::format(
+                                  " The final energy E = {:.9e} is below zero: it is not the ARAP "
+                                  "energy of a converged deformation, whatever `converged` says.",
+                                  result.energy)
+                            : std::string();
+    warnings.push_back(fmt::format(
+        "negative edge weights on {}: obtuse angles give those edges a negative cotangent "
+        "weight, so the energy is not a sum of squares there, is not bounded below and can be "
+        "negative, and the minimization exploits the negative terms (a coarse level that runs "
+        "away spoils the finer ones).{} Use weights that are never negative: --set "
+        "energy.weights=intrinsic_delaunay (and energy.coarse_weights=intrinsic_delaunay)",
+        negative_levels, final_energy));
+  }
   return warnings;
 }
 

@@ -30,7 +30,9 @@ struct RunWarningInput {
 ///     when the input has duplicate vertices);
 ///   - handles that share vertices (the first handle's target wins);
 ///   - handles that leave no vertex free (nothing was solved, "0 iterations" mean nothing);
-///   - a hierarchical run whose hierarchy has a single level (it ran as classic ARAP).
+///   - a hierarchical run whose hierarchy has a single level (it ran as classic ARAP);
+///   - levels whose energy has negative edge weights that take it out of the sum-of-squares
+///     form (EnergyWeights::can_be_negative), and a final energy below zero.
 std::vector<std::string> RunWarnings(const RunWarningInput& input);
 
 }  // namespace harap

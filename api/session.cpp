@@ -24,6 +24,7 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   SessionOptions options = SessionOptions::FromConfig(optimizer_node, registries_.level_solvers);
   if (frame_start) options.frame_start = *frame_start;
   factory_ = std::make_unique<RegistryComponentFactory>(registries_, config_, defaults);
+  options.optimizer.level_solver->CheckCompatible(*factory_->MakeEnergy(), /*handle_edits=*/true);
   threads_ = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
 
   const Context context = Context::WithThreads(threads);

@@ -93,9 +93,14 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
         solves.residuals_computed > 0
             ? fmt::format("max residual {:.2e}", solves.max_relative_residual)
             : std::string("residual not computed");
-    fmt::print("level {:<5} {:>8} unknowns | {:<12} {:4} solves {} {:7.3f} s | {}\n", level.level,
+    const EnergyWeights& weights = level.weights;
+    const std::string weight_text =
+        weights.scheme.empty()
+            ? std::string()
+            : fmt::format(" | weights {} ({} negative)", weights.scheme, weights.negative_edges);
+    fmt::print("level {:<5} {:>8} unknowns | {:<12} {:4} solves {} {:7.3f} s | {}{}\n", level.level,
                level.unknowns, k < outcome.level_solvers.size() ? outcome.level_solvers[k] : "",
-               solves.solves, iterations, solves.seconds, residual);
+               solves.solves, iterations, solves.seconds, residual, weight_text);
     if (const auto it = outcome.spectra.find(level.level); it != outcome.spectra.end()) {
       const SystemSpectrum& spectrum = it->second;
       fmt::print(

@@ -14,22 +14,11 @@
 
 #include "cli/output_checks.h"
 #include "framework/error.h"
+#include "io/handle_colors.h"
 
 namespace harap {
 
 namespace {
-
-struct NamedColor {
-  unsigned char rgb[3];
-  const char* name;
-};
-
-// Distinct colours, the first two as in the report's pictures (blue: first handle, red: second).
-constexpr NamedColor kColors[] = {
-    {{31, 119, 180}, "blue"},   {{214, 39, 40}, "red"},      {{44, 160, 44}, "green"},
-    {{255, 127, 14}, "orange"}, {{148, 103, 189}, "purple"}, {{23, 190, 207}, "cyan"},
-    {{227, 119, 194}, "pink"},  {{188, 189, 34}, "olive"},   {{140, 86, 75}, "brown"}};
-constexpr unsigned char kFreeGrey = 190;
 
 // `scale` > 0: components below 1e-12 * scale are rounding noise of a computed point (a
 // centred mesh's centroid at 1e-17) and print as 0.
@@ -41,16 +30,6 @@ std::string Vec(Eigen::RowVector3d v, double scale = 0.0) {
 }
 
 }  // namespace
-
-void HandleColor(size_t h, unsigned char rgb[3], std::string* name) {
-  const NamedColor& color = kColors[h % std::size(kColors)];
-  std::memcpy(rgb, color.rgb, 3);
-  if (name) {
-    *name = h < std::size(kColors) ? color.name
-                                   : fmt::format("{} (colours repeat after {} handles)", color.name,
-                                                 std::size(kColors));
-  }
-}
 
 std::string DescribeHandles(const Scenario& scenario) {
   const Mesh& mesh = scenario.mesh;
@@ -116,8 +95,9 @@ std::string DescribeHandles(const Scenario& scenario) {
 
 void WriteHandlesPly(const std::filesystem::path& file, const Scenario& scenario) {
   const Mesh& mesh = scenario.mesh;
-  std::vector<std::array<unsigned char, 3>> colors(static_cast<size_t>(mesh.num_vertices()),
-                                                   {kFreeGrey, kFreeGrey, kFreeGrey});
+  std::vector<std::array<unsigned char, 3>> colors(
+      static_cast<size_t>(mesh.num_vertices()),
+      {kFreeVertexGrey, kFreeVertexGrey, kFreeVertexGrey});
   std::vector<bool> colored(static_cast<size_t>(mesh.num_vertices()), false);
   for (size_t h = 0; h < scenario.handles.size(); ++h) {
     unsigned char rgb[3];

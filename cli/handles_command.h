@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "io/handle_colors.h"
 #include "io/scenario.h"
 
 namespace harap {
@@ -21,8 +22,5 @@ void WriteHandlesPly(const std::filesystem::path& file, const Scenario& scenario
 /// The command: loads the scenario, prints DescribeHandles, writes WriteHandlesPly to `out`
 /// (if not empty; must end in .ply). Returns the exit code.
 int HandlesCommand(const std::string& scenario_file, const std::string& out);
-
-/// The colour of handle `h` (0-based) in WriteHandlesPly, and its name ("blue", ...).
-void HandleColor(size_t h, unsigned char rgb[3], std::string* name = nullptr);
 
 }  // namespace harap

@@ -23,6 +23,9 @@
 #include "cli/output_checks.h"
 #include "cli/piece_flags.h"
 #include "cli/progress.h"
+#include "cli/scenario_command.h"
+#include "cli/slurm_command.h"
+#include "cli/view_command.h"
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_io.h"
@@ -161,6 +164,7 @@ struct RunArguments {
   std::vector<std::string> filter;
   bool retry_failed = false;
   bool quiet = false;
+  SlurmArguments slurm;
 };
 
 // `harap run CONFIG.toml`: the experiment sweep (docs/experiments.md).
@@ -169,6 +173,7 @@ int RunSweep(const RunArguments& args) {
                    "an experiment config: [scenarios] files = [...] and [[variant]] tables "
                    "(docs/experiments.md)");
   RefuseScenarioAsConfig(args.config);
+  if (args.slurm.slurm) return SubmitSweepToSlurm(args.config, args.out, args.slurm);
   const Experiment experiment = LoadExperiment(args.config);
   RunnerOptions options;
   options.out_dir = args.out.empty() ? std::filesystem::path("results") / experiment.name
@@ -333,6 +338,7 @@ CLI::App* AddRunCommand(CLI::App& app, RunArguments& run_args) {
                   "only scenarios whose name matches this shell pattern (repeatable)");
   run->add_flag("--retry-failed", run_args.retry_failed, "run failed runs again");
   run->add_flag("--quiet,-q", run_args.quiet, "no progress output");
+  AddSlurmOptions(*run, run_args.slurm);
   return run;
 }
 
@@ -370,10 +376,16 @@ int main(int argc, char** argv) {
   auto* hierarchy = AddHierarchyCommand(app, args, hierarchy_out);
   std::string handles_scenario, handles_out;
   auto* handles = AddHandlesCommand(app, handles_scenario, handles_out);
+  ScenarioCommandArguments scenario_args;
+  auto* scenario = AddScenarioCommand(app, scenario_args);
+  std::string status_dir;
+  auto* status = AddStatusCommand(app, status_dir);
   RunArguments run_args;
   auto* run = AddRunCommand(app, run_args);
   ReportArguments report_args;
   auto* report = AddReportCommand(app, report_args);
+  ViewArguments view_args;
+  auto* view = AddViewCommand(app, view_args);
 
   try {
     app.parse(argc, argv);
@@ -387,9 +399,12 @@ int main(int argc, char** argv) {
       RefuseMeshAsScenario(handles_scenario);
       return HandlesCommand(handles_scenario, handles_out);
     }
+    if (*scenario) return ScenarioCommand(scenario_args);
+    if (*status) return StatusCommand(status_dir);
     if (*run) return RunSweep(run_args);
     if (*report) return Report(report_args);
     if (*drag) return RunDragCommand(drag_args);
+    if (*view) return RunViewCommand(view_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

@@ -14,7 +14,8 @@ void RegisterEnergies(Registry<Energy>& registry) {
       "faces [Chao et al. 2010] (the paper's Eq. 1)");
   registry.Add<SpokesEnergy>(
       "spokes ARAP, one rotation per vertex over its 1-ring edges, weights "
-      "½(cot α + cot β) [Sorkine & Alexa 2007]");
+      "½(cot α + cot β) [Sorkine & Alexa 2007], of the intrinsic Delaunay triangulation by "
+      "default (never negative)");
   registry.Add<ElementArapEnergy>(
       "per-element ARAP, one rotation per tetrahedron or per triangle of a planar mesh, "
       "cotangent weights (the paper's Eqs. 8, 9); reports energy_wrapd = E/2");

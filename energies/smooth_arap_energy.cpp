@@ -144,6 +144,7 @@ SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode
 }
 
 void SmoothArapEnergy::SetInputMesh(const Mesh& input, const Context& context) {
+  CotangentArapEnergy::SetInputMesh(input, context);
   RequireTriangleMesh(input, kName);
   input_mean_area_ = context.Run(
       [&] { return MeanVertexArea(MixedVoronoiAreas(input.vertices, input.elements)); });

@@ -62,6 +62,11 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
       : CotangentArapEnergy(kName), options_(options) {}
 
   void SetInputMesh(const Mesh& input, const Context& context) override;
+  /// From the options (known before Precompute): a fit of the E_SR part alone does not minimize
+  /// the energy.
+  bool has_rotation_derivative() const override {
+    return options_.rotation_fit == RotationFit::kWholeEnergy;
+  }
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

@@ -21,8 +21,14 @@ class SpokesAndRimsEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes_and_rims";
 
-  /// Options: none (CoupledQuadraticEnergy's NoOptions).
-  explicit SpokesAndRimsEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
+  struct Options {
+    /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
+    WeightOptions weights{WeightScheme::kCotangent, WeightScheme::kAsInputLevel, 0.01};
+    static Options FromConfig(const ConfigNode& node);
+  };
+
+  explicit SpokesAndRimsEnergy(const Options& options)
+      : CotangentArapEnergy(kName, options.weights, /*negative_weights_break_squares=*/false) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

@@ -13,7 +13,7 @@ namespace harap {
 ///
 ///     E(U, R) = Σ_i Σ_{j ∈ N(i)} w_ij ‖(u_i − u_j) − R_i (v̄_i − v̄_j)‖²,
 ///     w_ij = ½ (cot α_ij + cot β_ij)  (sum over the faces sharing edge ij; one term on a
-///     boundary).
+///     boundary), the angles of the intrinsic Delaunay triangulation by default (`weights`).
 ///
 /// One rotation per vertex over the edges of its 1-ring (the spokes). A = 2·L with L the
 /// cotangent Laplacian (each edge is seen by the rotations of both ends). Triangle meshes only.
@@ -21,8 +21,18 @@ class SpokesEnergy final : public CotangentArapEnergy {
  public:
   static constexpr std::string_view kName = "spokes";
 
-  /// Options: none (CoupledQuadraticEnergy's NoOptions).
-  explicit SpokesEnergy(const Options& /*options*/) : CotangentArapEnergy(kName) {}
+  struct Options {
+    /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
+    /// Default intrinsic_delaunay on every level: the raw cotangent weights of obtuse angles
+    /// make the spokes energy unbounded below (docs/energies.md, "Weight schemes"), and the
+    /// coarse levels of a hierarchy keep non-negative weights even when `weights = "cotan"`
+    /// reproduces the published definition on the input mesh.
+    WeightOptions weights{WeightScheme::kIntrinsicDelaunay, WeightScheme::kIntrinsicDelaunay, 0.01};
+    static Options FromConfig(const ConfigNode& node);
+  };
+
+  explicit SpokesEnergy(const Options& options)
+      : CotangentArapEnergy(kName, options.weights, /*negative_weights_break_squares=*/true) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

@@ -17,6 +17,19 @@ namespace harap {
 /// one per element (per-triangle / per-tetrahedron ARAP, Section 6 of the paper).
 enum class RotationSite { kVertex, kElement };
 
+/// The weights an energy was precomputed with, for the report (per level) and its warnings.
+struct EnergyWeights {
+  /// The weight scheme's name ("cotan", "intrinsic_delaunay", ...); empty for energies whose
+  /// weights are fixed by their definition.
+  std::string scheme;
+  Index edges = 0;           ///< vertex pairs coupled by a weight
+  Index negative_edges = 0;  ///< of them, those whose (summed) weight is negative
+  /// Negative weights take the energy out of the sum-of-squares form: it is then not bounded
+  /// below, can be negative, and minimizing it exploits the negative terms. (Energies that are
+  /// sums of per-element squares stay ≥ 0 whatever the sign of single weights.)
+  bool can_be_negative = false;
+};
+
 /// An ARAP-type energy E(U, R) on one mesh level, minimized by local/global iterations.
 ///
 /// Contract (every implementation): for fixed rotations R the energy is quadratic in the
@@ -53,6 +66,9 @@ class Energy {
   /// global quantities they need, not a reference; the default ignores it.
   virtual void SetInputMesh(const Mesh& /*input*/, const Context& /*context*/) {}
 
+  /// The weights of the last Precompute() (default: none to report).
+  virtual EnergyWeights weights() const { return {}; }
+
   virtual RotationSite rotation_site() const = 0;
   /// Number of rotations: #V for per-vertex energies, #elements for per-element energies.
   virtual Index num_rotations() const = 0;
@@ -87,7 +103,8 @@ class Energy {
   ///
   /// These methods give R'(u)[v], the derivative of the fitted rotations in direction v.
   /// Energies without it (or with an option that fits rotations to a part of the energy, so that
-  /// R(u) does not minimize E) return false.
+  /// R(u) does not minimize E) return false. Answered from the options alone, before Precompute():
+  /// a run checks it when its configuration is resolved.
   virtual bool has_rotation_derivative() const { return false; }
 
   /// With `rotations` fitted to `u` (the local step's result), stores in `curvature` (resized to

@@ -4,6 +4,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "framework/error.h"
+
 namespace harap {
 
 void GatherRotations(const std::vector<Index>& source, const Rotations& gathered, Rotations& out,
@@ -18,6 +20,13 @@ void GatherRotations(const std::vector<Index>& source, const Rotations& gathered
                         }
                       });
   });
+}
+
+LevelSolveResult LevelSolver::GlobalStepFromGathered(LevelState& /*state*/,
+                                                     const std::vector<Index>& /*source*/,
+                                                     const Rotations& /*coarse*/,
+                                                     const Context& /*context*/) {
+  throw InputError("this level solver takes no gathered rotations (accepts_gathered_rotations)");
 }
 
 }  // namespace harap

@@ -86,18 +86,11 @@ struct LevelSolveRequest {
   /// approximation of the finest level, Fig. 15); the result's energy is NaN. Solvers without a
   /// rotation-driven global step throw InputError.
   bool global_step_only = false;
-  /// With global_step_only, for solvers that accepts_gathered_rotations(): the rotations are
-  /// not in state.rotations but gathered, site (vertex) v of the level mesh taking
-  /// (*gathered_rotations)[(*rotation_source)[v]] (kNoVertex: the identity): a preview straight
-  /// from the coarsest level, whose finest rotations need never be written out. state.rotations
-  /// is left as it is. Both null: the rotations are state.rotations.
-  const std::vector<Index>* rotation_source = nullptr;
-  const Rotations* gathered_rotations = nullptr;
   double diagonal = 1.0;  ///< bounding-box diagonal of the input mesh: scales convergence tests
 };
 
-/// Writes out the rotations a gathered request stands for (LevelSolveRequest::rotation_source):
-/// out[v] = gathered[source[v]], the identity where source[v] is kNoVertex; in parallel.
+/// Writes out gathered rotations (LevelSolver::GlobalStepFromGathered): out[v] =
+/// gathered[source[v]], the identity where source[v] is kNoVertex; in parallel.
 void GatherRotations(const std::vector<Index>& source, const Rotations& gathered, Rotations& out,
                      const Context& context);
 
@@ -112,6 +105,7 @@ struct LevelSolveResult {
   /// "newton_steps", "hessian_products"); copied into LevelResult::measures and the report.
   std::map<std::string, double> measures;
   std::vector<std::string> notes;  ///< remarks for the report ("level 2: ...")
+  EnergyWeights weights;           ///< the level energy's weights (Energy::weights())
 };
 
 /// What Constrain() did to the level's factorization.
@@ -139,6 +133,12 @@ class LevelSolver {
 
   /// A solver of the same kind with the same options and no state (one per level).
   virtual std::unique_ptr<LevelSolver> CreateAnother() const = 0;
+
+  /// Throws ConfigError naming the option when this solver, with its options, cannot work with
+  /// `energy` (the run's, made by its factory and not yet precomputed) or, with `handle_edits`,
+  /// in an interactive session. A run calls it once, when its configuration is resolved, so such
+  /// combinations fail before any work. Default: every energy, sessions included.
+  virtual void CheckCompatible(const Energy& /*energy*/, bool /*handle_edits*/) const {}
 
   virtual void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                           const Context& context) = 0;
@@ -171,9 +171,16 @@ class LevelSolver {
 
   /// Where the level's rotations live (the upsampler's input); valid after Precompute().
   virtual RotationSite rotation_site() const = 0;
-  /// Whether Solve() with global_step_only takes its rotations gathered
-  /// (LevelSolveRequest::rotation_source); valid after Constrain().
+  /// Whether GlobalStepFromGathered() works here; valid after Constrain().
   virtual bool accepts_gathered_rotations() const { return false; }
+  /// Solve() with global_step_only, the rotations gathered instead of in state.rotations: site
+  /// (vertex) v of the level mesh takes coarse[source[v]] (kNoVertex: the identity), a preview
+  /// straight from the coarsest level whose finest rotations need never be written out.
+  /// state.rotations is left as it is; the energy is NaN. Only where
+  /// accepts_gathered_rotations(); otherwise throws InputError.
+  virtual LevelSolveResult GlobalStepFromGathered(LevelState& state,
+                                                  const std::vector<Index>& source,
+                                                  const Rotations& coarse, const Context& context);
   virtual Index num_unknowns() const = 0;  ///< rows of the factored system
   virtual ConstraintReport constraint_report() const = 0;
   double precompute_seconds() const { return precompute_seconds_; }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -131,9 +132,20 @@ class LinearSolver {
   /// The solves since the last Factorize() or Refactor() (outcomes, iterations, time).
   const SolveStatistics& statistics() const { return statistics_; }
 
+  /// Told what a solver that chooses its method per matrix (`adaptive`) chose: the method's name
+  /// ("cholmod", "cg", "cg>cholmod") and whether its solves were direct, after each choice.
+  /// Solvers with a single method never call it. The composition root records each level's
+  /// choice for the run's report this way.
+  using ChoiceObserver = std::function<void(std::string_view method, bool direct)>;
+  void set_on_choice(ChoiceObserver on_choice) { on_choice_ = std::move(on_choice); }
+
  protected:
   /// `name`: the registry name, for the messages of the checks written here.
   explicit LinearSolver(std::string_view name) : name_(name) {}
+  /// For solvers that choose their method: tells the observer set with set_on_choice(), if any.
+  void ReportChoice(std::string_view method, bool direct) const {
+    if (on_choice_) on_choice_(method, direct);
+  }
 
  private:
   /// Factors `a` (square; Factorize() checked that and resets the state). Throws on failure.
@@ -151,6 +163,7 @@ class LinearSolver {
   Index rows_ = 0;
   double factorize_seconds_ = 0.0;
   SolveStatistics statistics_;
+  ChoiceObserver on_choice_;
 };
 
 }  // namespace harap

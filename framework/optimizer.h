@@ -72,9 +72,14 @@ struct DeformationProblem {
   std::optional<Positions> initial;
 };
 
-/// Creates the pluggable pieces an optimizer uses, configured by the caller (the experiments
-/// layer implements it with the registries and the config tables). Optimizers that work on
-/// several levels ask for one energy and one solver per level.
+/// Creates the pluggable pieces an optimizer uses, configured by the caller (the composition root
+/// implements it with the registries, from config tables it resolved before the run). Optimizers
+/// that work on several levels ask for one energy and one solver per level.
+///
+/// Thread safety: the Make* calls may run concurrently (a hierarchical run sets finer levels up
+/// on another thread while it solves coarser ones), so implementations hold only immutable,
+/// resolved options and read no configuration. Option errors belong to the factory's
+/// construction, not to these calls.
 class ComponentFactory {
  public:
   virtual ~ComponentFactory() = default;
@@ -115,6 +120,7 @@ struct LevelResult {
     const auto it = measures.find(name);
     return it == measures.end() ? absent : it->second;
   }
+  EnergyWeights weights;  ///< The level energy's weight scheme and negative weights.
 };
 
 /// What the constraint handling did to keep the global system non-singular.
@@ -149,6 +155,11 @@ class Optimizer {
   virtual OptimizeResult Optimize(const DeformationProblem& problem,
                                   const ComponentFactory& factory,
                                   const Context& context) const = 0;
+
+  /// Throws ConfigError naming the option when the pieces `factory` makes cannot work with this
+  /// optimizer's options (e.g. Newton steps need an energy with a rotation derivative). Called
+  /// once, when a run's configuration is resolved, before any work. Default: no requirements.
+  virtual void CheckComponents(const ComponentFactory& /*factory*/) const {}
 
  protected:
   Optimizer() = default;

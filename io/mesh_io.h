@@ -13,7 +13,7 @@
 
 namespace harap {
 
-/// Reads a mesh file. Triangle meshes: OBJ, PLY (ASCII and binary), OFF (ASCII), STL.
+/// Reads a mesh file. Triangle meshes: OBJ, PLY (ASCII and binary), OFF (ASCII and binary), STL.
 /// Tetrahedral meshes: TetGen `.node`/`.ele` (either file names the pair) and MEDIT `.mesh`.
 /// Each optionally xz-compressed (`.obj.xz`, decompressed in memory). OBJ, PLY and OFF are parsed
 /// by harap itself, keeping double coordinates exact (OpenMesh's readers round them to float);

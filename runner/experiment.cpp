@@ -198,6 +198,112 @@ class ExperimentParser {
     }
   }
 
+  // The mesh files `meshes` names: each entry a glob pattern, a list file (.txt: one mesh per
+  // line, relative to the list's folder, # comments) or a mesh file.
+  std::vector<fs::path> MeshesNamed(const toml::table& scenarios) const {
+    const toml::node* node = scenarios.get("meshes");
+    std::vector<std::string> entries;
+    if (node && node->is_string()) {
+      entries.push_back(toml_.String(scenarios, "meshes", ""));
+    } else {
+      entries = toml_.Strings(scenarios, "meshes");
+    }
+    std::vector<fs::path> meshes;
+    for (const std::string& entry : entries) {
+      const fs::path resolved = Resolve(entry);
+      if (entry.find_first_of("*?[") != std::string::npos) {
+        glob_t result{};
+        const int status = glob(resolved.c_str(), 0, nullptr, &result);
+        const size_t before = meshes.size();
+        for (size_t i = 0; status == 0 && i < result.gl_pathc; ++i) {
+          meshes.emplace_back(result.gl_pathv[i]);
+        }
+        globfree(&result);
+        if (meshes.size() == before) {
+          Fail(*node, fmt::format("the pattern {} matches no file", resolved.string()));
+        }
+      } else if (resolved.extension() == ".txt") {
+        std::ifstream list(resolved);
+        if (!list) Fail(*node, fmt::format("mesh list {} cannot be read", resolved.string()));
+        std::string line;
+        while (std::getline(list, line)) {
+          line = line.substr(0, line.find('#'));
+          line.erase(0, line.find_first_not_of(" \t\r"));
+          line.erase(line.find_last_not_of(" \t\r") + 1);
+          if (line.empty()) continue;
+          const fs::path mesh(line);
+          meshes.push_back(
+              (mesh.is_relative() ? resolved.parent_path() / mesh : mesh).lexically_normal());
+        }
+      } else {
+        // A missing or unreadable mesh becomes a failed run with its reason, as in a glob.
+        meshes.push_back(resolved);
+      }
+    }
+    return meshes;
+  }
+
+  // `[scenarios] meshes = ...` × `kinds` × `refine`: one generated scenario each, named
+  // MESH-KIND (+ "-rN" when refined).
+  void ParseGeneratedScenarios(const toml::table& scenarios) {
+    if (!scenarios.contains("meshes")) {
+      for (const char* key : {"kinds", "refine", "handle_fraction"}) {
+        if (const toml::node* node = scenarios.get(key)) {
+          Fail(*node, fmt::format("'{}' applies to generated scenarios: give 'meshes'", key));
+        }
+      }
+      return;
+    }
+    std::vector<std::string> kinds = toml_.Strings(scenarios, "kinds");
+    if (kinds.empty()) kinds = ScenarioKindNames();
+    for (const std::string& kind : kinds) {
+      try {
+        ParseScenarioKind(kind);
+      } catch (const ConfigError& error) {
+        Fail(*scenarios.get("kinds"), error.what());
+      }
+    }
+    std::vector<int> refinements = {0};
+    if (const toml::node* node = scenarios.get("refine")) {
+      const toml::array* array = node->as_array();
+      if (!array) Fail(*node, "'refine' must be an array of integers, e.g. [0, 1]");
+      refinements.clear();
+      for (const toml::node& value : *array) {
+        const auto* integer = value.as_integer();
+        if (!integer || integer->get() < 0 || integer->get() > 3) {
+          Fail(value, "'refine' values must be integers from 0 to 3");
+        }
+        refinements.push_back(static_cast<int>(integer->get()));
+      }
+    }
+    double fraction = 0.05;
+    if (const toml::node* node = scenarios.get("handle_fraction")) {
+      fraction = toml_.Number(*node, "handle_fraction");
+      if (!(fraction > 0.0 && fraction < 0.5)) {
+        Fail(*node, "'handle_fraction' must lie in (0, 0.5)");
+      }
+    }
+    for (const fs::path& mesh : MeshesNamed(scenarios)) {
+      std::string stem = mesh.filename().string();
+      if (stem.ends_with(".xz")) stem.resize(stem.size() - 3);
+      stem = fs::path(stem).stem().string();
+      for (const std::string& kind : kinds) {
+        for (const int refine : refinements) {
+          ExperimentScenario scenario;
+          scenario.name = refine == 0 ? fmt::format("{}-{}", stem, kind)
+                                      : fmt::format("{}-{}-r{}", stem, kind, refine);
+          scenario.mesh = fs::absolute(mesh).lexically_normal();
+          scenario.generated = true;
+          scenario.generator.kind = ParseScenarioKind(kind);
+          scenario.generator.refine = refine;
+          scenario.generator.handle_fraction = fraction;
+          AddScenario(std::move(scenario),
+                      fmt::format("generated:{}:{}:{}:{}", Written(mesh), kind, refine, fraction));
+        }
+      }
+    }
+  }
+
   // Leaves of `table` as (dotted key, node), in the order written in the file (toml++ iterates
   // tables in key order).
   static void Flatten(const toml::table& table, const std::string& prefix,
@@ -250,22 +356,29 @@ class ExperimentParser {
   Experiment Parse(std::string_view text) {
     const toml::table root = toml_.Parse(text);
     toml_.CheckKeys(root,
-                    {"experiment", "scenarios", "run", "grid", "variant", "report", "optimizer",
-                     "energy", "solver", "hierarchy", "upsampler"},
+                    {"experiment", "scenarios", "run", "grid", "variant", "report", "slurm",
+                     "optimizer", "energy", "solver", "hierarchy", "upsampler"},
                     "the top level");
     experiment_.source_text = std::string(text);
     ParseDescription(root);
 
     // [scenarios]
     const toml::table* scenarios = root["scenarios"].as_table();
-    if (!scenarios) Fail("no [scenarios] table (files = [...] or [[scenarios.folder]])");
-    toml_.CheckKeys(*scenarios, {"relative_to", "files", "folder"}, "[scenarios]");
+    if (!scenarios) {
+      Fail("no [scenarios] table (files = [...], meshes = \"...\" or [[scenarios.folder]])");
+    }
+    toml_.CheckKeys(
+        *scenarios,
+        {"relative_to", "files", "folder", "meshes", "kinds", "refine", "handle_fraction"},
+        "[scenarios]");
     paths_base_ = (base_ / toml_.String(*scenarios, "relative_to", ".")).lexically_normal();
     ParseScenarioFiles(*scenarios);
     ParseFolders(*scenarios);
+    ParseGeneratedScenarios(*scenarios);
     if (experiment_.scenarios.empty()) Fail("[scenarios] names no scenario");
 
     if (const toml::table* run = root["run"].as_table()) ParseRunSettings(*run);
+    if (const toml::table* slurm = root["slurm"].as_table()) ParseSlurmSettings(*slurm);
     const std::string base_text = BaseTablesText(root);
     const std::vector<Variant> variants = ParseVariants(root);
     const std::vector<GridAxis> axes = ParseGrid(root);
@@ -311,6 +424,29 @@ class ExperimentParser {
   }
 
   // [run]
+  void ParseSlurmSettings(const toml::table& slurm) {
+    toml_.CheckKeys(
+        slurm, {"tasks", "partition", "time", "cpus_per_task", "mem", "throttle", "sbatch_flags"},
+        "[slurm]");
+    ExperimentSlurmSettings& settings = experiment_.slurm;
+    auto count = [&](std::string_view key, int minimum, int fallback) {
+      const toml::node* node = slurm.get(key);
+      if (!node) return fallback;
+      if (!node->is_integer() || node->as_integer()->get() < minimum ||
+          node->as_integer()->get() > 1000000) {
+        Fail(*node, fmt::format("'{}' must be an integer >= {}", key, minimum));
+      }
+      return static_cast<int>(node->as_integer()->get());
+    };
+    settings.tasks = count("tasks", 0, settings.tasks);
+    settings.cpus_per_task = count("cpus_per_task", 1, settings.cpus_per_task);
+    settings.throttle = count("throttle", 0, settings.throttle);
+    settings.partition = toml_.String(slurm, "partition", "");
+    settings.time = toml_.String(slurm, "time", "");
+    settings.mem = toml_.String(slurm, "mem", "");
+    settings.sbatch_flags = toml_.Strings(slurm, "sbatch_flags");
+  }
+
   void ParseRunSettings(const toml::table& run) {
     toml_.CheckKeys(run, {"threads", "save_mesh", "timeout"}, "[run]");
     if (const toml::node* threads = run.get("threads")) {
@@ -556,8 +692,8 @@ class ExperimentParser {
     const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
       ValidateRunConfig(config);
-      MakeOptimizer(registries, config);
-      RegistryComponentFactory factory(registries, config);
+      const RegistryComponentFactory factory(registries, config);
+      MakeOptimizer(registries, config)->CheckComponents(factory);
     } catch (const Error& error) {
       throw ConfigError(fmt::format("{}: run '{}' is invalid: {}", source_,
                                     run.label.empty() ? "base config" : run.label, error.what()));

@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "io/scenario_generator.h"
+
 namespace harap {
 
 /// Handles generated for every mesh of a `[[scenarios.folder]]` (docs/experiments.md): the lowest
@@ -23,12 +25,15 @@ struct HandleTemplate {
   double translate[3] = {0.0, 0.0, 0.0};  ///< shift of the moved part, in box diagonals
 };
 
-/// One scenario of an experiment: an existing scenario file, or a mesh with a handle template.
+/// One scenario of an experiment: an existing scenario file, a mesh with a handle template, or
+/// a mesh with a generated scenario (`[scenarios] meshes`, scenario_generator.h).
 struct ExperimentScenario {
-  std::string name;            ///< unique within the experiment (file stem, made unique)
-  std::filesystem::path file;  ///< the scenario file (absolute); empty for template meshes
-  std::filesystem::path mesh;  ///< template scenarios: the mesh (absolute)
-  HandleTemplate handles;      ///< template scenarios: how to place the handles
+  std::string name;                    ///< unique within the experiment (file stem, made unique)
+  std::filesystem::path file;          ///< the scenario file (absolute); empty for template meshes
+  std::filesystem::path mesh;          ///< template and generated scenarios: the mesh (absolute)
+  HandleTemplate handles;              ///< template scenarios: how to place the handles
+  bool generated = false;              ///< the scenario is made by GenerateScenarioForFile
+  ScenarioGeneratorOptions generator;  ///< generated scenarios: kind, refinement, handle size
   bool templated() const { return file.empty(); }
 };
 
@@ -52,6 +57,17 @@ struct ExperimentRunSettings {
   double timeout = 0.0;    ///< seconds before a run is killed and recorded as failed (0: none)
 };
 
+/// The `[slurm]` table: defaults of `harap run --slurm` (its command-line options win).
+struct ExperimentSlurmSettings {
+  int tasks = 0;          ///< array tasks (= shards); 0: one per run, at most 100
+  std::string partition;  ///< "" : the cluster's default partition
+  std::string time;       ///< time limit per task (sbatch --time, e.g. "2:00:00"); "": default
+  int cpus_per_task = 1;  ///< CPUs per task; the runs of a task use them as threads
+  std::string mem;        ///< memory per task (sbatch --mem, e.g. "8G"); "": default
+  int throttle = 0;       ///< at most this many tasks at once (--array=...%K); 0: no limit
+  std::vector<std::string> sbatch_flags;  ///< further sbatch options, e.g. ["--qos=long"]
+};
+
 /// An experiment config (experiments/configs/*.toml, format in docs/experiments.md), expanded.
 struct Experiment {
   std::filesystem::path file;
@@ -63,6 +79,7 @@ struct Experiment {
   std::vector<ExperimentScenario> scenarios;
   std::vector<ExperimentRun> runs;
   ExperimentRunSettings settings;
+  ExperimentSlurmSettings slurm;
   /// Things that are allowed but probably not meant, for `harap run` to print before it starts
   /// (e.g. runs that compare different energies).
   std::vector<std::string> warnings;

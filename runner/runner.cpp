@@ -11,6 +11,9 @@
 //     --retry-failed, regardless of its status).
 //   - Each shard writes its own CSV; `harap report` merges all reports into results.csv. Shards
 //     may share DIR (one file system) or be copied together afterwards.
+//   - Temporary names carry PID@HOST: shards on several hosts of a cluster share one folder on a
+//     network file system, where a PID alone names different processes on different hosts. A
+//     shard removes only its own host's temporaries whose process is gone.
 #include "runner/runner.h"
 
 #include <fmt/format.h>
@@ -21,6 +24,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
@@ -36,6 +40,7 @@
 #include "framework/error.h"
 #include "io/scenario.h"
 #include "runner/process.h"
+#include "runner/run_folder.h"
 
 namespace harap {
 
@@ -43,24 +48,37 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using runner_internal::ReadPlan;
+using runner_internal::ReadText;
 using Clock = std::chrono::steady_clock;
 
-void WriteFileAtomically(const fs::path& file, const std::string& content) {
+// "PID@HOST": what makes a temporary file's name unique among the processes of every host
+// sharing a folder. Host names are reduced to letters, digits and '-' (no dots: the stale-file
+// scan splits names at dots).
+std::string HostName(const std::string& injected) {
+  std::string host = injected;
+  if (host.empty()) {
+    char buffer[256] = {};
+    host = gethostname(buffer, sizeof buffer - 1) == 0 ? buffer : "localhost";
+  }
+  for (char& c : host) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-') c = '_';
+  }
+  return host;
+}
+
+std::string TemporaryTag(const std::string& host) { return fmt::format("{}@{}", getpid(), host); }
+
+void WriteFileAtomically(const fs::path& file, const std::string& content,
+                         const std::string& tag = TemporaryTag(HostName(""))) {
   const fs::path temporary =
-      file.parent_path() / fmt::format(".{}.{}.tmp", file.filename().string(), getpid());
+      file.parent_path() / fmt::format(".{}.{}.tmp", file.filename().string(), tag);
   {
     std::ofstream stream(temporary, std::ios::binary);
     stream << content;
     if (!stream) throw InputError(fmt::format("{}: cannot write", temporary.string()));
   }
   fs::rename(temporary, file);
-}
-
-std::string ReadText(const fs::path& file) {
-  std::ifstream stream(file, std::ios::binary);
-  std::stringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -238,6 +256,16 @@ void MeshExtent(const fs::path& mesh, double extent[3]) {
   }
 }
 
+// experiment.json (the plan) and config.toml (the config as written) in `dir`.
+void WriteExperimentPlan(const Experiment& experiment, const fs::path& dir,
+                         const std::string& tag) {
+  WriteFileAtomically(dir / "experiment.json", PlanJson(experiment).dump(1) + "\n", tag);
+  WriteFileAtomically(
+      dir / "config.toml",
+      fmt::format("# {} as run by harap run\n{}", experiment.file.string(), experiment.source_text),
+      tag);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 class Sweep {
@@ -250,14 +278,13 @@ class Sweep {
           1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
     }
     csv_file_ = dir_ / fmt::format("results{}.csv", options.shard.Suffix());
+    host_ = HostName(options.host);
+    tag_ = TemporaryTag(host_);
   }
 
   SweepSummary Run() {
     for (const char* sub : {"runs", "scenarios", "meshes"}) fs::create_directories(dir_ / sub);
-    WriteFileAtomically(dir_ / "experiment.json", PlanJson(experiment_).dump(1) + "\n");
-    WriteFileAtomically(dir_ / "config.toml",
-                        fmt::format("# {} as run by harap run\n{}", experiment_.file.string(),
-                                    experiment_.source_text));
+    WriteExperimentPlan(experiment_, dir_, tag_);
 
     RemoveStaleTemporaries();
     if (options_.observer) {
@@ -328,27 +355,31 @@ class Sweep {
   }
 
   // Temporary files of sweeps that were killed (SIGKILL, power loss) before they could rename
-  // or remove them: ".NAME.PID.*" in runs/, meshes/ and the folder itself, whose PID is no
-  // longer a running process. Files of live processes (another shard sharing the folder) stay.
+  // or remove them: ".NAME.PID@HOST.*" in runs/, meshes/, scenarios/ and the folder itself,
+  // written on this host by a process that is no longer running. Files of live processes and of
+  // other hosts (whose PIDs cannot be checked from here) stay.
   void RemoveStaleTemporaries() const {
     for (const fs::path& folder : {dir_, dir_ / "runs", dir_ / "meshes", dir_ / "scenarios"}) {
       std::error_code error;
       for (const auto& entry : fs::directory_iterator(folder, error)) {
         const std::string name = entry.path().filename().string();
         if (name.size() < 2 || name[0] != '.') continue;
-        // The PID is the last all-digit part between dots.
+        // The tag is the last part between dots of the form DIGITS@HOST.
         long pid = 0;
+        std::string host;
         size_t start = 1;
         while (start < name.size()) {
           const size_t end = std::min(name.find('.', start), name.size());
           const std::string part = name.substr(start, end - start);
-          if (!part.empty() && part.find_first_not_of("0123456789") == std::string::npos &&
-              part.size() < 10) {
-            pid = std::stol(part);
+          const size_t at = part.find('@');
+          if (at != std::string::npos && at > 0 && at < 10 &&
+              part.find_first_not_of("0123456789") == at) {
+            pid = std::stol(part.substr(0, at));
+            host = part.substr(at + 1);
           }
           start = end + 1;
         }
-        if (pid <= 0 || pid == getpid()) continue;
+        if (pid <= 0 || host != host_ || pid == getpid()) continue;
         if (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) continue;  // alive
         fs::remove(entry.path(), error);
       }
@@ -363,19 +394,25 @@ class Sweep {
            });
   }
 
-  void WriteCsv() { WriteFileAtomically(csv_file_, CsvText(experiment_.grid_keys, rows_)); }
+  void WriteCsv() { WriteFileAtomically(csv_file_, CsvText(experiment_.grid_keys, rows_), tag_); }
 
   // The scenario file of a run (generated from the template on first use).
   fs::path ScenarioFile(const ExperimentScenario& scenario) {
     if (!scenario.templated()) return scenario.file;
     const fs::path file = dir_ / "scenarios" / (scenario.name + ".toml");
     std::lock_guard lock(scenario_mutex_);
-    if (!fs::exists(file)) {
+    if (!fs::exists(file) && scenario.generated) {
+      // A mesh that cannot be read or cannot hold handles throws: the run fails with the reason.
+      WriteFileAtomically(file,
+                          GenerateScenarioForFile(scenario.mesh, scenario.mesh.generic_string(),
+                                                  scenario.generator),
+                          tag_);
+    } else if (!fs::exists(file)) {
       double extent[3] = {1.0, 1.0, 1.0};
       if (scenario.handles.axis == "longest" || scenario.handles.bend_axis == "auto") {
         MeshExtent(scenario.mesh, extent);
       }
-      WriteFileAtomically(file, TemplateScenarioToml(scenario, extent));
+      WriteFileAtomically(file, TemplateScenarioToml(scenario, extent), tag_);
     }
     return file;
   }
@@ -398,7 +435,7 @@ class Sweep {
     const ExperimentScenario& scenario = experiment_.scenarios[run.scenario];
     const fs::path runs = dir_ / "runs";
     const fs::path report_file = runs / (run.id + ".json");
-    const fs::path temporary_report = runs / fmt::format(".{}.{}.report", run.id, getpid());
+    const fs::path temporary_report = runs / fmt::format(".{}.{}.report", run.id, tag_);
     const fs::path config_file = runs / (run.id + ".config.toml");
     const fs::path log_file = runs / (run.id + ".log");
     json info = {{"index", run.index},
@@ -429,13 +466,13 @@ class Sweep {
       const fs::path mesh_file = dir_ / "meshes" / (run.id + ".ply");
       // The child writes the mesh under a temporary name; renamed when the run succeeded, so a
       // killed run leaves no partial mesh under the final name.
-      const fs::path mesh_temporary = dir_ / "meshes" / fmt::format(".{}.{}.ply", run.id, getpid());
+      const fs::path mesh_temporary = dir_ / "meshes" / fmt::format(".{}.{}.ply", run.id, tag_);
       const fs::path rest_file = dir_ / "meshes" / (scenario.name + ".rest.ply");
       const fs::path handles_file = dir_ / "meshes" / (scenario.name + ".handles.json");
       const fs::path rest_temporary =
-          dir_ / "meshes" / fmt::format(".{}.{}.rest.ply", run.id, getpid());
+          dir_ / "meshes" / fmt::format(".{}.{}.rest.ply", run.id, tag_);
       const fs::path handles_temporary =
-          dir_ / "meshes" / fmt::format(".{}.{}.handles.json", run.id, getpid());
+          dir_ / "meshes" / fmt::format(".{}.{}.handles.json", run.id, tag_);
       const bool write_rest = experiment_.settings.save_mesh && !fs::exists(rest_file);
       if (experiment_.settings.save_mesh) {
         arguments.insert(arguments.end(), {"--out", mesh_temporary.string()});
@@ -483,11 +520,11 @@ class Sweep {
     std::error_code ignore;
     fs::remove(temporary_report, ignore);
     for (const char* suffix : {"ply", "rest.ply", "handles.json"}) {  // of a failed run
-      fs::remove(dir_ / "meshes" / fmt::format(".{}.{}.{}", run.id, getpid(), suffix), ignore);
+      fs::remove(dir_ / "meshes" / fmt::format(".{}.{}.{}", run.id, tag_, suffix), ignore);
     }
     info["wall_seconds"] = std::chrono::duration<double>(Clock::now() - start).count();
     report["run"] = info;
-    WriteFileAtomically(report_file, report.dump(1) + "\n");
+    WriteFileAtomically(report_file, report.dump(1) + "\n", tag_);
     return report;
   }
 
@@ -495,6 +532,8 @@ class Sweep {
   const RunnerOptions& options_;
   fs::path dir_;
   fs::path csv_file_;
+  std::string host_;  ///< this host's name as it appears in temporary names
+  std::string tag_;   ///< PID@HOST of this process, in its temporary names
   int threads_ = 1;
   std::mutex rows_mutex_, scenario_mutex_;
   std::map<int, std::string> rows_;
@@ -509,17 +548,12 @@ SweepSummary RunExperiment(const Experiment& experiment, const RunnerOptions& op
   return Sweep(experiment, options).Run();
 }
 
+void WriteExperimentPlan(const Experiment& experiment, const fs::path& dir) {
+  WriteExperimentPlan(experiment, dir, TemporaryTag(HostName("")));
+}
+
 MergeSummary MergeResults(const fs::path& dir) {
-  const fs::path plan_file = dir / "experiment.json";
-  if (!fs::exists(plan_file)) {
-    throw InputError(fmt::format("{}: no experiment.json (not a harap run folder)", dir.string()));
-  }
-  json plan;
-  try {
-    plan = json::parse(ReadText(plan_file));
-  } catch (const json::exception& error) {
-    throw InputError(fmt::format("{}: {}", plan_file.string(), error.what()));
-  }
+  const json plan = ReadPlan(dir);
   const std::vector<std::string> grid_keys = plan["grid_keys"];
   MergeSummary summary;
   std::map<int, std::string> rows;

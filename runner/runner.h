@@ -39,6 +39,9 @@ struct RunnerOptions {
   std::vector<std::string> scenario_filter;
   /// Also re-run runs recorded as failed (finished runs are always skipped).
   bool retry_failed = false;
+  /// This machine's name in temporary file names (PID@HOST), which keeps shards on several
+  /// hosts sharing one folder from removing each other's files; empty: gethostname().
+  std::string host;
   /// Told of every run started and finished; nullptr: nothing is told.
   SweepObserver* observer = nullptr;
 };
@@ -61,6 +64,10 @@ struct SweepSummary {
 ///   results[-shard-I-of-N].csv  one row per finished run of this shard
 /// A run that fails is recorded (status, error) and the sweep goes on.
 SweepSummary RunExperiment(const Experiment& experiment, const RunnerOptions& options);
+
+/// Writes the plan of `experiment` into `dir` (experiment.json, config.toml), as a sweep does
+/// before its first run: for submitters that start the shards elsewhere.
+void WriteExperimentPlan(const Experiment& experiment, const std::filesystem::path& dir);
 
 struct MergeSummary {
   int planned = 0;

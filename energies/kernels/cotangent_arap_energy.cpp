@@ -7,11 +7,59 @@
 
 namespace harap {
 
+namespace {
+
+// Edges (vertex pairs) of A's pattern and those whose off-diagonal entry says the summed weight
+// is negative (A = κ·L with κ > 0, L_ij = −w_ij).
+std::pair<Index, Index> CountEdges(const SparseMatrix& a) {
+  Index edges = 0, negative = 0;
+  for (Index col = 0; col < a.outerSize(); ++col) {
+    for (SparseMatrix::InnerIterator it(a, col); it; ++it) {
+      if (it.row() >= col) continue;
+      ++edges;
+      if (it.value() > 0.0) ++negative;
+    }
+  }
+  return {edges, negative};
+}
+
+}  // namespace
+
+WeightOptions WeightOptions::FromConfig(const ConfigNode& node, const WeightOptions& defaults) {
+  WeightOptions options = defaults;
+  options.input_level = node.GetEnum(
+      "weights", options.input_level, kWeightSchemeNames,
+      "edge weights: cotan = ½cot of the mesh's angles (negative at obtuse angles; libigl's); "
+      "intrinsic_delaunay = cotangents of the intrinsic Delaunay triangulation (never "
+      "negative on closed meshes); clamped = cotangents raised to min_cotangent; uniform = 1 "
+      "per edge");
+  options.coarse_levels =
+      node.GetEnum("coarse_weights", options.coarse_levels, kCoarseWeightSchemeNames,
+                   "edge weights on a hierarchy's coarse levels (same = as `weights`)");
+  options.min_cotangent =
+      node.Get("min_cotangent", options.min_cotangent,
+               "weights = clamped: the smallest cotangent of a corner (the weight of an edge is "
+               "half the sum over its faces)",
+               Range::Above(0.0));
+  return options;
+}
+
+void CotangentArapEnergy::SetInputMesh(const Mesh& /*input*/, const Context& /*context*/) {
+  coarse_level_ = true;
+}
+
 void CotangentArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context& context) {
   RequireTriangleMesh(rest, name_);
   context.Run([&] {
-    const Elements& faces = rest.elements;
-    const auto half_cot = HalfCotangents(rest.vertices, faces, &num_degenerate_);
+    WeightScheme scheme = weight_options_.input_level;
+    if (coarse_level_ && weight_options_.coarse_levels != WeightScheme::kAsInputLevel) {
+      scheme = weight_options_.coarse_levels;
+    }
+    TriangleWeights weights =
+        ComputeTriangleWeights(rest.vertices, rest.elements, scheme, weight_options_.min_cotangent);
+    num_degenerate_ = weights.degenerate;
+    const Elements& faces = weights.triangles;
+    const auto& half_cot = weights.half_cot;
     a_ = AdjacencyPattern(rest.num_vertices(), faces);
     const auto entry = TriangleEntryPositions(a_, faces);
     std::vector<Eigen::Vector3d> coefficient(a_.nonZeros(), Eigen::Vector3d::Zero());
@@ -25,7 +73,10 @@ void CotangentArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context&
       AddFace(face, a_.valuePtr(), coefficient.data(), constant);
     }
     coupling_ = MakeVertexSiteCoupling(a_, std::move(coefficient), constant);
-    AddNonFaceTerms(RestGeometry{rest, half_cot, entry}, context);
+    const auto [edges, negative] = CountEdges(a_);
+    weights_ = EnergyWeights{std::string(NameOf(kWeightSchemeNames, scheme)), edges, negative,
+                             negative_weights_break_squares_ && negative > 0};
+    AddNonFaceTerms(RestGeometry{rest, faces, half_cot, entry}, context);
   });
 }
 

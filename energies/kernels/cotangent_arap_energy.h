@@ -6,23 +6,47 @@
 #include <vector>
 
 #include "energies/kernels/rotation_coupling.h"
+#include "energies/kernels/weight_schemes.h"
 
 namespace harap {
 
+/// The weight options of the edge-based energies (`weights`, `coarse_weights`, `min_cotangent`;
+/// docs/energies.md, "Weight schemes"). Defaults are the energy's.
+struct WeightOptions {
+  WeightScheme input_level = WeightScheme::kCotangent;  ///< `weights`: on the input mesh
+  /// `coarse_weights`: on the coarse levels of a hierarchy (kAsInputLevel: as `weights`).
+  WeightScheme coarse_levels = WeightScheme::kAsInputLevel;
+  double min_cotangent = 0.01;  ///< `min_cotangent`: the bound of the `clamped` scheme
+  static WeightOptions FromConfig(const ConfigNode& node, const WeightOptions& defaults);
+};
+
 /// Shared precomputation of the per-vertex cotangent ARAP energies on triangle meshes (spokes,
-/// spokes-and-rims, smooth ARAP): ½cot weights with degenerate triangles zeroed, the adjacency
-/// pattern, a loop over faces in which the concrete energy adds its face's contributions to A, to
-/// the coupling coefficients and to the constant, and a hook for terms beyond per-face sums.
+/// spokes-and-rims, smooth ARAP): ½cot weights of a weight scheme with degenerate triangles
+/// zeroed, the adjacency pattern, a loop over faces in which the concrete energy adds its face's
+/// contributions to A, to the coupling coefficients and to the constant, and a hook for terms
+/// beyond per-face sums.
 class CotangentArapEnergy : public CoupledQuadraticEnergy {
  public:
   void PrecomputeCoupledForm(const Mesh& rest, const Context& context) final;
+  /// Marks the next Precompute() as a coarse level's (its weights: `coarse_weights`).
+  void SetInputMesh(const Mesh& input, const Context& context) override;
+  EnergyWeights weights() const override { return weights_; }
 
   /// Triangles whose weights were zeroed as degenerate in the last Precompute().
   Index num_degenerate_triangles() const { return num_degenerate_; }
 
  protected:
+  /// `negative_weights_break_squares`: whether a negative edge weight takes the energy out of
+  /// the sum-of-squares form (spokes: each edge is its own square; not so for per-face sums).
+  CotangentArapEnergy(std::string_view name, const WeightOptions& weight_options,
+                      bool negative_weights_break_squares)
+      : CoupledQuadraticEnergy(RotationSite::kVertex),
+        name_(name),
+        weight_options_(weight_options),
+        negative_weights_break_squares_(negative_weights_break_squares) {}
+  /// Raw cotangent weights on every level, for energies that keep a sum of squares with them.
   explicit CotangentArapEnergy(std::string_view name)
-      : CoupledQuadraticEnergy(RotationSite::kVertex), name_(name) {}
+      : CotangentArapEnergy(name, WeightOptions{}, /*negative_weights_break_squares=*/false) {}
 
   /// One face's data for AddFace: its vertices' rest positions, the ½cot weight of the edge
   /// opposite each corner, and where its 3×3 vertex pairs live in A's value array (entry
@@ -45,6 +69,7 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
   /// What the face loop was built from, for AddNonFaceTerms.
   struct RestGeometry {
     const Mesh& rest;
+    const Elements& triangles;  ///< the triangles the weights live on (the scheme's)
     const Eigen::Matrix<double, Eigen::Dynamic, 3>& half_cot;  ///< HalfCotangents(), #F×3
     /// TriangleEntryPositions() in the adjacency pattern (a_'s pattern when the hook is called).
     const std::vector<std::array<Index, 9>>& entry;
@@ -57,7 +82,11 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
 
  private:
   std::string_view name_;
+  WeightOptions weight_options_;
+  bool negative_weights_break_squares_;
+  bool coarse_level_ = false;
   Index num_degenerate_ = 0;
+  EnergyWeights weights_;
 };
 
 }  // namespace harap

@@ -294,8 +294,16 @@ def figure_relative_scatter(directory, runs, compare, baseline, panel):
                   for r, b in pairs if not panel or r["run"]["parameters"].get(panel, "") == value]
         xs = [p[0] for p in points]
         ys = [p[1] for p in points]
-        ax.scatter(xs, ys, c=[quadrant_color(x, y) for x, y in zip(xs, ys)], s=22,
-                   edgecolors="black", linewidths=0.3)
+        # One marker per compared value (e.g. hierarchical and fast against classic).
+        compared = list(OrderedDict.fromkeys(compare_value(r, compare) for _, _, r in points))
+        for value_index, compared_value in enumerate(compared):
+            own = [(x, y) for x, y, r in points if compare_value(r, compare) == compared_value]
+            ax.scatter([x for x, _ in own], [y for _, y in own],
+                       c=[quadrant_color(x, y) for x, y in own], s=22,
+                       marker="o^sDv"[value_index % 5], edgecolors="black", linewidths=0.3,
+                       label=compared_value if len(compared) > 1 else None)
+        if len(compared) > 1:
+            ax.legend(fontsize=7, loc="upper left")
         ax.axvline(1.0, color="grey", linewidth=0.8)
         ax.axhline(1.0, color="grey", linewidth=0.8)
         ax.set_xscale("log")
@@ -317,6 +325,80 @@ def figure_relative_scatter(directory, runs, compare, baseline, panel):
         "orange: faster but higher energy; red: slower and higher." +
         (f" {skipped} pairs with different energies are left out (their energies are not "
          "comparable)." if skipped else ""))
+
+
+SIZE_BINS = [(0, 10_000, "< 10K"), (10_000, 50_000, "10K–50K"), (50_000, 100_000, "50K–100K"),
+             (100_000, float("inf"), "≥ 100K")]
+QUADRANTS = [("bottom-left", "faster, lower"), ("bottom-right", "slower, lower"),
+             ("top-left", "faster, higher"), ("top-right", "slower, higher")]
+
+
+def quadrant_of(run, base):
+    """Fig. 11's quadrant of a run against its baseline run (ties count as not better)."""
+    faster = run["timings"]["total"] < base["timings"]["total"]
+    lower = run["energy"] < base["energy"]
+    return {(True, True): 0, (False, True): 1, (True, False): 2, (False, False): 3}[(faster, lower)]
+
+
+def size_bin(run):
+    vertices = run["mesh"]["vertices"]
+    return next(label for low, high, label in SIZE_BINS if low <= vertices < high)
+
+
+def what_happened(run, base):
+    """Levels, iterations and per-level energies of a run and its baseline, for the case list."""
+    def levels(r):
+        return "; ".join(f"L{level['level']} {level['vertices']:,} v: {level['iterations']} it, "
+                         f"E {fmt_number(level['energy'], 5)}"
+                         f"{'' if level.get('converged', True) else ' (not converged)'}"
+                         for level in r.get("levels", []))
+    return (f"time {run['timings']['total']:.3g} s vs {base['timings']['total']:.3g} s, energy "
+            f"{fmt_number(run['energy'], 6)} vs {fmt_number(base['energy'], 6)} "
+            f"(ratio {run['energy'] / base['energy']:.5g}); levels: {levels(run)}; baseline: "
+            f"{levels(base)}")
+
+
+def quadrant_section(runs, compare, baseline, panel):
+    """Fig. 11's quadrant shares per compared value, panel value (tolerance) and size bin, and
+    every case outside the bottom-left quadrant with what happened."""
+    pairs = [(r, b) for r, b in pairs_against_baseline(runs, compare, baseline)
+             if energy_of(r) == energy_of(b)]
+    if not pairs:
+        return []
+    out = ["## Quadrants (Fig. 11)\n",
+           f"Each test case against `{baseline}`: bottom-left = faster and lower final energy. "
+           "Shares in percent of the cases in the row (count in brackets).\n"]
+    header = [compare, panel.split(".")[-1] if panel else "", "vertices", "cases"] + \
+        [f"{name} ({meaning})" for name, meaning in QUADRANTS]
+    out.append("| " + " | ".join(header) + " |")
+    out.append("|" + "|".join(["---"] * 3 + ["---:"] * 5) + "|")
+    groups = OrderedDict()
+    for run, base in pairs:
+        value = compare_value(run, compare)
+        tolerance = run["run"]["parameters"].get(panel, "") if panel else ""
+        for bin_label in ("all", size_bin(run)):
+            groups.setdefault((value, tolerance, bin_label), []).append(quadrant_of(run, base))
+    order = {label: k for k, (_, _, label) in enumerate(SIZE_BINS)}
+    for (value, tolerance, bin_label), quadrants in sorted(
+            groups.items(), key=lambda item: (item[0][0], item[0][1],
+                                               -1 if item[0][2] == "all" else order[item[0][2]])):
+        n = len(quadrants)
+        shares = [f"{100 * quadrants.count(q) / n:.0f}% ({quadrants.count(q)})" for q in range(4)]
+        out.append(f"| {value} | {tolerance} | {bin_label} | {n} | " + " | ".join(shares) + " |")
+    outside = [(r, b) for r, b in pairs if quadrant_of(r, b) != 0]
+    out.append("")
+    if outside:
+        out.append(f"### Cases outside the bottom-left quadrant ({len(outside)})\n")
+        for run, base in outside:
+            plan = run["_plan"]
+            name, meaning = QUADRANTS[quadrant_of(run, base)]
+            out.append(f"- **{plan['scenario']}** ({markdown_escape(run_name(run))}), "
+                       f"{run['mesh']['vertices']:,} vertices, {name} ({meaning}): "
+                       f"{markdown_escape(what_happened(run, base))}")
+        out.append("")
+    else:
+        out.append("Every case is in the bottom-left quadrant.\n")
+    return out
 
 
 def figure_levels(directory, runs):
@@ -864,6 +946,9 @@ def main():
         elif not any(r["run"].get("mesh") for r in runs):
             out.append("No pictures: the config does not save meshes (`[run] save_mesh = "
                        "true`).\n")
+
+    if "relative_scatter" in figures and compare:
+        out.extend(quadrant_section(runs, compare, baseline, report.get("panel", "")))
 
     failed = [r for r in runs if r["run"]["status"] not in ("ok", "missing")]
     if failed:

@@ -18,18 +18,6 @@ CellUpsampler::Options CellUpsampler::Options::FromConfig(const ConfigNode& node
   return options;
 }
 
-std::unique_ptr<Upsampler> CellUpsampler::CreateRotations(const ConfigNode& node) {
-  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kRotations));
-}
-
-std::unique_ptr<Upsampler> CellUpsampler::CreatePositions(const ConfigNode& node) {
-  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kPositions));
-}
-
-std::unique_ptr<Upsampler> CellUpsampler::CreateSmoothedRotations(const ConfigNode& node) {
-  return std::make_unique<CellUpsampler>(Options::FromConfig(node, Mode::kSmoothedRotations));
-}
-
 void CellUpsampler::Upsample(const HierarchyLevel& fine, const HierarchyLevel& coarse,
                              RotationSite site, const LevelState& coarse_state,
                              LevelState& fine_state, const Context& context) const {

@@ -35,9 +35,6 @@ class CellUpsampler final : public Upsampler {
   };
 
   explicit CellUpsampler(const Options& options) : options_(options) {}
-  static std::unique_ptr<Upsampler> CreateRotations(const ConfigNode& node);
-  static std::unique_ptr<Upsampler> CreatePositions(const ConfigNode& node);
-  static std::unique_ptr<Upsampler> CreateSmoothedRotations(const ConfigNode& node);
 
   UpsampleOutput output() const override {
     return options_.mode == Mode::kPositions ? UpsampleOutput::kPositions

@@ -118,7 +118,7 @@ void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context
     chosen_ = nullptr;
     throw;
   }
-  if (on_choice_) on_choice_(chosen(), chosen_->is_direct());
+  ReportChoice(chosen(), chosen_->is_direct());
 }
 
 SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& b,
@@ -142,7 +142,7 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     chosen_ = direct_.get();
     iterative_.reset();
     switched_ = true;
-    if (on_choice_) on_choice_(chosen(), false);  // the level's solves were not all direct
+    ReportChoice(chosen(), false);  // the level's solves were not all direct
   }
   const SolveSummary summary = chosen_->Solve(b, x, context);
   if (chosen_ == iterative_.get()) {

@@ -94,12 +94,6 @@ class AdaptiveSolver final : public LinearSolver {
   const Decision& decision() const { return decision_; }
   const Options& options() const { return options_; }
 
-  /// Called by every successful Factorize() with chosen() and is_direct() (the composition
-  /// root records each level's choice for the report).
-  void set_on_choice(std::function<void(std::string_view, bool)> on_choice) {
-    on_choice_ = std::move(on_choice);
-  }
-
   /// The memory budget max_factor_megabytes = 0 stands for: half the physical memory.
   static double DefaultBudgetBytes();
 
@@ -123,7 +117,6 @@ class AdaptiveSolver final : public LinearSolver {
   double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
   int iterative_solves_ = 0;     // CG solves since Factorize()
   bool stalled_ = false;         // the last CG solve left more than max_unresolved undone
-  std::function<void(std::string_view, bool)> on_choice_;
 };
 
 }  // namespace harap

@@ -101,14 +101,6 @@ AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant) {
   return options;
 }
 
-std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAdmmPd(const ConfigNode& node) {
-  return std::make_unique<AdmmLevelSolver>(ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics));
-}
-
-std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateWrapd(const ConfigNode& node) {
-  return std::make_unique<AdmmLevelSolver>(ReadAdmmOptions(node, AdmmVariant::kRotationAware));
-}
-
 std::unique_ptr<LevelSolver> AdmmLevelSolver::CreateAnother() const {
   return std::make_unique<AdmmLevelSolver>(options_);
 }
@@ -201,13 +193,27 @@ void AdmmLevelSolver::AssembleA0() {
   a0_.setFromTriplets(triplets.begin(), triplets.end());
 }
 
+namespace {
+
+constexpr std::string_view kAdmmNoSessions =
+    "the ADMM level solvers eliminate their constrained vertices once; they do not support "
+    "handle edits (interactive sessions): use local_global";
+constexpr std::string_view kAdmmNeedsElements =
+    "the ADMM optimizers minimize the per-element ARAP energy: use energy `elements` (the "
+    "configured energy has a different global-step matrix or rotation sites)";
+
+}  // namespace
+
+void AdmmLevelSolver::CheckCompatible(const Energy& energy, bool handle_edits) const {
+  if (handle_edits) throw ConfigError(std::string(kAdmmNoSessions));
+  if (energy.rotation_site() != RotationSite::kElement) {
+    throw ConfigError(std::string(kAdmmNeedsElements));
+  }
+}
+
 void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                                  const Context& context) {
-  if (setup.handle_edits) {
-    throw ConfigError(
-        "the ADMM level solvers eliminate their constrained vertices once; they "
-        "do not support handle edits (interactive sessions): use local_global");
-  }
+  if (setup.handle_edits) throw ConfigError(std::string(kAdmmNoSessions));
   const Mesh& mesh = *setup.mesh;
   const int level = setup.level;
   // Only the input level needs the factory's energy (final energy and measures); coarse levels
@@ -243,9 +249,7 @@ void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory
                             energy_->num_rotations() == num_elements &&
                             laplacian.rows() == num_vertices;
     if (!same_shape || (laplacian - a0 / beta).norm() > 1e-8 * reference) {
-      throw ConfigError(
-          "the ADMM optimizers minimize the per-element ARAP energy: use energy `elements` "
-          "(the configured energy has a different global-step matrix or rotation sites)");
+      throw ConfigError(std::string(kAdmmNeedsElements));
     }
   }
   f_.assign(num_elements, Eigen::Matrix3d::Zero());

@@ -70,12 +70,12 @@ AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant);
 class AdmmLevelSolver final : public LevelSolver {
  public:
   explicit AdmmLevelSolver(const AdmmOptions& options) : options_(options) {}
-  /// `admm_pd` and `wrapd`: reads AdmmOptions; the caller rejects unknown keys.
-  static std::unique_ptr<LevelSolver> CreateAdmmPd(const ConfigNode& node);
-  static std::unique_ptr<LevelSolver> CreateWrapd(const ConfigNode& node);
 
   // LevelSolver.
   std::unique_ptr<LevelSolver> CreateAnother() const override;
+  /// Per-element rotations (energy `elements`) and no session; Precompute() checks that the
+  /// energy's matrix is A₀ once the mesh is known.
+  void CheckCompatible(const Energy& energy, bool handle_edits) const override;
   void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                   const Context& context) override;
   ConstrainSummary Constrain(const LevelConstraints& constraints, const ComponentFactory& factory,

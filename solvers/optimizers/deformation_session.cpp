@@ -52,7 +52,6 @@ std::string_view SessionOptions::FrameStartName(FrameStart start) {
 }
 
 struct DeformationSession::Level {
-  std::unique_ptr<LevelSolver> solver;
   LevelState state;  ///< the last solution, in the mesh's numbering
   bool has_solution = false;
   /// Coarse levels: the solver's mean targets are not yet mapped from the current targets.
@@ -63,7 +62,7 @@ struct DeformationSession::Level {
 
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
                                        const SessionOptions& options, const Context& context)
-    : mesh_(mesh), factory_(factory), options_(options), context_(context) {
+    : mesh_(mesh), factory_(factory), options_(options), context_(context), cascade_(mesh) {
   Stopwatch clock;
   context_.Run([&] {
     diagonal_ = BoundingBoxDiagonal(mesh_);
@@ -71,35 +70,33 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
     Stopwatch phase;
     if (options_.hierarchical) {
       context_.ReportPhase("building the hierarchy");
-      hierarchy_ = factory_.MakeHierarchy()->Build(mesh_, context_);
-      upsampler_ = factory_.MakeUpsampler();
+      cascade_.SetHierarchy(factory_.MakeHierarchy()->Build(mesh_, context_),
+                            factory_.MakeUpsampler());
+    } else {
+      cascade_.SetSingleLevel();
     }
     setup_timings_.hierarchy = phase.Seconds();
     const int levels = num_levels();
-    const int coarsest = levels - 1;
     solved_levels_ = options_.optimizer.SolvedLevels(levels);
     levels_.resize(levels);
     for (int l : solved_levels_) {
       levels_[l] = std::make_unique<Level>();
-      levels_[l]->solver = options_.optimizer.level_solver->CreateAnother();
+      cascade_.set_solver(l, options_.optimizer.level_solver->CreateAnother());
       // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh);
       // every level keeps one system for all handle sets (handle edits).
-      levels_[l]->solver->Precompute(
-          LevelSetup{l == 0 ? &mesh_ : &hierarchy_.levels[l].mesh, l > 0 ? &mesh_ : nullptr, l,
-                     /*handle_edits=*/true},
-          factory_, context_);
-      setup_timings_.precompute += levels_[l]->solver->precompute_seconds();
+      cascade_.solver(l).Precompute(LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
+                                               /*handle_edits=*/true},
+                                    factory_, context_);
+      setup_timings_.precompute += cascade_.solver(l).precompute_seconds();
     }
-    site_ = levels_[coarsest]->solver->rotation_site();
+    cascade_.TakeRotationSite(solved_levels_.front());
   });
   setup_timings_.total = clock.Seconds();
 }
 
 DeformationSession::~DeformationSession() = default;
 
-int DeformationSession::num_levels() const {
-  return options_.hierarchical ? hierarchy_.num_levels() : 1;
-}
+int DeformationSession::num_levels() const { return cascade_.num_levels(); }
 
 const Positions& DeformationSession::positions() const {
   return levels_[0]->has_solution ? levels_[0]->state.positions : start_positions_;
@@ -251,20 +248,19 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
 HandleEditResult DeformationSession::ConstrainLevels() {
   Stopwatch clock;
   HandleEditResult result;
-  // Creating a level's linear solver reads config tables: two threads take turns.
-  const SerializedFactory factory(factory_);
+  const ComponentFactory& factory = factory_;  // thread-safe: levels are constrained in parallel
   std::vector<HandleEditResult::Level> done(levels_.size());
   const Constraints finest{handles_, targets_, {}};
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
-    LevelSolver& solver = *level.solver;
+    LevelSolver& solver = cascade_.solver(l);
     ConstrainSummary summary;
     Index constrained = static_cast<Index>(handles_.size());
     if (l == 0) {
       summary = solver.Constrain(LevelConstraints::Exact(finest, mesh_.planar), factory, context_);
     } else {
       // As the hierarchical optimizer's level setup: clusters holding a handle are constrained.
-      const LevelConstraints mapped = MapConstraints(hierarchy_, l, finest);
+      const LevelConstraints mapped = MapConstraints(cascade_.hierarchy(), l, finest);
       level.targets_stale = false;
       constrained = static_cast<Index>(mapped.vertices.size());
       summary = solver.Constrain(mapped, factory, context_);
@@ -305,14 +301,14 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   for (auto it = solved_levels_.rbegin(); it != solved_levels_.rend(); ++it) {
     result.levels.push_back(done[*it]);
   }
-  result.constraints = levels_[0]->solver->constraint_report();
+  result.constraints = cascade_.solver(0).constraint_report();
   result.notes = DescribeConstraintHandling(result.constraints);
   result.seconds = clock.Seconds();
   return result;
 }
 
 void DeformationSession::UpdateTargets() {
-  levels_[0]->solver->MoveTargets(targets_);
+  cascade_.solver(0).MoveTargets(targets_);
   // The coarse levels' targets are mapped when a solve uses the level (a preview uses only the
   // coarsest one): UpdateCoarseTargets().
   for (int l : solved_levels_) {
@@ -324,8 +320,8 @@ void DeformationSession::UpdateCoarseTargets(int l) {
   Level& level = *levels_[l];
   if (l == 0 || !level.targets_stale) return;
   // The constrained vertices are the same (same handles): only the mean targets move.
-  level.solver->MoveTargets(
-      MapConstraints(hierarchy_, l, Constraints{handles_, targets_, {}}).mean_target);
+  cascade_.solver(l).MoveTargets(
+      MapConstraints(cascade_.hierarchy(), l, Constraints{handles_, targets_, {}}).mean_target);
   level.targets_stale = false;
 }
 
@@ -357,7 +353,7 @@ double DeformationSession::CurrentEnergy() {
   } else {
     state.rotations.clear();
   }
-  return context_.Run([&] { return levels_[0]->solver->FitRotations(state, context_); });
+  return context_.Run([&] { return cascade_.solver(0).FitRotations(state, context_); });
 }
 
 bool DeformationSession::StraightPreview(bool preview, int top) {
@@ -369,12 +365,12 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
   // so with a direct solver the result is identical (an iterative one starts from the last
   // frame's positions instead of the up-sampled ones).
   const bool straight = preview && preview_straight_ && top > 0 &&
-                        upsampler_->output() == UpsampleOutput::kRotations &&
-                        upsampler_->RotationsFollowCoarseVertex(site_);
+                        cascade_.upsampler().output() == UpsampleOutput::kRotations &&
+                        cascade_.upsampler().RotationsFollowCoarseVertex(cascade_.rotation_site());
   if (straight && preview_map_.empty()) {
     preview_map_.resize(mesh_.num_vertices());
     for (Index v = 0; v < mesh_.num_vertices(); ++v) {
-      preview_map_[v] = hierarchy_.MapFinestVertex(v, top);
+      preview_map_[v] = cascade_.hierarchy().MapFinestVertex(v, top);
     }
   }
   return straight;
@@ -382,7 +378,7 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
 
 LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOptions& solve_options,
                                                    bool preview, bool out_of_time,
-                                                   bool start_with_global_step, bool gather) const {
+                                                   bool start_with_global_step) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
   // before every global step with update_constraints).
   LevelSolveRequest request =
@@ -397,11 +393,6 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
   // The paper's approximation: one global solve from the up-sampled rotations, no local step
   // (the energy is left to CurrentEnergy()).
   request.global_step_only = l == 0 && preview && start_with_global_step;
-  if (gather) {
-    // The coarsest rotations, gathered by the finest level's global step itself.
-    request.rotation_source = &preview_map_;
-    request.gathered_rotations = &preview_coarse_rotations_;
-  }
   return request;
 }
 
@@ -426,7 +417,7 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
       work = level->state;
       return true;
     } else {
-      work.positions = l == 0 ? start_positions_ : hierarchy_.levels[l].mesh.vertices;
+      work.positions = l == 0 ? start_positions_ : cascade_.hierarchy().levels[l].mesh.vertices;
       work.rotations.clear();
       return false;
     }
@@ -442,16 +433,13 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
     // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
     // the coarser level's solution changed since then (the smooth motion), up-sampled.
     LevelState& now = scratch_[l];
-    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, now, context);
-    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, work_[l + 1], work,
-                         context);
+    cascade_.Upsample(l, *cur, now, context);
+    cascade_.Upsample(l, work_[l + 1], work, context);
     work.positions = levels_[l]->state.positions + now.positions - work.positions;
     work.rotations = levels_[l]->state.rotations;
     return false;
   } else {
-    upsampler_->Upsample(hierarchy_.levels[l], hierarchy_.levels[l + 1], site_, *cur, work,
-                         context);
-    return upsampler_->output() == UpsampleOutput::kRotations;
+    return cascade_.Upsample(l, *cur, work, context);
   }
 }
 
@@ -459,7 +447,7 @@ void DeformationSession::FinishResult(const LevelState& final_state, bool previe
                                       double time_budget_seconds, int out_of_time_level,
                                       const std::vector<std::string>& level_notes,
                                       const Context& context, OptimizeResult& result) const {
-  const LevelSolver& finest = *levels_[0]->solver;
+  const LevelSolver& finest = cascade_.solver(0);
   // A preview's rotations are not fitted to its positions: no measures of that state.
   if (!preview) {
     result.measures = context.Run([&] { return finest.AuxiliaryMeasures(final_state, context); });
@@ -477,6 +465,87 @@ void DeformationSession::FinishResult(const LevelState& final_state, bool previe
   result.positions = final_state.positions;
 }
 
+// One Solve() or Preview() down the cascade: where each level starts (StartLevel), its request
+// (LevelRequest) and what a solved level keeps (its Level: the solution, its version).
+class DeformationSession::Frame final : public LevelCascade::Pass {
+ public:
+  Frame(DeformationSession& session, const SessionSolveOptions& options, bool preview, int top,
+        const Context& context)
+      : s_(session), options_(options), preview_(preview), top_(top), context_(context) {
+    straight_ = s_.StraightPreview(preview, top);
+    // With per-vertex rotations the finest level's global step reads the coarse rotations
+    // straight into its own numbering (no finest rotations in the mesh's numbering at all).
+    gathered_ = straight_ && s_.cascade_.solver(0).accepts_gathered_rotations();
+  }
+
+  // Set by the session's iteration callback: which kind of stop ended a solve.
+  bool user_stop = false;
+  bool out_of_time = false;
+  int out_of_time_level = -1;
+
+  bool Visits(int l) const override {
+    return !straight_ || l == top_ || l == 0;  // a straight preview skips the levels between
+  }
+  bool Solves(int l) const override {
+    return s_.levels_[l] != nullptr && (!preview_ || l == top_ || l == 0);
+  }
+  LevelState& Start(int l, const LevelState* coarser, bool& from_rotations) override {
+    // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
+    // numbering.)
+    gather_step_ = gathered_ && l == 0 && !user_stop;
+    from_rotations = s_.StartLevel(l, top_, preview_, straight_, gather_step_, coarser,
+                                   coarse_before_level_, context_);
+    return s_.work_[l];
+  }
+  void Prepare(int l) override {
+    s_.UpdateCoarseTargets(l);
+    had_solution_ = s_.levels_[l]->has_solution;
+  }
+  LevelSolveRequest Request(int l, bool from_rotations, bool finishing) override {
+    return s_.LevelRequest(l, options_, preview_, finishing, from_rotations);
+  }
+  LevelSolveResult Solve(LevelSolver& solver, LevelState& state, const LevelSolveRequest& request,
+                         const Context& context) override {
+    // The coarsest rotations, gathered by the finest level's global step itself.
+    if (gather_step_) {
+      return solver.GlobalStepFromGathered(state, s_.preview_map_, s_.preview_coarse_rotations_,
+                                           context);
+    }
+    return solver.Solve(state, request, context);
+  }
+  LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
+    Level& level = *s_.levels_[l];
+    level.has_solution = true;
+    if (run == nullptr) {
+      // As a one-shot run stopped on a coarse level: the up-sampled state, rotations fitted.
+      level.state = state;
+      return level.state;
+    }
+    // The new solution into the Level; work_[l] keeps the previous one (the correction of the
+    // next finer level needs it).
+    std::swap(level.state, state);
+    // After a gathered preview the finest rotations stay pending (MaterializePreviewRotations).
+    if (l == 0) s_.preview_rotations_pending_ = gather_step_;
+    coarse_before_level_ = had_solution_ ? l : -1;
+    // A stopped run or a preview is no finished solution: the next solve redoes the level.
+    level.version = run->stopped_by_callback || preview_ ? s_.version_ - 1 : s_.version_;
+    return level.state;
+  }
+  Finish OnStop(int /*l*/) override {
+    return user_stop ? Finish::kFitRotations : Finish::kOneIteration;
+  }
+
+ private:
+  DeformationSession& s_;
+  const SessionSolveOptions& options_;
+  const bool preview_;
+  const int top_;
+  const Context& context_;
+  bool straight_ = false, gathered_ = false, gather_step_ = false, had_solution_ = false;
+  // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
+  int coarse_before_level_ = -1;
+};
+
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
   if (handles_.empty()) {
     throw InputError(fmt::format("{}: the session has no handles yet (SetHandles)",
@@ -484,108 +553,42 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   }
   Stopwatch total;
   OptimizeResult result;
-  const int coarsest = num_levels() - 1;
   // The cascade from the coarsest level, or the finest level alone from its previous solution.
-  const bool cascade = preview || options_.frame_start != SessionOptions::FrameStart::kPrevious ||
-                       !levels_[0]->has_solution;
-  const int top = cascade ? coarsest : 0;
-
-  Context context = context_;
-  context.run_clock.Restart();
-  bool user_stop = false;
-  bool out_of_time = false;
-  int out_of_time_level = -1;
-  context.iteration_callback = [&](const IterationSummary& summary) {
-    if (callback_ && callback_(summary) == CallbackAction::kStop) {
-      user_stop = true;
-      return CallbackAction::kStop;
-    }
-    if (solve_options.time_budget_seconds > 0.0 &&
-        context.run_clock.Seconds() > solve_options.time_budget_seconds) {
-      if (!out_of_time) out_of_time_level = summary.level;
-      out_of_time = true;
-      return CallbackAction::kStop;
-    }
-    return CallbackAction::kContinue;
-  };
-
-  std::vector<std::string> level_notes;
+  const bool from_coarsest = preview ||
+                             options_.frame_start != SessionOptions::FrameStart::kPrevious ||
+                             !levels_[0]->has_solution;
+  const int top = from_coarsest ? num_levels() - 1 : 0;
   // The states are kept between solves (work_[l], scratch_[l]: no allocation per frame on the
-  // big levels). `cur` is the state being solved or handed down; a solved level's result is
-  // swapped into its Level, so work_[l] then holds the level's previous solution.
+  // big levels). A solved level's result is swapped into its Level, so work_[l] then holds the
+  // level's previous solution.
   if (work_.size() != static_cast<size_t>(num_levels())) {
     work_.assign(num_levels(), LevelState());
     scratch_.assign(num_levels(), LevelState());
   }
-  LevelState* cur = nullptr;
-  bool start_with_global_step = false;
-  // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
-  int coarse_before_level = -1;
-  const bool straight = StraightPreview(preview, top);
-  // With per-vertex rotations the finest level's global step reads the coarse rotations
-  // straight into its own numbering (no finest rotations in the mesh's numbering at all).
-  const bool gathered = straight && levels_[0]->solver->accepts_gathered_rotations();
+  Context context = context_;
+  context.run_clock.Restart();
+  Frame frame(*this, solve_options, preview, top, context);
+  context.iteration_callback = [&](const IterationSummary& summary) {
+    if (callback_ && callback_(summary) == CallbackAction::kStop) {
+      frame.user_stop = true;
+      return CallbackAction::kStop;
+    }
+    if (solve_options.time_budget_seconds > 0.0 &&
+        context.run_clock.Seconds() > solve_options.time_budget_seconds) {
+      if (!frame.out_of_time) frame.out_of_time_level = summary.level;
+      frame.out_of_time = true;
+      return CallbackAction::kStop;
+    }
+    return CallbackAction::kContinue;
+  };
   // Whatever this solve reads of the finest level's last rotations must be there.
   if (!preview) MaterializePreviewRotations();
-  context.Run([&] {
-    for (int l = top; l >= 0; --l) {
-      LevelState& work = work_[l];
-      if (straight && l != top && l != 0) continue;  // the levels in between: skipped
-      // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
-      // numbering.)
-      const bool gather_step = gathered && l == 0 && !user_stop;
-      start_with_global_step =
-          StartLevel(l, top, preview, straight, gather_step, cur, coarse_before_level, context);
-      cur = &work;
-      LevelState& state = work;
-      Level* level = levels_[l].get();
-      if (level == nullptr) continue;  // not a solved level: only up-sampled
-      if (preview && l != top && l != 0) continue;
-      if (l > 0 && (user_stop || out_of_time)) continue;  // finish on the finest level
-      LevelSolver& solver = *level->solver;
-      if (user_stop) {
-        // As a one-shot run stopped on a coarse level: the up-sampled state, rotations fitted.
-        result.energy = solver.FitRotations(state, context);
-        level->state = state;
-        level->has_solution = true;
-        cur = &level->state;
-        break;
-      }
-      Stopwatch level_clock;
-      const LevelSolveRequest request =
-          LevelRequest(l, solve_options, preview, out_of_time, start_with_global_step, gather_step);
-      UpdateCoarseTargets(l);
-      const bool was_out_of_time = out_of_time;
-      const bool had_solution = level->has_solution;
-      const LevelSolveResult run = solver.Solve(state, request, context);
-      // The new solution into the Level; work_[l] keeps the previous one (the correction of
-      // the next finer level needs it).
-      std::swap(level->state, work);
-      cur = &level->state;
-      // After a gathered preview the finest rotations stay pending (MaterializePreviewRotations).
-      if (l == 0) preview_rotations_pending_ = gather_step;
-      level->has_solution = true;
-      coarse_before_level = had_solution ? l : -1;
-      // A stopped run or a preview is no finished solution: the next solve redoes the level.
-      level->version = run.stopped_by_callback || preview ? version_ - 1 : version_;
-      level_notes.insert(level_notes.end(), run.notes.begin(), run.notes.end());
-      result.total_iterations += run.iterations;
-      const Mesh& level_mesh = l == 0 ? mesh_ : hierarchy_.levels[l].mesh;
-      result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
-                                          run.iterations, run.energy, level_clock.Seconds(),
-                                          run.converged, solver.num_unknowns(), run.linear_solves,
-                                          run.measures});
-      if (l == 0) {
-        result.energy = run.energy;
-        result.iterations = run.iterations;
-        result.converged = run.converged && !was_out_of_time;
-      }
-    }
-  });
-  result.stopped_by_callback = user_stop;
-  std::reverse(result.levels.begin(), result.levels.end());
-  FinishResult(*cur, preview, solve_options.time_budget_seconds,
-               out_of_time ? out_of_time_level : -1, level_notes, context, result);
+  std::vector<std::string> level_notes;
+  const LevelState* final_state = nullptr;
+  context.Run([&] { final_state = &cascade_.Run(top, frame, context, result, level_notes); });
+  result.stopped_by_callback = frame.user_stop;
+  FinishResult(*final_state, preview, solve_options.time_budget_seconds,
+               frame.out_of_time ? frame.out_of_time_level : -1, level_notes, context, result);
   result.timings.solve = total.Seconds();
   result.timings.total = result.timings.solve;
   return result;

@@ -12,6 +12,7 @@
 #include "framework/registry.h"
 #include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/hierarchical_optimizer.h"
+#include "solvers/optimizers/level_cascade.h"
 
 namespace harap {
 
@@ -155,6 +156,7 @@ class DeformationSession {
 
  private:
   struct Level;
+  class Frame;
   void ValidateIndices(const std::vector<Index>& indices, const char* what) const;
   void ValidateTargets(const Positions& targets, size_t count, const char* what) const;
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
@@ -182,9 +184,8 @@ class DeformationSession {
   /// composed vertex map on first use.
   bool StraightPreview(bool preview, int top);
   /// The request for level `l`: the optimizer's, with the solve's limits.
-  /// `gather`: the straight preview's finest level takes the coarsest rotations gathered.
   LevelSolveRequest LevelRequest(int l, const SessionSolveOptions& solve_options, bool preview,
-                                 bool out_of_time, bool start_with_global_step, bool gather) const;
+                                 bool out_of_time, bool start_with_global_step) const;
   /// Run()'s result from the final state: measures, constraint report, notes, positions
   /// (`out_of_time_level`: -1 when the time budget did not run out).
   void FinishResult(const LevelState& final_state, bool preview, double time_budget_seconds,
@@ -196,11 +197,9 @@ class DeformationSession {
   SessionOptions options_;
   Context context_;
   IterationCallback callback_;
-  MeshHierarchy hierarchy_;  ///< classic: empty (level 0 is mesh_)
-  std::unique_ptr<Upsampler> upsampler_;
+  LevelCascade cascade_;  ///< the hierarchy (classic: the mesh alone), level solvers, the loop
   std::vector<std::unique_ptr<Level>> levels_;  ///< per hierarchy level; null if not solved
   std::vector<int> solved_levels_;              ///< coarsest first
-  RotationSite site_ = RotationSite::kVertex;
   double diagonal_ = 0.0;
   std::vector<Index> handles_;
   Positions targets_;
@@ -211,7 +210,7 @@ class DeformationSession {
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's
   /// coarsest-level vertex (the composed maps; kNoVertex: identity), built on first use.
   std::vector<Index> preview_map_;
-  /// After a gathered preview (LevelSolveRequest::rotation_source) the finest level's rotations
+  /// After a gathered preview (LevelSolver::GlobalStepFromGathered) the finest level's rotations
   /// are these coarse ones gathered along preview_map_; they are written into levels_[0]->state
   /// only when something reads them (MaterializePreviewRotations): a preview frame never does.
   Rotations preview_coarse_rotations_;

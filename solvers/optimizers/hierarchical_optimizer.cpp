@@ -4,11 +4,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "framework/error.h"
 #include "solvers/optimizers/coarse_constraints.h"
+#include "solvers/optimizers/level_cascade.h"
 #include "solvers/optimizers/level_setup_pipeline.h"
 #include "solvers/optimizers/local_global_solver.h"
 
@@ -87,18 +90,8 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   return request;
 }
 
-Registry<Optimizer>::Factory HierarchicalOptimizer::Factory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers) {
-  return [level_solvers](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::FromConfig(node, *level_solvers));
-  };
-}
-
-Registry<Optimizer>::Factory HierarchicalOptimizer::OneLevelFactory(
-    std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner) {
-  return [level_solvers, inner](const ConfigNode& node) -> std::unique_ptr<Optimizer> {
-    return std::make_unique<HierarchicalOptimizer>(Options::OneLevel(node, *level_solvers, inner));
-  };
+void HierarchicalOptimizer::CheckComponents(const ComponentFactory& factory) const {
+  options_.level_solver->CheckCompatible(*factory.MakeEnergy(), /*handle_edits=*/false);
 }
 
 std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& report) {
@@ -121,69 +114,89 @@ std::vector<std::string> DescribeConstraintHandling(const ConstraintReport& repo
 
 namespace {
 
-// What one Optimize() call shares between its phases: the levels (the hierarchy's, or the input
-// mesh alone), their solvers and their times.
-struct Cascade {
-  Cascade(const HierarchicalOptimizer::Options& options, const DeformationProblem& problem,
-          const Context& context)
-      : options(options), problem(problem), context(context) {}
+// What one level's setup (P and C) made.
+struct LevelSetupResult {
+  std::unique_ptr<LevelSolver> solver;
+  double precompute_seconds = 0.0, constrain_seconds = 0.0, seconds = 0.0;
+};
 
-  // Level 0 is the input mesh itself (the hierarchy's levels[0] equals it), so that its setup
-  // can start before the hierarchy is built.
-  const Mesh& LevelMesh(int l) const {
-    return options.hierarchical && l > 0 ? hierarchy.levels[l].mesh : *problem.mesh;
+// P and C of level l (from whichever thread gets there first; see LevelSetupPipeline). Level 0
+// is the input mesh, so its setup needs no hierarchy.
+LevelSetupResult SetUpLevel(int l, const HierarchicalOptimizer::Options& options,
+                            const LevelCascade& cascade, const DeformationProblem& problem,
+                            const ComponentFactory& factory, const Context& context) {
+  Stopwatch clock;
+  const Mesh& mesh = *problem.mesh;
+  const LevelConstraints constraints =
+      l == 0 ? LevelConstraints::Exact(problem.constraints, mesh.planar)
+             : MapConstraints(cascade.hierarchy(), l, problem.constraints);
+  LevelSetupResult setup;
+  setup.solver = options.level_solver->CreateAnother();
+  // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
+  setup.solver->Precompute(LevelSetup{&cascade.LevelMesh(l), l > 0 ? &mesh : nullptr, l, false},
+                           factory, context);
+  setup.solver->Constrain(constraints, factory, context);
+  setup.precompute_seconds = setup.solver->precompute_seconds();
+  setup.constrain_seconds = setup.solver->constrain_seconds();
+  setup.seconds = clock.Seconds();
+  return setup;
+}
+
+// A one-shot run's pass down the cascade: every solved level from the up-sampled solution of the
+// coarser one, each waiting for its setup, a coarse level's solver freed once it is solved.
+class OneShotPass final : public LevelCascade::Pass {
+ public:
+  OneShotPass(const HierarchicalOptimizer::Options& options, LevelCascade& cascade,
+              LevelSetupPipeline& setup, const std::function<void(int)>& wait_for,
+              Positions initial, const Context& context)
+      : options_(options),
+        cascade_(cascade),
+        setup_(setup),
+        wait_for_(wait_for),
+        initial_(std::move(initial)),
+        context_(context),
+        solved_(options.SolvedLevels(cascade.num_levels())),
+        diagonal_(BoundingBoxDiagonal(cascade.mesh())) {}
+
+  const std::vector<int>& solved_levels() const { return solved_; }
+
+  bool Solves(int l) const override {
+    return std::find(solved_.begin(), solved_.end(), l) != solved_.end();
   }
-  int num_levels() const { return options.hierarchical ? hierarchy.num_levels() : 1; }
-
-  // What setting up one level made.
-  struct Setup {
-    std::unique_ptr<LevelSolver> solver;
-    double precompute_seconds = 0.0, constrain_seconds = 0.0, seconds = 0.0;
-  };
-
-  // P and C of level l (from whichever thread gets there first; see LevelSetupPipeline).
-  Setup MakeSetup(int l, const ComponentFactory& factory) const {
-    Stopwatch clock;
-    const Mesh& mesh = *problem.mesh;
-    const LevelConstraints constraints =
-        l == 0 ? LevelConstraints::Exact(problem.constraints, mesh.planar)
-               : MapConstraints(hierarchy, l, problem.constraints);
-    Setup setup;
-    setup.solver = options.level_solver->CreateAnother();
-    // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-    setup.solver->Precompute(LevelSetup{&LevelMesh(l), l > 0 ? &mesh : nullptr, l, false}, factory,
-                             context);
-    setup.solver->Constrain(constraints, factory, context);
-    setup.precompute_seconds = setup.solver->precompute_seconds();
-    setup.constrain_seconds = setup.solver->constrain_seconds();
-    setup.seconds = clock.Seconds();
-    return setup;
+  LevelState& Start(int l, const LevelState* coarser, bool& from_rotations) override {
+    if (coarser == nullptr) {
+      state_.positions = l == 0 ? initial_ : cascade_.LevelMesh(l).vertices;
+      return state_;
+    }
+    LevelState coarse_state = std::move(state_);
+    state_ = LevelState();
+    from_rotations = cascade_.Upsample(l, coarse_state, state_, context_);
+    return state_;
+  }
+  void Prepare(int l) override { wait_for_(l); }
+  LevelSolveRequest Request(int l, bool from_rotations, bool /*finishing*/) override {
+    return options_.Request(l, cascade_.num_levels(), from_rotations, diagonal_);
+  }
+  LevelSolveResult Solve(LevelSolver& solver, LevelState& state, const LevelSolveRequest& request,
+                         const Context& context) override {
+    return setup_.Isolated(context, [&] { return solver.Solve(state, request, context); });
+  }
+  LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
+    // The level's factor is no longer needed.
+    if (l > 0 && run != nullptr && !run->stopped_by_callback) cascade_.release_solver(l);
+    return state;
   }
 
-  // Stores level l's setup (the caller's thread, or level > 0 after the vectors are sized).
-  void Store(int l, Setup&& setup) {
-    precompute_seconds[l] = setup.precompute_seconds;
-    constrain_seconds[l] = setup.constrain_seconds;
-    solvers[l] = std::move(setup.solver);
-    level_seconds[l] = setup.seconds;
-  }
-
-  // The state of level l from the state of level l + 1 (Section 5.1).
-  void Upsample(int l, LevelState& state) const {
-    LevelState coarse_state = std::move(state);
-    state = LevelState();
-    upsampler->Upsample(hierarchy.levels[l], hierarchy.levels[l + 1], site, coarse_state, state,
-                        context);
-  }
-
-  const HierarchicalOptimizer::Options& options;
-  const DeformationProblem& problem;
-  const Context& context;
-  MeshHierarchy hierarchy;
-  std::unique_ptr<Upsampler> upsampler;
-  RotationSite site = RotationSite::kVertex;
-  std::vector<std::unique_ptr<LevelSolver>> solvers;
-  std::vector<double> level_seconds, precompute_seconds, constrain_seconds;
+ private:
+  const HierarchicalOptimizer::Options& options_;
+  LevelCascade& cascade_;
+  LevelSetupPipeline& setup_;
+  const std::function<void(int)>& wait_for_;
+  Positions initial_;
+  const Context& context_;
+  std::vector<int> solved_;
+  double diagonal_;
+  LevelState state_;
 };
 
 }  // namespace
@@ -193,29 +206,33 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
                                                const Context& context) const {
   Stopwatch total;
   OptimizeResult result;
-  const Positions initial = InitialPositions(problem);  // validates the constraints
-  Cascade cascade(options_, problem, context);
+  Positions initial = InitialPositions(problem);  // validates the constraints
+  LevelCascade cascade(*problem.mesh);
 
   // P and C of every solved level (Algorithm 2, first loop). With overlap_setup, a background
   // task sets the levels up from fine to coarse while the caller's thread sets up and solves the
-  // coarse levels, from the coarsest down: the finest level's setup (its ordering and
-  // factorization alone take about half of the run, and are sequential) then runs from the
-  // start beside everything else (armadillo-bend, 1e-6: 0.9 s instead of 1.2 s,
-  // docs/results.md). It needs no hierarchy, so it starts before the hierarchy is built
-  // (dragon-lift: 0.17 s earlier); the coarse levels join once the hierarchy is there. Each level
-  // is set up by whichever thread reaches it first; creating components reads config tables, so
-  // the two threads take turns at the factory. Level 0's setup is kept aside until the caller
-  // waits for it: the per-level vectors are sized only after the hierarchy is built.
-  const SerializedFactory serialized_factory(factory);
+  // coarse levels, from the coarsest down: the finest level's setup (sequential ordering and
+  // factorization, about half of a run: docs/results.md) then runs from the start beside
+  // everything else. It needs no hierarchy, so it starts before the hierarchy is built; the
+  // coarse levels join once the hierarchy is there. Each level is set up by whichever thread
+  // reaches it first (both use the factory, which is thread-safe). Level 0's setup is kept aside
+  // until the caller waits for it: the cascade's levels exist only once the hierarchy is built.
   const bool overlap = options_.overlap_setup && context.arena->max_concurrency() >= 2;
-  Cascade::Setup finest_setup;
+  std::vector<double> precompute_seconds, constrain_seconds;
+  LevelSetupResult finest_setup;
+  const auto store = [&](int l, LevelSetupResult&& setup) {
+    precompute_seconds[l] = setup.precompute_seconds;
+    constrain_seconds[l] = setup.constrain_seconds;
+    cascade.set_solver(l, std::move(setup.solver), setup.seconds);
+  };
   LevelSetupPipeline setup(
       {0},
       [&](int l) {
+        LevelSetupResult made = SetUpLevel(l, options_, cascade, problem, factory, context);
         if (l == 0) {
-          finest_setup = cascade.MakeSetup(0, serialized_factory);
+          finest_setup = std::move(made);
         } else {
-          cascade.Store(l, cascade.MakeSetup(l, serialized_factory));
+          store(l, std::move(made));
         }
       },
       overlap, context, /*more_levels=*/true);
@@ -225,89 +242,47 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   Stopwatch clock;
   if (options_.hierarchical) {
     context.ReportPhase("building the hierarchy");
-    cascade.hierarchy = setup.Isolated(
+    MeshHierarchy hierarchy = setup.Isolated(
         context, [&] { return factory.MakeHierarchy()->Build(*problem.mesh, context); });
-    cascade.upsampler = factory.MakeUpsampler();
+    cascade.SetHierarchy(std::move(hierarchy), factory.MakeUpsampler());
+  } else {
+    cascade.SetSingleLevel();
   }
   result.timings.hierarchy = clock.Seconds();
-  const int levels = cascade.num_levels();
-  const int coarsest = levels - 1;
-  cascade.solvers.resize(levels);
-  cascade.level_seconds.assign(levels, 0.0);
-  cascade.precompute_seconds.assign(levels, 0.0);
-  cascade.constrain_seconds.assign(levels, 0.0);
-  const std::vector<int> solved_levels = options_.SolvedLevels(levels);
-  std::vector<int> coarse_levels(solved_levels.rbegin() + 1, solved_levels.rend());
-  setup.AddLevels(coarse_levels);  // fine to coarse, after level 0
+  const int coarsest = cascade.num_levels() - 1;
+  precompute_seconds.assign(cascade.num_levels(), 0.0);
+  constrain_seconds.assign(cascade.num_levels(), 0.0);
 
-  // S: solve from the coarsest level down.
-  Stopwatch solve_clock;
-  const double diagonal = BoundingBoxDiagonal(*problem.mesh);
-  double waiting_seconds = 0.0;  // waiting for a level's setup belongs to P and C, not to S
+  // Waiting for a level's setup belongs to P and C, not to S.
+  double waiting_seconds = 0.0;
   bool finest_stored = false;
-  const auto wait_for = [&](int l) {
+  const std::function<void(int)> wait_for = [&](int l) {
     Stopwatch wait_clock;
     setup.WaitFor(l);
     if (l == 0 && !finest_stored) {
-      cascade.Store(0, std::move(finest_setup));
+      store(0, std::move(finest_setup));
       finest_stored = true;
     }
     waiting_seconds += wait_clock.Seconds();
   };
-  wait_for(coarsest);
-  cascade.site = cascade.solvers[coarsest]->rotation_site();
-  std::vector<std::string> level_notes;
-  LevelState state;
-  bool from_rotations = false;
-  for (int l = coarsest; l >= 0; --l) {
-    if (l < coarsest) {
-      cascade.Upsample(l, state);
-      from_rotations = cascade.upsampler->output() == UpsampleOutput::kRotations;
-    } else {
-      state.positions = l == 0 ? initial : cascade.LevelMesh(l).vertices;
-    }
-    if (std::find(solved_levels.begin(), solved_levels.end(), l) == solved_levels.end()) continue;
+  OneShotPass pass(options_, cascade, setup, wait_for, std::move(initial), context);
+  const std::vector<int>& solved_levels = pass.solved_levels();
+  setup.AddLevels(std::vector<int>(solved_levels.rbegin() + 1, solved_levels.rend()));
 
-    wait_for(l);
-    Stopwatch level_clock;
-    LevelSolver& solver = *cascade.solvers[l];
-    const LevelSolveRequest request = options_.Request(l, levels, from_rotations, diagonal);
-    const LevelSolveResult run =
-        setup.Isolated(context, [&] { return solver.Solve(state, request, context); });
-    cascade.level_seconds[l] += level_clock.Seconds();
-    level_notes.insert(level_notes.end(), run.notes.begin(), run.notes.end());
-    result.total_iterations += run.iterations;
-    const Mesh& level_mesh = cascade.LevelMesh(l);
-    result.levels.push_back(LevelResult{l, level_mesh.num_vertices(), level_mesh.num_elements(),
-                                        run.iterations, run.energy, cascade.level_seconds[l],
-                                        run.converged, solver.num_unknowns(), run.linear_solves,
-                                        run.measures});
-    if (l == 0) {
-      result.energy = run.energy;
-      result.iterations = run.iterations;
-      result.converged = run.converged;
-    }
-    if (run.stopped_by_callback) {
-      result.stopped_by_callback = true;
-      if (l > 0) {
-        // Finish on the finest level without iterating: up-sample what we have.
-        for (int f = l - 1; f >= 0; --f) cascade.Upsample(f, state);
-        wait_for(0);
-        result.energy = cascade.solvers[0]->FitRotations(state, context);
-      }
-      break;
-    }
-    if (l > 0) cascade.solvers[l].reset();  // the level's factor is no longer needed
-  }
+  // S: solve from the coarsest level down (Algorithm 2, second loop).
+  Stopwatch solve_clock;
+  wait_for(coarsest);
+  cascade.TakeRotationSite(coarsest);
+  std::vector<std::string> level_notes;
+  LevelState& state = cascade.Run(coarsest, pass, context, result, level_notes);
   for (int l : solved_levels) wait_for(l);
   for (int l : solved_levels) {
-    result.timings.precompute += cascade.precompute_seconds[l];
-    result.timings.constrain += cascade.constrain_seconds[l];
+    result.timings.precompute += precompute_seconds[l];
+    result.timings.constrain += constrain_seconds[l];
   }
   result.timings.solve = solve_clock.Seconds() - waiting_seconds;
-  std::reverse(result.levels.begin(), result.levels.end());
 
-  const LevelSolver& finest = *cascade.solvers[0];
+  const LevelSolver& finest = cascade.solver(0);
   result.measures = finest.AuxiliaryMeasures(state, context);
   result.constraints = finest.constraint_report();
   result.positions = std::move(state.positions);

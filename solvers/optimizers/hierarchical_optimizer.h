@@ -87,14 +87,10 @@ class HierarchicalOptimizer final : public Optimizer {
 
   explicit HierarchicalOptimizer(Options options) : options_(std::move(options)) {}
 
-  /// Registry factories; `level_solvers` is the registry `inner` names (kept alive by them).
-  static Registry<Optimizer>::Factory Factory(
-      std::shared_ptr<const Registry<LevelSolver>> level_solvers);
-  static Registry<Optimizer>::Factory OneLevelFactory(
-      std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string inner);
-
   OptimizeResult Optimize(const DeformationProblem& problem, const ComponentFactory& factory,
                           const Context& context) const override;
+  /// The level solver's requirements on the energy (LevelSolver::CheckCompatible).
+  void CheckComponents(const ComponentFactory& factory) const override;
 
   const Options& options() const { return options_; }
 

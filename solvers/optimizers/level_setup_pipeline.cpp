@@ -13,36 +13,6 @@
 
 namespace harap {
 
-struct SerializedFactory::Lock {
-  std::mutex mutex;
-};
-
-SerializedFactory::SerializedFactory(const ComponentFactory& factory)
-    : factory_(factory), lock_(std::make_unique<Lock>()) {}
-
-SerializedFactory::~SerializedFactory() = default;
-
-std::unique_ptr<Energy> SerializedFactory::MakeEnergy() const {
-  const std::lock_guard guard(lock_->mutex);
-  return factory_.MakeEnergy();
-}
-
-std::unique_ptr<LinearSolver> SerializedFactory::MakeLinearSolver(int level,
-                                                                  Index num_unknowns) const {
-  const std::lock_guard guard(lock_->mutex);
-  return factory_.MakeLinearSolver(level, num_unknowns);
-}
-
-std::unique_ptr<Hierarchy> SerializedFactory::MakeHierarchy() const {
-  const std::lock_guard guard(lock_->mutex);
-  return factory_.MakeHierarchy();
-}
-
-std::unique_ptr<Upsampler> SerializedFactory::MakeUpsampler() const {
-  const std::lock_guard guard(lock_->mutex);
-  return factory_.MakeUpsampler();
-}
-
 // Shared with the background task. The task runs in a task_group that the pipeline's destructor
 // waits for (running the task itself if no worker ever picked it up: it then finds `cancelled`
 // and returns at once), so no task outlives the pipeline (an enqueued task that never ran was

@@ -8,27 +8,8 @@
 #include <vector>
 
 #include "framework/context.h"
-#include "framework/optimizer.h"
 
 namespace harap {
-
-/// A ComponentFactory that forwards to another one, one call at a time: creating a component
-/// reads config tables that record which keys were used, so creations from two threads take
-/// turns.
-class SerializedFactory final : public ComponentFactory {
- public:
-  explicit SerializedFactory(const ComponentFactory& factory);
-  ~SerializedFactory() override;
-  std::unique_ptr<Energy> MakeEnergy() const override;
-  std::unique_ptr<LinearSolver> MakeLinearSolver(int level, Index num_unknowns) const override;
-  std::unique_ptr<Hierarchy> MakeHierarchy() const override;
-  std::unique_ptr<Upsampler> MakeUpsampler() const override;
-
- private:
-  struct Lock;
-  const ComponentFactory& factory_;
-  std::unique_ptr<Lock> lock_;
-};
 
 /// Sets up the levels of a hierarchy (precomputation and factorization, via `setup(level)`) while
 /// the caller solves the levels that are ready: the hierarchical optimizer's P and C phases of

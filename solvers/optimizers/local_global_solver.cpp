@@ -1,13 +1,9 @@
 // SPDX-License-Identifier: MIT
 #include "solvers/optimizers/local_global_solver.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <random>
 
 #include "framework/config.h"
 #include "framework/error.h"
@@ -15,8 +11,30 @@
 
 namespace harap {
 
-std::unique_ptr<LevelSolver> LocalGlobalSolver::Create(const ConfigNode& node) {
-  return std::make_unique<LocalGlobalSolver>(ReadLocalGlobalOptions(node));
+namespace {
+
+// Why Newton steps (LocalGlobalOptions::newton) cannot run with `energy` on a level that masks
+// its handles (`handle_edits`, an interactive session) or not; "" if they can.
+std::string NewtonProblem(const Energy& energy, bool handle_edits) {
+  if (handle_edits) {
+    return "optimizer.newton works on the eliminated global system of a one-shot run; an "
+           "interactive session masks its handles instead: set newton = 0 (anderson works in a "
+           "session)";
+  }
+  if (!energy.has_rotation_derivative()) {
+    return "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
+           "derivative); this energy has none, or fits its rotations to a part of the energy: "
+           "set newton = 0 or choose another energy";
+  }
+  return {};
+}
+
+}  // namespace
+
+void LocalGlobalSolver::CheckCompatible(const Energy& energy, bool handle_edits) const {
+  if (options_.newton == 0) return;
+  const std::string problem = NewtonProblem(energy, handle_edits);
+  if (!problem.empty()) throw ConfigError(problem);
 }
 
 std::unique_ptr<LevelSolver> LocalGlobalSolver::CreateAnother() const {
@@ -41,18 +59,14 @@ LocalGlobalSolver::LocalGlobalSolver(const Mesh& mesh, const std::vector<Index>&
 
 void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                                    const Context& context) {
-  if (setup.handle_edits && options_.newton > 0) {
-    throw ConfigError(
-        "Newton steps work on the eliminated global system of a one-shot run; a session masks "
-        "its handles instead: set newton = 0 (anderson works in a session)");
-  }
   Stopwatch clock;
   setup_ = setup;
   level_ = setup.level;
   context.ReportPhase(fmt::format("precomputing level {}", level_));
-  ordering_ = LocalityOrdering(*setup.mesh);
   energy_ = factory.MakeEnergy();
   data_term_ = nullptr;
+  CheckCompatible(*energy_, setup.handle_edits);  // the run's check, for callers without one
+  ordering_ = LocalityOrdering(*setup.mesh);
   if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
@@ -243,18 +257,6 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
   PlaceConstrainedVertices(constraints_, site, have_rotations ? &state.rotations : nullptr,
                            state.positions);
   LevelSolveResult result;
-  if (request.global_step_only && request.rotation_source != nullptr) {
-    HARAP_CHECK(accepts_gathered_rotations() && request.gathered_rotations != nullptr,
-                "level {}: gathered rotations for a level that cannot take them", level_);
-    // The straight preview: the coarse rotations gathered by the global step itself, in the
-    // level's own numbering (the state's rotations are left as they are).
-    result.linear_solves.Add(GatheredGlobalStep(
-        GatheredSource(*request.rotation_source), *request.gathered_rotations,
-        constraints_.vertices, constraints_.mean_target, state.positions, context));
-    result.iterations = 1;
-    result.energy = std::numeric_limits<double>::quiet_NaN();
-    return result;
-  }
   if (request.global_step_only && have_rotations) {
     // The paper's approximation: one global solve from the given rotations, no local step (the
     // energy would cost one).
@@ -277,6 +279,7 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
   result.converged = run.converged;
   result.stopped_by_callback = run.stopped_by_callback;
   result.linear_solves = run.linear_solves;
+  result.weights = energy_->weights();
   if (options.anderson > 0) result.measures["accelerated_iterations"] = run.accelerated_iterations;
   if (options.newton > 0) {
     result.measures["newton_steps"] = run.newton_steps;
@@ -315,26 +318,9 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
   return summary;
 }
 
-bool LocalGlobalSolver::accepts_gathered_rotations() const {
-  // GatheredGlobalStep's conditions: one rotation per vertex, exact (input-level) targets.
-  return energy_ != nullptr && setup_.mesh != nullptr && constraints_.soft.empty() &&
-         energy_->rotation_site() == RotationSite::kVertex &&
-         energy_->num_rotations() == setup_.mesh->num_vertices() &&
-         !constraints_.follow_rotations();
-}
-
-const std::vector<Index>& LocalGlobalSolver::GatheredSource(const std::vector<Index>& source) {
-  // Renumbered once per map (a session passes the same one every preview frame).
-  if (gathered_map_ != source) {
-    HARAP_CHECK(static_cast<Index>(source.size()) == energy_->num_rotations(),
-                "{} rotation sources for {} sites", source.size(), energy_->num_rotations());
-    gathered_map_ = source;
-    gathered_source_.resize(source.size());
-    for (size_t s = 0; s < source.size(); ++s) {
-      gathered_source_[s] = source[ordering_.old_vertex[s]];
-    }
-  }
-  return gathered_source_;
+GatheredPreviewStep::Level LocalGlobalSolver::GatheredLevel() {
+  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
+  return GatheredPreviewStep::Level{*energy_, *system_, *solver_, ordering_, level_};
 }
 
 SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& source,
@@ -342,173 +328,34 @@ SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& sou
                                                    const std::vector<Index>& handles,
                                                    const Positions& targets, Positions& positions,
                                                    const Context& context) {
-  HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
-  HARAP_CHECK(energy_->rotation_site() == RotationSite::kVertex &&
-                  static_cast<Index>(source.size()) == energy_->num_rotations(),
-              "{} rotation sources for {} sites", source.size(), energy_->num_rotations());
-  const Index n = system_->num_vertices();
-  HARAP_CHECK(positions.rows() == n && targets.rows() == static_cast<Index>(handles.size()),
-              "{} positions for {} vertices, {} targets for {} handles", positions.rows(), n,
-              targets.rows(), handles.size());
-  Positions& u = internal_state_.positions;
-  Rotations& rotations = internal_state_.rotations;
-  // Only the fixed rows are read (a direct solver ignores the rest; an iterative one starts
-  // from them all).
-  if (!solver_->is_direct() || u.rows() != n) {
-    ordering_.ToNew(positions, u);
-  } else {
-    for (Index v : system_->fixed_vertices()) u.row(v) = positions.row(ordering_.old_vertex[v]);
-  }
-  for (size_t k = 0; k < handles.size(); ++k) {
-    u.row(ordering_.new_vertex[handles[k]]) = targets.row(static_cast<Index>(k));
-  }
-  GatheredRhs& map = gathered_rhs_;
-  if (map.num_coarse != static_cast<Index>(coarse.size()) || map.source != source) {
-    BuildGatheredRhs(source, static_cast<Index>(coarse.size()), context);
-  }
-  if (!map.linear) {
-    GatherRotations(source, coarse, rotations, context);
-  }
-  system_->SetFixedPositions(u);
-  SolveSummary summary;
-  if (system_->num_free() > 0) {
-    if (map.linear) {
-      map.coarse.assign(coarse.begin(), coarse.end());
-      map.coarse.push_back(Rotation::Identity());
-      context.Run([&] {
-        tbb::parallel_for(tbb::blocked_range<Index>(0, n, 4096),
-                          [&](const tbb::blocked_range<Index>& range) {
-                            for (Index j = range.begin(); j != range.end(); ++j) {
-                              Eigen::Vector3d b = Eigen::Vector3d::Zero();
-                              for (Index e = map.offset[j]; e < map.offset[j + 1]; ++e) {
-                                b.noalias() += map.coarse[map.cluster[e]] * map.weight[e];
-                              }
-                              rhs_.row(j) = b.transpose();
-                            }
-                          });
-      });
-    } else {
-      energy_->AssembleRhs(rotations, rhs_, context);
-    }
-    system_->ReducedRhs(rhs_, reduced_rhs_);
-    if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
-    summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
-    if (!summary.success()) {
-      throw NumericalError(
-          fmt::format("linear solve failed on level {}: {}", level_, summary.message));
-    }
-    system_->ScatterFree(reduced_x_, u);
-  }
-  // Back to the mesh's numbering, in parallel (ToOld is a serial loop).
-  context.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, n, 4096),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index v = range.begin(); v != range.end(); ++v) {
-                          positions.row(v) = u.row(ordering_.new_vertex[v]);
-                        }
-                      });
-  });
-  return summary;
+  return gathered_step_.Run(GatheredLevel(), source, coarse, handles, targets, positions, context);
 }
 
-void LocalGlobalSolver::BuildGatheredRhs(const std::vector<Index>& source, Index num_coarse,
-                                         const Context& context) {
-  GatheredRhs& map = gathered_rhs_;
-  map = GatheredRhs();
-  map.source = source;
-  map.num_coarse = num_coarse;
-  const Index n = system_->num_vertices();
-  const Index clusters = num_coarse + 1;  // + the identity
-  const auto cluster_of = [&](Index site) {
-    return source[site] == kNoVertex ? num_coarse : source[site];
-  };
-  // The clusters each vertex's right-hand side may see: those of the sites of its closed
-  // neighbourhood in A (an ARAP energy couples a vertex to the rotations of its elements'
-  // vertices); the verification below catches an energy that reaches further.
-  const SparseMatrix& a = energy_->system_matrix();
-  std::vector<Index> offset(n + 1, 0);
-  std::vector<Index> near;
-  std::vector<Index> mark(clusters, -1);
-  for (Index j = 0; j < n; ++j) {
-    const auto visit = [&](Index site) {
-      const Index c = cluster_of(site);
-      if (mark[c] != j) {
-        mark[c] = j;
-        near.push_back(c);
-      }
-    };
-    visit(j);
-    for (SparseMatrix::InnerIterator it(a, j); it; ++it) visit(static_cast<Index>(it.row()));
-    offset[j + 1] = static_cast<Index>(near.size());
-  }
-  // Greedy coloring: clusters seen by one vertex get different colors.
-  std::vector<std::vector<Index>> conflicts(clusters);
-  for (Index j = 0; j < n; ++j) {
-    for (Index e = offset[j]; e < offset[j + 1]; ++e) {
-      for (Index f = offset[j]; f < offset[j + 1]; ++f) {
-        if (e != f) conflicts[near[e]].push_back(near[f]);
-      }
-    }
-  }
-  std::vector<int> color(clusters, -1);
-  int colors = 0;
-  std::vector<char> used;
-  for (Index c = 0; c < clusters; ++c) {
-    used.assign(colors + 1, 0);
-    for (Index d : conflicts[c]) {
-      if (color[d] >= 0) used[color[d]] = 1;
-    }
-    int k = 0;
-    while (used[k]) ++k;
-    color[c] = k;
-    colors = std::max(colors, k + 1);
-  }
-  // One probe per color: the identity on that color's sites, zero elsewhere; a vertex's row is
-  // w_jc of the one cluster c of that color it sees, and zero if it sees none.
-  std::vector<Eigen::Vector3d> weight(near.size(), Eigen::Vector3d::Zero());
-  Rotations probe(source.size());
-  Positions probe_rhs(n, 3);
-  for (int k = 0; k < colors; ++k) {
-    for (size_t s = 0; s < source.size(); ++s) {
-      probe[s] = color[cluster_of(static_cast<Index>(s))] == k ? Rotation(Rotation::Identity())
-                                                               : Rotation(Rotation::Zero());
-    }
-    energy_->AssembleRhs(probe, probe_rhs, context);
-    for (Index j = 0; j < n; ++j) {
-      bool seen = false;
-      for (Index e = offset[j]; e < offset[j + 1]; ++e) {
-        if (color[near[e]] != k) continue;
-        weight[e] = probe_rhs.row(j).transpose();
-        seen = true;
-      }
-      if (!seen && probe_rhs.row(j).squaredNorm() != 0.0) return;  // reaches further: not used
-    }
-  }
-  map.offset = std::move(offset);
-  map.cluster = std::move(near);
-  map.weight = std::move(weight);
-  // Verify on arbitrary matrices (B is linear in them): the probed map must reproduce
-  // AssembleRhs() to rounding, or it is not used.
-  Rotations random_coarse(clusters);
-  std::mt19937 generator(12345);
-  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  for (Rotation& r : random_coarse) {
-    for (int k = 0; k < 9; ++k) r(k) = uniform(generator);
-  }
-  for (size_t s = 0; s < source.size(); ++s) {
-    probe[s] = random_coarse[cluster_of(static_cast<Index>(s))];
-  }
-  energy_->AssembleRhs(probe, probe_rhs, context);
-  double largest = 0.0, error = 0.0;
-  for (Index j = 0; j < n; ++j) {
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    for (Index e = map.offset[j]; e < map.offset[j + 1]; ++e) {
-      b += random_coarse[map.cluster[e]] * map.weight[e];
-    }
-    largest = std::max(largest, probe_rhs.row(j).cwiseAbs().maxCoeff());
-    error = std::max(error, (probe_rhs.row(j).transpose() - b).cwiseAbs().maxCoeff());
-  }
-  map.linear = error <= 1e-12 * largest;
+LevelSolveResult LocalGlobalSolver::GlobalStepFromGathered(LevelState& state,
+                                                           const std::vector<Index>& source,
+                                                           const Rotations& coarse,
+                                                           const Context& context) {
+  HARAP_CHECK(accepts_gathered_rotations(),
+              "level {}: gathered rotations for a level that cannot take them", level_);
+  PlaceConstrainedVertices(constraints_, energy_->rotation_site(), nullptr, state.positions);
+  // In the level's own numbering; the state's rotations are left as they are.
+  const GatheredPreviewStep::Level level = GatheredLevel();
+  LevelSolveResult result;
+  result.linear_solves.Add(gathered_step_.Run(level, gathered_step_.InternalSource(source, level),
+                                              coarse, constraints_.vertices,
+                                              constraints_.mean_target, state.positions, context));
+  result.iterations = 1;
+  result.energy = std::numeric_limits<double>::quiet_NaN();
+  return result;
+}
+
+bool LocalGlobalSolver::accepts_gathered_rotations() const {
+  // GatheredGlobalStep's conditions: one rotation per vertex, exact (input-level) targets.
+  // Soft targets are terms of the energy, which the gathered step does not assemble.
+  return energy_ != nullptr && setup_.mesh != nullptr && constraints_.soft.empty() &&
+         energy_->rotation_site() == RotationSite::kVertex &&
+         energy_->num_rotations() == setup_.mesh->num_vertices() &&
+         !constraints_.follow_rotations();
 }
 
 std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
@@ -567,16 +414,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     trial_positions_ = state.positions;
   }
   if (options.newton > 0) {
-    if (!energy_->has_rotation_derivative()) {
-      throw ConfigError(
-          "optimizer.newton needs an energy whose local step minimizes it (with a rotation "
-          "derivative); this energy has none, or fits its rotations to a part of the energy");
-    }
-    if (masked_ != nullptr) {
-      throw ConfigError(
-          "optimizer.newton works on the eliminated global system of a one-shot run; an "
-          "interactive session masks its handles instead: set `newton` to 0 (or use `anderson`)");
-    }
+    // Run()'s options may differ from the level's (CheckCompatible checked those).
+    const std::string problem = NewtonProblem(*energy_, masked_ != nullptr);
+    if (!problem.empty()) throw ConfigError(problem);
     newton_.Reset(system_->num_vertices(), system_->num_free(), options.newton_exact_hessian);
   }
   while (result.iterations < options.max_iterations) {

@@ -13,6 +13,7 @@
 #include "framework/level_solver.h"
 #include "framework/optimizer.h"
 #include "solvers/optimizers/anderson_acceleration.h"
+#include "solvers/optimizers/gathered_preview_step.h"
 #include "solvers/optimizers/newton_cg.h"
 #include "solvers/optimizers/vertex_ordering.h"
 
@@ -66,8 +67,6 @@ class LocalGlobalSolver final : public LevelSolver {
   static constexpr std::string_view kName = "local_global";
 
   explicit LocalGlobalSolver(const LocalGlobalOptions& options = {}) : options_(options) {}
-  /// Reads LocalGlobalOptions (ReadLocalGlobalOptions); the caller rejects unknown keys.
-  static std::unique_ptr<LevelSolver> Create(const ConfigNode& node);
 
   /// The P phase only (Precompute()); Constrain() must follow before Run(). `input_mesh`: see
   /// LevelSetup.
@@ -81,6 +80,9 @@ class LocalGlobalSolver final : public LevelSolver {
 
   // LevelSolver.
   std::unique_ptr<LevelSolver> CreateAnother() const override;
+  /// Newton steps need an energy with a rotation derivative and the eliminated system (no
+  /// session).
+  void CheckCompatible(const Energy& energy, bool handle_edits) const override;
   void Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                   const Context& context) override;
   /// Eliminated: a new solver from `factory` factors the reduced system. Masked
@@ -107,9 +109,11 @@ class LocalGlobalSolver final : public LevelSolver {
   std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
                                                   const Context& context) const override;
   RotationSite rotation_site() const override { return energy_->rotation_site(); }
-  /// Per-vertex rotations on a level with exact targets (the input level): Solve() with
-  /// request.global_step_only takes them gathered (GatheredGlobalStep()).
+  /// Per-vertex rotations on a level with exact targets (the input level): the preview's global
+  /// step takes them gathered (GatheredPreviewStep).
   bool accepts_gathered_rotations() const override;
+  LevelSolveResult GlobalStepFromGathered(LevelState& state, const std::vector<Index>& source,
+                                          const Rotations& coarse, const Context& context) override;
   Index num_unknowns() const override { return system_->num_free(); }
   ConstraintReport constraint_report() const override { return system_->report(); }
 
@@ -154,30 +158,13 @@ class LocalGlobalSolver final : public LevelSolver {
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
   /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
   SolveSummary GlobalStep(LevelState& state, const Context& context);
-  /// GlobalStep() for a preview whose rotations are gathered from a coarse level (Solve() with
-  /// request.global_step_only and request.rotation_source), without renumbering rotations or
-  /// positions into the level's order and back per call: internal rotation site s takes
-  /// coarse[source[s]] (kNoVertex: the identity; `source` in the internal numbering of
-  /// ordering(), one per site); the fixed rows take `handles`' `targets` and, for the other
-  /// fixed (pinned) vertices, their rows of `positions`; the free rows of `positions` (the
-  /// mesh's numbering) receive the solution. The same arithmetic as GlobalStep() on the
-  /// gathered rotations. Vertex rotation sites only.
-  ///
-  /// The right-hand side B(R) is linear in the rotations and, for the ARAP energies, of the form
-  /// B_j = Σ_s R_s c_js over the sites s near vertex j; with the rotations gathered from a few
-  /// coarse ones that is B_j = Σ_c R_c w_jc with one or two clusters c per vertex. The first
-  /// call with a `source` finds the w_jc by probing AssembleRhs() (one probe per color of a
-  /// coloring of the clusters in which no vertex sees two clusters of one color) and verifies
-  /// them against AssembleRhs() on random matrices; if they agree (to rounding), later calls
-  /// evaluate B from w (a few entries per vertex, cache-resident coarse rotations) instead of
-  /// gathering one rotation per site and assembling from the energy's full coupling: the same
-  /// right-hand side up to rounding. Otherwise every call gathers and assembles.
+  /// The gathered preview step (GatheredPreviewStep::Run) on this level: `source` in the
+  /// internal numbering of ordering(), `positions` in the mesh's.
   SolveSummary GatheredGlobalStep(const std::vector<Index>& source, const Rotations& coarse,
                                   const std::vector<Index>& handles, const Positions& targets,
                                   Positions& positions, const Context& context);
-  /// Whether GatheredGlobalStep() evaluates its right-hand side from the probed linear map
-  /// (false before its first call or when the probe did not reproduce AssembleRhs()).
-  bool gathered_rhs_is_linear() const { return gathered_rhs_.linear; }
+  /// Whether GatheredGlobalStep() evaluates its right-hand side from the probed linear map.
+  bool gathered_rhs_is_linear() const { return gathered_step_.rhs_is_linear(); }
 
   /// The level's energy; it works in the internal numbering of ordering().
   const Energy& energy() const { return *energy_; }
@@ -229,22 +216,9 @@ class LocalGlobalSolver final : public LevelSolver {
   Eigen::MatrixXd current_free_, accelerated_free_;
   Positions trial_positions_;
   NewtonCgStep newton_;
-  // GatheredGlobalStep's right-hand side as a linear map of the coarse rotations (see there):
-  // per internal vertex the entries [offset[j], offset[j+1]) of (cluster, w); cluster
-  // num_coarse stands for the identity (sites without a source).
-  struct GatheredRhs {
-    std::vector<Index> source;  ///< what it was built for
-    Index num_coarse = -1;
-    bool linear = false;  ///< the probed map reproduced AssembleRhs()
-    std::vector<Index> offset, cluster;
-    std::vector<Eigen::Vector3d> weight;
-    Rotations coarse;  ///< per call: the coarse rotations and the identity
-  };
-  void BuildGatheredRhs(const std::vector<Index>& source, Index num_coarse, const Context& context);
-  GatheredRhs gathered_rhs_;
-  // Solve()'s request.rotation_source (the mesh's numbering) and the same per internal site.
-  const std::vector<Index>& GatheredSource(const std::vector<Index>& source);
-  std::vector<Index> gathered_map_, gathered_source_;
+  // The preview's global step from gathered rotations (GlobalStepFromGathered()).
+  GatheredPreviewStep::Level GatheredLevel();
+  GatheredPreviewStep gathered_step_;
 };
 
 /// Initial positions of a problem: `problem.initial` or the rest positions, with constrained

@@ -168,3 +168,50 @@ TEST_CASE("every shared surface scenario loads and converges (small ones)", "[ex
     }
   }
 }
+
+TEST_CASE("RunDeform: the report shows each level's weights and warns about negative ones",
+          "[experiments]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Scenario scenario = ParseScenario(kScenario, "inline", ".");
+  auto run = [&](const std::string& weights, const std::string& coarse_weights) {
+    ConfigNode config;
+    config.Set("optimizer.type", "\"hierarchical\"");
+    config.Set("energy.type", "\"spokes\"");
+    if (!weights.empty()) config.Set("energy.weights", fmt::format("\"{}\"", weights));
+    if (!coarse_weights.empty()) {
+      config.Set("energy.coarse_weights", fmt::format("\"{}\"", coarse_weights));
+    }
+    const DeformOutcome outcome = RunDeform(registries, scenario, config, {});
+    return std::make_pair(outcome,
+                          nlohmann::json::parse(DeformReportJson(scenario, outcome, false)));
+  };
+  auto weight_warnings = [](const DeformOutcome& outcome) {
+    int count = 0;
+    for (const auto& warning : outcome.warnings) {
+      count += warning.find("negative edge weights") != std::string::npos;
+    }
+    return count;
+  };
+  SECTION("defaults: intrinsic Delaunay on every level, nothing negative, no warning") {
+    const auto [outcome, report] = run("", "");
+    REQUIRE(report["levels"].size() >= 2);
+    for (const auto& level : report["levels"]) {
+      CHECK(level["weights"] == "intrinsic_delaunay");
+      CHECK(level["negative_weights"] == 0);
+      CHECK(level["energy_can_be_negative"] == false);
+    }
+    CHECK(weight_warnings(outcome) == 0);
+    CHECK(outcome.result.energy >= 0.0);
+  }
+  SECTION("raw cotangents on every level: the coarse clusters have negative weights, warned") {
+    const auto [outcome, report] = run("cotan", "same");
+    Index negative = 0;
+    for (const auto& level : report["levels"]) {
+      CHECK(level["weights"] == "cotan");
+      negative += level["negative_weights"].get<Index>();
+      CHECK(level["energy_can_be_negative"] == (level["negative_weights"].get<Index>() > 0));
+    }
+    REQUIRE(negative > 0);
+    CHECK(weight_warnings(outcome) == 1);
+  }
+}

@@ -289,7 +289,9 @@ TEST_CASE("elements: flat mesh as 2D vs as a surface agree where they must", "[e
   surface.planar = false;
   ElementArapEnergy elements({});
   SpokesAndRimsEnergy spokes_and_rims({});
-  SpokesEnergy spokes({});
+  SpokesEnergy::Options raw_cotangents;  // the elements' weights are the mesh's own cotangents
+  raw_cotangents.weights.input_level = WeightScheme::kCotangent;
+  SpokesEnergy spokes(raw_cotangents);
   elements.Precompute(planar, context);
   spokes_and_rims.Precompute(surface, context);
   spokes.Precompute(surface, context);

@@ -312,3 +312,77 @@ TEST_CASE("energy options: unknown keys are rejected", "[energies]") {
   CHECK_THROWS_WITH(registries.energies.Create("nonexistent", ConfigNode()),
                     Catch::Contains("spokes_and_rims") && Catch::Contains("nonexistent"));
 }
+
+namespace {
+
+// Meshes with many obtuse angles (negative raw cotangent weights) and near-degenerate triangles:
+// a strongly jittered sphere, and a tube whose every other ring is pushed almost onto the next,
+// so its triangles are needles a thousandth as wide as long.
+std::vector<std::pair<std::string, Mesh>> ObtuseMeshes() {
+  Mesh needles = Tube(12, 16);
+  for (Index i = 0; i < needles.num_vertices(); ++i) {
+    const double z = needles.vertices(i, 2);
+    const long ring = std::lround(z * 11.0);
+    if (ring % 2 == 1) needles.vertices(i, 2) = (static_cast<double>(ring) - 0.999) / 11.0;
+  }
+  return {{"jittered sphere", Jittered(Icosphere(3), 20, 0.45, 3)},
+          {"needle tube", needles},
+          {"jittered 5-tet box", Jittered(TetBox(5, 4, 4, 5), 5, 0.2, 1)},
+          {"jittered planar grid", Jittered(PlanarGrid(7, 6), 7, 0.25, 2)}};
+}
+
+}  // namespace
+
+TEST_CASE("every energy: E >= 0 on obtuse and needle meshes, or it declares negative weights",
+          "[energies]") {
+  // An ARAP energy with non-negative weights is a sum of squares; one that is not must say so
+  // (Energy::weights().can_be_negative), which the report turns into a warning.
+  const Context context;
+  const Registries registries = MakeBuiltinRegistries();
+  std::mt19937 rng(17);
+  std::normal_distribution<double> normal;
+  for (const auto& name : registries.energies.Names()) {
+    for (const auto& [mesh_name, mesh] : ObtuseMeshes()) {
+      auto energy = registries.energies.Create(name, ConfigNode());
+      try {
+        energy->Precompute(mesh, context);
+      } catch (const InputError&) {
+        continue;
+      }
+      INFO(name << " on " << mesh_name);
+      const EnergyWeights weights = energy->weights();
+      CHECK(weights.negative_edges <= weights.edges);
+      if (weights.can_be_negative) {
+        CHECK(weights.negative_edges > 0);
+        continue;
+      }
+      const double scale = energy->system_matrix().diagonal().sum();
+      for (int trial = 0; trial < 6; ++trial) {
+        // Random deformations of growing size, in the plane for planar meshes.
+        Positions u = Deformed(mesh, 0.3 * trial);
+        for (Eigen::Index i = 0; i < u.size(); ++i) u.data()[i] += 0.05 * trial * normal(rng);
+        if (mesh.planar) u.col(2).setZero();
+        Rotations rotations = Identities(*energy);
+        const double e = energy->FitRotations(u, rotations, context);
+        CHECK(e >= -1e-10 * scale);
+        // Any rotations, not only the fitted ones: a sum of squares is ≥ 0 for all.
+        for (size_t s = 0; s < rotations.size(); ++s) {
+          rotations[s] = RandomMotionRotation(mesh, static_cast<unsigned>(s + 31 * trial));
+        }
+        CHECK(energy->Evaluate(u, rotations, context) >= -1e-10 * scale);
+      }
+    }
+  }
+}
+
+TEST_CASE("spokes with raw cotangent weights declares that it can be negative", "[energies]") {
+  const Registries registries = MakeBuiltinRegistries();
+  ConfigNode config;
+  config.Set("weights", "cotan");
+  auto energy = registries.energies.Create("spokes", config);
+  energy->Precompute(Jittered(Icosphere(3), 20, 0.45, 3), Context());
+  const EnergyWeights weights = energy->weights();
+  CHECK(weights.scheme == "cotan");
+  CHECK(weights.negative_edges > 0);
+  CHECK(weights.can_be_negative);
+}

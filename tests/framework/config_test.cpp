@@ -72,17 +72,21 @@ struct Widget {
 
 TEST_CASE("Registry creates by name and lists the valid names on errors", "[framework]") {
   Registry<Widget> registry("widget");
-  registry.Add("small", "a small widget", [](const ConfigNode& node) {
+  const auto make = [](int size) {
     auto widget = std::make_unique<Widget>();
-    widget->size = node.Get("size", 1, "the size");
-    node.RejectUnknownKeys();
+    widget->size = size;
     return widget;
-  });
-  registry.Add("large", "a large widget", [](const ConfigNode&) {
-    auto widget = std::make_unique<Widget>();
-    widget->size = 100;
-    return widget;
-  });
+  };
+  registry.Add(
+      "small", "a small widget",
+      [](const ConfigNode& node) {
+        const int size = node.Get("size", 1, "the size");
+        node.RejectUnknownKeys();
+        return size;
+      },
+      make);
+  registry.Add(
+      "large", "a large widget", [](const ConfigNode&) { return 100; }, make);
   CHECK(registry.Names() == std::vector<std::string>{"large", "small"});
   CHECK(registry.Create("small", ConfigNode::Parse("size = 3", "t"))->size == 3);
   CHECK(registry.Create(ConfigNode::Parse("type = \"large\"", "t"), "small")->size == 100);

@@ -1,8 +1,13 @@
 // SPDX-License-Identifier: MIT
 // The per-format readers (obj_reader.h, off_reader.h, ply_reader.h, stl_reader.h) called
 // directly: each gives what ReadMesh/ParseMesh give for its extension, names its source in
-// errors, and PLY reads WritePly's doubles back exactly.
+// errors, PLY reads WritePly's doubles back exactly, and binary OFF reads in both layouts.
+#include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstring>
+#include <sstream>
 #include <string>
 
 #include "framework/error.h"
@@ -14,6 +19,7 @@
 #include "io/ply_reader.h"
 #include "io/stl_reader.h"
 #include "tests/io/io_test_util.h"
+#include "tests/support/shared_data.h"
 
 namespace {
 
@@ -78,4 +84,92 @@ TEST_CASE("format readers: WritePly's double coordinates read back exactly", "[i
   const harap::Mesh mesh = harap::ParsePly(harap::ReadFileMaybeXz(file), file.string());
   CHECK(mesh.vertices == vertices);
   CHECK(mesh.elements == triangles);
+}
+
+namespace {
+
+// Appends `value` as 4 bytes in the given byte order.
+template <typename T>
+void AppendWord(std::string& bytes, T value, bool big_endian) {
+  static_assert(sizeof(T) == 4);
+  unsigned char word[4];
+  std::memcpy(word, &value, 4);
+  if (big_endian) std::reverse(word, word + 4);
+  bytes.append(reinterpret_cast<const char*>(word), 4);
+}
+
+// The square of kOff as binary OFF: little-endian without colour counts (pmp-library's layout)
+// or big-endian with a colour count per face (Geomview's), the quad split into two faces.
+std::string BinarySquareOff(bool big_endian, bool colour_counts) {
+  std::string bytes = "OFF BINARY\n";
+  for (int32_t count : {4, 2, 0}) AppendWord(bytes, count, big_endian);
+  for (float coordinate : {0.F, 0.F, 0.F, 1.F, 0.F, 0.F, 1.F, 1.F, 0.F, 0.F, 1.F, 0.1F}) {
+    AppendWord(bytes, coordinate, big_endian);
+  }
+  const std::array<std::array<int32_t, 3>, 2> faces = {{{0, 1, 2}, {0, 2, 3}}};
+  for (const std::array<int32_t, 3>& face : faces) {
+    AppendWord(bytes, int32_t{3}, big_endian);
+    for (int32_t corner : face) AppendWord(bytes, corner, big_endian);
+    if (colour_counts) {
+      AppendWord(bytes, int32_t{3}, big_endian);  // an RGB colour, ignored
+      for (float channel : {0.5F, 0.25F, 1.F}) AppendWord(bytes, channel, big_endian);
+    }
+  }
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("format readers: binary OFF in both layouts reads like the ASCII square", "[io]") {
+  const harap::Mesh ascii = harap::ParseOff(kOff, "square.off");
+  for (const bool big_endian : {false, true}) {
+    CAPTURE(big_endian);
+    const harap::Mesh binary =
+        harap::ParseMesh(BinarySquareOff(big_endian, /*colour_counts=*/big_endian), "square.off");
+    CHECK(binary.elements == ascii.elements);
+    // float32 coordinates: 0.1 is stored as the nearest float.
+    CHECK(binary.vertices(3, 2) == static_cast<double>(0.1F));
+    CHECK(binary.vertices.topRows(3) == ascii.vertices.topRows(3));
+  }
+}
+
+TEST_CASE("format readers: broken binary OFF files are errors naming the problem", "[io]") {
+  const std::string good = BinarySquareOff(false, false);
+  // Cut inside the faces, cut inside the counts, and garbage after the last face.
+  CHECK_THROWS_WITH(harap::ParseOff(good.substr(0, good.size() - 6), "cut.off"),
+                    StartsWith("cut.off: binary OFF that reads in none of the known layouts") &&
+                        Contains("little-endian without per-face colour counts: truncated file"));
+  CHECK_THROWS_WITH(harap::ParseOff(good.substr(0, 17), "short.off"),
+                    Contains("ends inside the vertex/face/edge counts"));
+  CHECK_THROWS_WITH(harap::ParseOff(good + "xyz", "long.off"),
+                    Contains("3 bytes follow the last face"));
+  // A face index out of range in an otherwise well-formed file names the face and its byte.
+  std::string bad_index = good;
+  const int32_t out_of_range = 9;
+  std::memcpy(bad_index.data() + bad_index.size() - 4, &out_of_range, 4);
+  CHECK_THROWS_WITH(harap::ParseOff(bad_index, "index.off"),
+                    Contains("byte 87: face 1: vertex index out of range: 9"));
+}
+
+TEST_CASE("format readers: every mesh of the shared dataset reads with its listed counts",
+          "[io][shared]") {
+  HARAP_REQUIRE_SHARED(manifest, "meshes/datasets/MANIFEST.tsv");
+  const std::string table = harap::testing::ReadBytes(manifest);
+  std::istringstream lines(table);
+  std::string line;
+  std::getline(lines, line);  // header: file vertices faces ...
+  int files = 0;
+  while (std::getline(lines, line)) {
+    std::istringstream fields(line);
+    std::string file;
+    harap::Index vertices = 0;
+    harap::Index faces = 0;
+    fields >> file >> vertices >> faces;
+    CAPTURE(file);
+    const harap::Mesh mesh = harap::ReadMesh(manifest.parent_path() / file);
+    CHECK(mesh.num_vertices() == vertices);
+    CHECK(mesh.num_elements() == faces);
+    ++files;
+  }
+  CHECK(files >= 8);
 }

@@ -34,22 +34,23 @@ class SweepsLevelSolver final : public LevelSolver {
     double tolerance = 1e-6;  ///< on max ‖Δu_i‖² / diag² of an iteration, as local_global's
     int max_iterations = 1000;  ///< per level
     int sweeps = 4;             ///< Gauss–Seidel sweeps per global step
+
+    // Step 2: options from the optimizer's table, read once when a run is resolved (the
+    // optimizer rejects unknown keys after).
+    static Options FromConfig(const ConfigNode& node) {
+      Options options;
+      options.tolerance = node.Get("tolerance", options.tolerance,
+                                   "stop when max squared displacement / diag² falls below this");
+      options.max_iterations =
+          node.Get("max_iterations", options.max_iterations, "cap on iterations (per level)");
+      options.sweeps = node.Get("sweeps", options.sweeps, "Gauss-Seidel sweeps per global step");
+      if (options.sweeps < 1)
+        node.Fail("sweeps", fmt::format("must be >= 1, got {}", options.sweeps));
+      return options;
+    }
   };
 
   explicit SweepsLevelSolver(const Options& options) : options_(options) {}
-
-  // Step 2: options from the optimizer's table (the optimizer rejects unknown keys after).
-  static std::unique_ptr<LevelSolver> Create(const ConfigNode& node) {
-    Options options;
-    options.tolerance = node.Get("tolerance", options.tolerance,
-                                 "stop when max squared displacement / diag² falls below this");
-    options.max_iterations =
-        node.Get("max_iterations", options.max_iterations, "cap on iterations (per level)");
-    options.sweeps = node.Get("sweeps", options.sweeps, "Gauss-Seidel sweeps per global step");
-    if (options.sweeps < 1)
-      node.Fail("sweeps", fmt::format("must be >= 1, got {}", options.sweeps));
-    return std::make_unique<SweepsLevelSolver>(options);
-  }
 
   // Step 3: the phases.
   std::unique_ptr<LevelSolver> CreateAnother() const override {
@@ -181,9 +182,9 @@ class SweepsLevelSolver final : public LevelSolver {
 // copy of that registry when they are registered, so register level solvers first.
 Registries RegistriesWithSweeps() {
   Registries registries = MakeBuiltinRegistries();
-  registries.level_solvers.Add("sweeps",
-                               "local/global with Gauss-Seidel sweeps for the global step",
-                               &SweepsLevelSolver::Create);
+  registries.level_solvers.AddParsed<SweepsLevelSolver>(
+      "sweeps", "local/global with Gauss-Seidel sweeps for the global step",
+      &SweepsLevelSolver::Options::FromConfig);
   registries.optimizers = Registry<Optimizer>("optimizer");
   RegisterOptimizers(registries.optimizers, registries.level_solvers);
   return registries;

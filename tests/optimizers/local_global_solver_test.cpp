@@ -99,19 +99,15 @@ TEST_CASE("local/global: the gathered global step equals the global step on gath
         INFO("round " << round);
         CHECK((gathered - reference.positions).cwiseAbs().maxCoeff() <=
               1e-12 * reference.positions.cwiseAbs().maxCoeff());
-        // The same through the LevelSolver interface (the session's preview request): the map
+        // The same through the LevelSolver interface (the session's preview): the map
         // in the mesh's numbering, the targets the level's own (moved by MoveTargets).
         std::vector<Index> mesh_source(n);
         for (Index v = 0; v < n; ++v) mesh_source[v] = cluster(v);
         solver.MoveTargets(targets);
         LevelState state;
         state.positions = tube.mesh.vertices;
-        LevelSolveRequest request;
-        request.global_step_only = true;
-        request.start_from_rotations = true;
-        request.rotation_source = &mesh_source;
-        request.gathered_rotations = &coarse;
-        const LevelSolveResult result = solver.Solve(state, request, context);
+        const LevelSolveResult result =
+            solver.GlobalStepFromGathered(state, mesh_source, coarse, context);
         CHECK(result.iterations == 1);
         CHECK(state.rotations.empty());  // never written out
         CHECK((state.positions - reference.positions).cwiseAbs().maxCoeff() <=

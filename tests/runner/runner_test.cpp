@@ -1,24 +1,32 @@
 // SPDX-License-Identifier: MIT
-// `harap run` / `harap report`: grid expansion, sharding, resume, failures, determinism, and two
-// GNU parallel shards merged against one unsharded run. Built-in meshes of a few hundred
+// `harap run` / `harap report`: grid expansion, sharding, resume, failures, determinism, two
+// GNU parallel shards merged against one unsharded run, shards of two hosts in one folder, and
+// a sweep on a real (local) Slurm. Built-in meshes of a few hundred
 // vertices keep every sweep well under a second per run.
 #include "runner/runner.h"
 
 #include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
 #include "framework/error.h"
+#include "io/mesh_writers.h"
 #include "runner/experiment.h"
+#include "runner/slurm.h"
+#include "tests/support/run_harap.h"
 #include "tests/support/shared_data.h"
 #include "tests/support/temp_folder.h"
 #include "tests/support/test_files.h"
+#include "tests/support/test_meshes.h"
 
 using namespace harap;
 namespace fs = std::filesystem;
@@ -45,8 +53,9 @@ translate = [0.0, 0.0, 0.2]
     return LoadExperiment(Write("experiment.toml", config_text));
   }
   SweepSummary Run(const Experiment& experiment, const std::string& out, Shard shard = {},
-                   int jobs = 1) const {
+                   int jobs = 1, const std::string& host = "") const {
     RunnerOptions options;
+    options.host = host;
     options.out_dir = dir / out;
     options.shard = shard;
     options.jobs = jobs;
@@ -220,6 +229,55 @@ template = {{ axis = "longest", fixed = 0.1, moved = 0.2, degrees = 30.0 }}
   CHECK(scenario.find("axis = [0.0, 0.0, 1.0], degrees = 30") != std::string::npos);
 }
 
+TEST_CASE("Experiment: generated scenarios, meshes x kinds x refine; bad meshes fail alone",
+          "[experiments][runner]") {
+  Workspace workspace("generated");
+  fs::create_directories(workspace.dir / "meshes");
+  const Mesh tube = testing::Tube(16, 10);
+  WriteMesh(workspace.dir / "meshes" / "tube.ply", tube.vertices, tube.elements);
+  workspace.Write("meshes/empty.obj", "");
+  workspace.Write("meshes/tiny.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const Experiment experiment = workspace.Load(R"(
+[scenarios]
+meshes = "meshes/*"
+kinds = ["bend", "twist"]
+refine = [0, 1]
+[optimizer]
+tolerance = 1e-4
+)");
+  std::vector<std::string> names;
+  for (const ExperimentScenario& scenario : experiment.scenarios) names.push_back(scenario.name);
+  CHECK(names == std::vector<std::string>{"empty-bend", "empty-bend-r1", "empty-twist",
+                                          "empty-twist-r1", "tiny-bend", "tiny-bend-r1",
+                                          "tiny-twist", "tiny-twist-r1", "tube-bend",
+                                          "tube-bend-r1", "tube-twist", "tube-twist-r1"});
+  const SweepSummary summary = workspace.Run(experiment, "out");
+  CHECK(summary.succeeded == 4);
+  CHECK(summary.failed == 8);
+  for (const ExperimentRun& run : experiment.runs) {
+    const auto report =
+        nlohmann::json::parse(ReadText(workspace.dir / "out" / "runs" / (run.id + ".json")));
+    const std::string& name = experiment.scenarios[run.scenario].name;
+    CAPTURE(name);
+    if (name.starts_with("tube")) {
+      CHECK(report["run"]["status"] == "ok");
+      const int vertices = report["mesh"]["vertices"];
+      if (name.ends_with("-r1")) {
+        CHECK(vertices > 3 * tube.num_vertices());  // Loop-refined once
+      } else {
+        CHECK(vertices == tube.num_vertices());
+      }
+    } else {
+      CHECK(report["run"]["status"] == "failed");
+      CHECK_THAT(report["run"]["error"].get<std::string>(),
+                 Catch::Contains(name.starts_with("tiny") ? "cannot place handles" : "empty.obj"));
+    }
+  }
+  // A typo in a kind fails before any run, naming the valid kinds.
+  CHECK_THROWS_WITH(workspace.Load("[scenarios]\nmeshes = \"meshes/*\"\nkinds = [\"bent\"]\n"),
+                    Catch::Contains("bend, twist, lift, stretch"));
+}
+
 TEST_CASE("Sharding partitions the runs exactly", "[experiments][runner]") {
   for (int count = 1; count <= 5; ++count) {
     std::vector<int> owners(23, 0);
@@ -245,6 +303,43 @@ TEST_CASE("Sharding partitions the runs exactly", "[experiments][runner]") {
   }
   CHECK(total == 4);
   CHECK(fs::exists(workspace.dir / "out" / "results-shard-2-of-3.csv"));
+}
+
+TEST_CASE("Shards on two hosts share one folder: each removes only its own host's stale files",
+          "[experiments][runner]") {
+  Workspace workspace("two-hosts");
+  const Experiment experiment = workspace.Load(kSmallSweep);
+  const fs::path out = workspace.dir / "out";
+  fs::create_directories(out / "runs");
+  // A PID that is not running: a child that has exited and been reaped.
+  const pid_t gone = fork();
+  if (gone == 0) _exit(0);
+  REQUIRE(gone > 0);
+  waitpid(gone, nullptr, 0);
+  // The same dead PID on both hosts (PIDs repeat across hosts), and a live process of host A.
+  const fs::path stale_a = out / "runs" / fmt::format(".x.json.{}@node-a.tmp", gone);
+  const fs::path stale_b = out / "runs" / fmt::format(".x.json.{}@node-b.tmp", gone);
+  const fs::path live_a = out / "runs" / fmt::format(".y.json.{}@node-a.tmp", getppid());
+  for (const fs::path& file : {stale_a, stale_b, live_a}) std::ofstream(file) << "partial";
+
+  // Host A's shard: its own dead process's file goes; host B's file (whose PID host A cannot
+  // check) and the live one stay.
+  CHECK(workspace.Run(experiment, "out", ParseShard("0/2"), 1, "node-a").succeeded == 2);
+  CHECK_FALSE(fs::exists(stale_a));
+  CHECK(fs::exists(stale_b));
+  CHECK(fs::exists(live_a));
+  // Host B's shard: under another name (dots, as gethostname may give, become '_') it leaves
+  // the file alone; under its own name it removes its stale file.
+  CHECK(workspace.Run(experiment, "out", ParseShard("1/2"), 1, "node.b").succeeded == 2);
+  CHECK(fs::exists(stale_b));  // "node.b" is written "node_b": not this file's host
+  CHECK(workspace.Run(experiment, "out", ParseShard("1/2"), 1, "node-b").skipped == 2);
+  CHECK_FALSE(fs::exists(stale_b));
+  CHECK(fs::exists(live_a));
+  // Both hosts' results merge into one folder, nothing lost.
+  const MergeSummary merged = MergeResults(out);
+  CHECK(merged.succeeded == 4);
+  CHECK(merged.missing == 0);
+  CHECK(Energies(out).size() == 4);
 }
 
 TEST_CASE("Resume skips finished runs; a failing run is recorded and the sweep goes on",
@@ -352,4 +447,123 @@ TEST_CASE("harap report writes report.md from a run folder", "[experiments][runn
   CHECK(report.find("| cylinder | ") != std::string::npos);
   CHECK(fs::exists(out / "figures" / "phases.png"));
   CHECK(fs::exists(out / "figures" / "phases.svg"));
+}
+
+namespace {
+
+// A private single-node Slurm (.ci/slurm-local) for the duration of a test; SLURM_CONF points
+// harap, sbatch and squeue at it.
+struct LocalSlurm {
+  explicit LocalSlurm(const fs::path& folder) : dir(folder) {
+    const auto started = testing::RunCommand(fmt::format(
+        "{}/.ci/slurm-local start {}", ::harap::testing::SourceDir().string(), dir.string()));
+    up = started.status == 0;
+    output = started.output;
+    if (up) setenv("SLURM_CONF", (dir / "slurm.conf").c_str(), 1);
+  }
+  ~LocalSlurm() {
+    (void)testing::RunCommand(fmt::format("{}/.ci/slurm-local stop {}",
+                                          ::harap::testing::SourceDir().string(), dir.string()));
+    unsetenv("SLURM_CONF");
+  }
+  // Waits until the queue is empty (at most `seconds`); false on timeout.
+  bool WaitForEmptyQueue(double seconds) const {
+    for (int i = 0; i < static_cast<int>(seconds * 10); ++i) {
+      const auto queue = testing::RunCommand("squeue -h");
+      if (queue.status == 0 && queue.output.empty()) return true;
+      usleep(100000);
+    }
+    return false;
+  }
+  fs::path dir;
+  bool up = false;
+  std::string output;
+};
+
+}  // namespace
+
+TEST_CASE("harap run --slurm on a real Slurm: a cancelled task resumed, merged = unsharded",
+          "[experiments][runner][slurm]") {
+  if (std::system("command -v sbatch >/dev/null && command -v slurmctld >/dev/null && "
+                  "command -v slurmd >/dev/null && command -v munged >/dev/null") != 0) {
+    WARN(
+        "skipped: Slurm is not installed (Debian packages slurmctld slurmd slurm-client munge; "
+        ".ci/setup installs them)");
+    return;
+  }
+  Workspace workspace("slurm");
+  LocalSlurm slurm(workspace.dir / "cluster");
+  INFO(slurm.output);
+  REQUIRE(slurm.up);
+  // Six runs of about a second each (a fixed number of iterations) in three shards.
+  workspace.Write("slow.toml", testing::kSlowCylinderScenario);
+  const std::string config = workspace.Write("sweep.toml", R"(
+[scenarios]
+files = ["slow.toml"]
+[slurm]
+tasks = 3
+cpus_per_task = 1
+[optimizer]
+tolerance = 1e-30
+[grid]
+"optimizer.max_iterations" = [400, 401, 402, 403, 404, 405]
+)");
+  const fs::path out = workspace.dir / "out";
+  const auto submitted =
+      testing::RunHarap(fmt::format("run {} --out {} --slurm", config, out.string()));
+  INFO(submitted.output);
+  REQUIRE(submitted.status == 0);
+  CHECK_THAT(submitted.output, Catch::Contains("(3 of 3 shards: 0,1,2)"));
+  const std::string script = ReadText(out / "slurm" / "array.sh");
+  CHECK_THAT(script, Catch::Contains("--shard \"${SLURM_ARRAY_TASK_ID}/3\""));
+  CHECK_THAT(script, Catch::Contains(fmt::format("--out '{}'", out.string())));
+
+  // Cancel shard 1 while it runs.
+  const std::string array_job = nlohmann::json::parse(
+      ReadText(out / "slurm" / "submissions.json"))["submissions"][0]["array_job"];
+  bool cancelled = false;
+  for (int i = 0; i < 600 && !cancelled; ++i) {
+    const auto state = testing::RunCommand(fmt::format("squeue -h -r -j {}_1 -o %T", array_job));
+    if (state.output == "RUNNING\n") {
+      usleep(300000);
+      cancelled = testing::RunCommand(fmt::format("scancel {}_1", array_job)).status == 0;
+    }
+    usleep(100000);
+  }
+  REQUIRE(cancelled);
+  REQUIRE(slurm.WaitForEmptyQueue(120));
+  const auto after_cancel = testing::RunHarap("status " + out.string());
+  INFO(after_cancel.output);
+  CHECK_THAT(after_cancel.output, Catch::Contains("no job of the last submission is queued"));
+  const FolderStatus partial = CollectStatus(out);
+  REQUIRE(partial.tasks == 3);
+  CHECK(partial.shards[0].done == 2);
+  CHECK(partial.shards[2].done == 2);
+  CHECK(partial.shards[1].missing > 0);
+
+  // The same command submits shard 1 alone; the report job merges every shard.
+  const auto resumed =
+      testing::RunHarap(fmt::format("run {} --out {} --slurm", config, out.string()));
+  INFO(resumed.output);
+  REQUIRE(resumed.status == 0);
+  CHECK_THAT(resumed.output, Catch::Contains("(1 of 3 shards: 1)"));
+  REQUIRE(slurm.WaitForEmptyQueue(120));
+  int logs = 0;
+  for (const auto& entry : fs::directory_iterator(out / "slurm" / "logs")) {
+    logs += entry.path().filename().string().starts_with("shard-1-job-");
+  }
+  CHECK(logs == 2);  // the cancelled task's log and the resumed one's
+  const FolderStatus complete = CollectStatus(out);
+  for (const ShardStatus& shard : complete.shards) CHECK(shard.done == 2);
+  const auto again =
+      testing::RunHarap(fmt::format("run {} --out {} --slurm", config, out.string()));
+  CHECK_THAT(again.output, Catch::Contains("nothing submitted"));
+
+  const fs::path whole = workspace.dir / "whole";
+  REQUIRE(testing::RunHarap(fmt::format("run {} --out {} --threads 1 -q", config, whole.string()))
+              .status == 0);
+  REQUIRE(fs::exists(out / "results.csv"));  // written by the report job
+  CHECK(CsvWithoutTimings(out / "results.csv") == CsvWithoutTimings(whole / "results.csv"));
+  CHECK(Energies(out) == Energies(whole));
+  CHECK(Energies(out).size() == 6);
 }

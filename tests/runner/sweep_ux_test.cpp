@@ -148,14 +148,7 @@ TEST_CASE("a sweep killed with SIGKILL resumes keeping every finished run, no pa
   Folder folder("sigkill");
   // Six runs of most of a second each (a fixed number of iterations), meshes saved (more files
   // that could be left partial).
-  folder.Write("slow.toml", R"(
-mesh = { builtin = "cylinder", vertices = 2000 }
-[[handle]]
-select.slab = { axis = "z", from = 0.0, to = 0.05 }
-[[handle]]
-select.slab = { axis = "z", from = 0.95, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
-)");
+  folder.Write("slow.toml", harap::testing::kSlowCylinderScenario);
   const std::string config = folder.Write("kill.toml", R"(
 [scenarios]
 files = ["slow.toml"]

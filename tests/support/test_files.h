@@ -21,6 +21,18 @@ select.slab = { axis = "z", from = 0.95, to = 1.0 }
 rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
 )";
 
+/// A 2000-vertex built-in cylinder, its bottom held and its top turned 60° about x, without
+/// names: with a tolerance of 1e-30 and a fixed iteration count a run takes most of a second, long
+/// enough to interrupt a sweep in the middle of a run.
+inline constexpr const char* kSlowCylinderScenario = R"(
+mesh = { builtin = "cylinder", vertices = 2000 }
+[[handle]]
+select.slab = { axis = "z", from = 0.0, to = 0.05 }
+[[handle]]
+select.slab = { axis = "z", from = 0.95, to = 1.0 }
+rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
+)";
+
 /// The tables of a sweep comparing classic and hierarchical ARAP on small meshes (tolerance 1e-5,
 /// a hierarchy down to 100 vertices), for experiment configs after their [scenarios].
 inline constexpr const char* kClassicAndHierarchicalVariants = R"(

@@ -1,0 +1,113 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "framework/context.h"
+#include "framework/hierarchy.h"
+#include "framework/level_solver.h"
+#include "framework/mesh.h"
+#include "framework/optimizer.h"
+#include "framework/upsampler.h"
+
+namespace harap {
+
+/// The levels of one deformation and the paper's coarse-to-fine loop over them (Algorithm 2,
+/// second loop): a mesh hierarchy (Section 4; none for a one-level run on the input mesh), the
+/// upsampler between its levels (Section 5.1) and one level solver per solved level, solved from
+/// the coarsest level down, each finer level starting from the up-sampled solution of the
+/// coarser one.
+///
+/// The loop is the one of every optimizer and of the interactive session; what differs between
+/// them (where a level's state comes from, the request, what a solved level keeps) is a Pass.
+/// Stops (Context::iteration_callback returning kStop) are handled here: the coarser levels
+/// still to come are not solved, the state is carried down to the finest level, and there the
+/// pass chooses between fitting the rotations (the result as it stands) and one iteration.
+///
+/// Level 0 is the input mesh itself, so its solver can be set up before the hierarchy is built.
+/// Not thread-safe; set_solver() of different levels from different threads is.
+class LevelCascade {
+ public:
+  /// `mesh` (the input mesh, level 0) must outlive the cascade.
+  explicit LevelCascade(const Mesh& mesh) : mesh_(mesh) {}
+
+  /// A hierarchy of the input mesh and its upsampler; without one the cascade is the input mesh
+  /// alone. Sizes the per-level slots (solvers, setup times); call before set_solver() of a
+  /// coarse level.
+  void SetHierarchy(MeshHierarchy hierarchy, std::unique_ptr<Upsampler> upsampler);
+  /// One level: the input mesh (a one-level run).
+  void SetSingleLevel();
+  /// The level solver of level l and what its setup (P and C) took, in seconds: `setup_seconds`
+  /// is reported with the level's solve time (LevelResult::seconds).
+  void set_solver(int l, std::unique_ptr<LevelSolver> solver, double setup_seconds = 0.0);
+  /// Frees level l's solver (a one-shot run no longer needs a coarse level's factor).
+  void release_solver(int l) { solvers_[l].reset(); }
+  /// Takes the rotation site (the upsampler's input) from the coarsest solved level's solver.
+  void TakeRotationSite(int coarsest_solved);
+
+  int num_levels() const { return static_cast<int>(solvers_.size()); }
+  bool hierarchical() const { return upsampler_ != nullptr; }
+  const Mesh& mesh() const { return mesh_; }
+  const Mesh& LevelMesh(int l) const { return l > 0 ? hierarchy_.levels[l].mesh : mesh_; }
+  const MeshHierarchy& hierarchy() const { return hierarchy_; }
+  const Upsampler& upsampler() const { return *upsampler_; }
+  RotationSite rotation_site() const { return site_; }
+  bool has_solver(int l) const { return solvers_[l] != nullptr; }
+  LevelSolver& solver(int l) const { return *solvers_[l]; }
+
+  /// Level l's state from level l + 1's (Section 5.1); returns whether it starts with a global
+  /// step (the upsampler hands down rotations).
+  bool Upsample(int l, const LevelState& coarse, LevelState& fine, const Context& context) const;
+
+  /// What a pass down the levels does at each of them, beyond the loop itself.
+  class Pass {
+   public:
+    virtual ~Pass() = default;
+    /// Whether level l gets a state at all (false: skipped, the next level starts from the last
+    /// one that got a state).
+    virtual bool Visits(int /*l*/) const { return true; }
+    /// Whether a visited level is solved (false: its state is only handed down).
+    virtual bool Solves(int l) const = 0;
+    /// The state level l starts from, made from `coarser` (the last visited coarser level's
+    /// state; null on the first level of the pass); `from_rotations` says whether the level
+    /// starts with a global step from the state's rotations.
+    virtual LevelState& Start(int l, const LevelState* coarser, bool& from_rotations) = 0;
+    /// Called before level l is solved or, after a stop, its rotations fitted (e.g. to wait for
+    /// its setup).
+    virtual void Prepare(int /*l*/) {}
+    /// The request for level l; `finishing`: after a stop on a coarser level.
+    virtual LevelSolveRequest Request(int l, bool from_rotations, bool finishing) = 0;
+    /// Solves level l (a pass may run it isolated from background work).
+    virtual LevelSolveResult Solve(LevelSolver& solver, LevelState& state,
+                                   const LevelSolveRequest& request, const Context& context) {
+      return solver.Solve(state, request, context);
+    }
+    /// After level l is solved (or, finishing, its rotations fitted): where its state is now,
+    /// the input of the next finer level. `run` is null after a fit.
+    virtual LevelState& Done(int /*l*/, LevelState& state, const LevelSolveResult* /*run*/) {
+      return state;
+    }
+    /// How a pass stopped on level l finishes: fit the finest level's rotations to the state
+    /// handed down (the result as it stands) or iterate once there (a time budget).
+    enum class Finish { kFitRotations, kOneIteration };
+    virtual Finish OnStop(int /*l*/) { return Finish::kFitRotations; }
+  };
+
+  /// The loop from level `top` down to the finest: per level the pass's start, then, if solved,
+  /// the solve and its LevelResult (finest first in `result.levels`), iterations and notes; on
+  /// the finest level energy, iterations and convergence. Returns the finest level's state (the
+  /// pass's, to take).
+  LevelState& Run(int top, Pass& pass, const Context& context, OptimizeResult& result,
+                  std::vector<std::string>& notes);
+
+ private:
+  const Mesh& mesh_;
+  MeshHierarchy hierarchy_;
+  std::unique_ptr<Upsampler> upsampler_;
+  RotationSite site_ = RotationSite::kVertex;
+  std::vector<std::unique_ptr<LevelSolver>> solvers_;
+  std::vector<double> setup_seconds_;
+};
+
+}  // namespace harap

@@ -1,0 +1,441 @@
+// SPDX-License-Identifier: MIT
+// The page of `harap view`: draws the mesh the server sends, drags its handles with a gizmo and
+// shows the server's solves. Protocol: docs/view.md (JSON text to the server; binary frames of
+// float32 positions and JSON text back).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { TransformControls } from 'three/addons/controls/TransformControls.js';
+import { OBJExporter } from 'three/addons/exporters/OBJExporter.js';
+import { PLYExporter } from 'three/addons/exporters/PLYExporter.js';
+import GUI from 'lil-gui';
+import uPlot from 'uplot';
+
+const kMeshFrame = 1;
+const kPositionsFrame = 2;
+const kFreeGrey = 190 / 255;
+const kLevelColors = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#17becf'];
+
+const statusElement = document.getElementById('status');
+const energyElement = document.getElementById('energy');
+const solveInfoElement = document.getElementById('solve-info');
+const editInfoElement = document.getElementById('edit-info');
+const errorsElement = document.getElementById('errors');
+
+// What the page shows and what a test or a benchmark reads (window.harapView).
+const state = {
+  ready: false, mesh: null, groups: [], energy: null, lastSolve: null, framesDrawn: 0,
+  errors: [], timings: { preview: [], full: [], edit: [] }, scenarioToml: null,
+};
+window.harapView = state;
+
+// Renderer, camera, lights.
+const viewport = document.getElementById('viewport');
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+renderer.setSize(window.innerWidth, window.innerHeight);
+viewport.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0xf4f4f2);
+const camera = new THREE.PerspectiveCamera(40, window.innerWidth / window.innerHeight, 0.001, 1000);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 1.6));
+const light = new THREE.DirectionalLight(0xffffff, 1.6);
+camera.add(light);
+light.position.set(0.5, 1, 1);
+scene.add(camera);
+let orbit = null;  // made with the mesh, once the up axis is known
+const gizmo = new TransformControls(camera, renderer.domElement);
+scene.add(gizmo.getHelper());
+const pivot = new THREE.Object3D();
+scene.add(pivot);
+gizmo.addEventListener('dragging-changed', (event) => {
+  if (orbit) orbit.enabled = !event.value;
+  if (!event.value) moveReleased();
+});
+gizmo.addEventListener('objectChange', () => moveChanged());
+
+let geometry = null, surface = null, ghost = null, wireframe = null;
+let restPositions = null, diagonal = 1;
+
+const settings = {
+  shading: 'smooth', wireframe: false, ghost: true, previewOnly: false, gizmoMode: 'translate',
+  handle: '', addHandle: false, handleRadius: 0.03,
+  optimizer: 'classic', energy: '', solver: '', preset: '', tolerance: 1e-6,
+};
+const gui = new GUI({ title: 'harap view' });
+const display = gui.addFolder('Display');
+display.add(settings, 'shading', ['smooth', 'flat']).onChange(updateMaterial);
+display.add(settings, 'wireframe').onChange(updateMaterial);
+display.add(settings, 'ghost').name('rest pose ghost').onChange(updateMaterial);
+const handlesFolder = gui.addFolder('Handles');
+let handleController = handlesFolder.add(settings, 'handle', ['']).onChange(selectHandle);
+handlesFolder.add(settings, 'gizmoMode', ['translate', 'rotate']).name('gizmo')
+  .onChange((mode) => gizmo.setMode(mode));
+handlesFolder.add(settings, 'previewOnly').name('preview only (key p)');
+handlesFolder.add(settings, 'addHandle').name('click adds handle');
+handlesFolder.add(settings, 'handleRadius', 0, 0.2, 0.005).name('new handle radius');
+handlesFolder.add({ remove: () => removeSelectedHandle() }, 'remove').name('remove handle');
+const solveFolder = gui.addFolder('Solve');
+const optimizerController = solveFolder.add(settings, 'optimizer', ['classic', 'hierarchical']);
+let energyController = solveFolder.add(settings, 'energy', ['']);
+let solverController = solveFolder.add(settings, 'solver', ['']);
+let presetController = solveFolder.add(settings, 'preset', ['']);
+solveFolder.add(settings, 'tolerance', 1e-12, 1e-2);
+solveFolder.add({ apply: () => configure() }, 'apply').name('set up with these');
+solveFolder.add({ solve: () => send({ type: 'solve' }) }, 'solve').name('full solve');
+const downloads = gui.addFolder('Download');
+downloads.add({ obj: () => downloadMesh('obj') }, 'obj').name('deformed mesh (OBJ)');
+downloads.add({ ply: () => downloadMesh('ply') }, 'ply').name('deformed mesh (PLY)');
+downloads.add({ toml: () => send({ type: 'scenario' }) }, 'toml').name('scenario (TOML)');
+downloads.add({ png: () => downloadScreenshot() }, 'png').name('screenshot (PNG)');
+
+// Energy-vs-time of the last full solve, one series per hierarchy level.
+let plot = null;
+function showTrace(trace) {
+  const levels = [...new Set(trace.map((entry) => entry[2]))].sort((a, b) => b - a);
+  const xs = trace.map((entry) => entry[0]);
+  const data = [xs, ...levels.map((level) => trace.map((e) => (e[2] === level ? e[1] : null)))];
+  const series = [{ label: 's' }, ...levels.map((level) => ({
+    label: `level ${level}`, stroke: kLevelColors[level % kLevelColors.length], spanGaps: false,
+    points: { show: true, size: 4 } }))];
+  if (plot) plot.destroy();
+  plot = new uPlot({ width: 420, height: 160, series, scales: { x: { time: false } },
+    axes: [{ label: 'seconds' }, { label: 'energy', size: 70 }] }, data,
+    document.getElementById('plot'));
+}
+
+// The WebSocket to this page's own session.
+const socket = new WebSocket(`ws://${location.host}/ws`);
+socket.binaryType = 'arraybuffer';
+let nextId = 1;
+const sentAt = new Map();  // id -> {kind, time}
+function send(message) {
+  message.id = nextId++;
+  sentAt.set(message.id, { kind: message.type, time: performance.now() });
+  socket.send(JSON.stringify(message));
+  return message.id;
+}
+state.sendRaw = (data) => socket.send(data);
+socket.onclose = () => { statusElement.textContent = 'disconnected'; };
+socket.onmessage = (event) => {
+  if (event.data instanceof ArrayBuffer) receiveFrame(event.data);
+  else receiveMessage(JSON.parse(event.data));
+};
+
+function receiveFrame(buffer) {
+  const header = new Uint32Array(buffer, 0, 3);
+  if (header[0] === kMeshFrame) {
+    const [, vertices, triangles] = header;
+    restPositions = new Float32Array(buffer, 12, 3 * vertices).slice();
+    const index = new Uint32Array(buffer, 12 + 12 * vertices, 3 * triangles);
+    buildMesh(restPositions, index);
+  } else if (header[0] === kPositionsFrame) {
+    const [, id, count] = header;
+    const positions = geometry.attributes.position.array;
+    const vertices = positions.length / 3;
+    if (count === vertices) {
+      positions.set(new Float32Array(buffer, 12, 3 * count));
+    } else {
+      const indices = new Uint32Array(buffer, 12, count);
+      const values = new Float32Array(buffer, 12 + 4 * count, 3 * count);
+      for (let i = 0; i < count; ++i) {
+        const v = indices[i];
+        positions[3 * v] = values[3 * i];
+        positions[3 * v + 1] = values[3 * i + 1];
+        positions[3 * v + 2] = values[3 * i + 2];
+      }
+    }
+    geometry.attributes.position.needsUpdate = true;
+    geometry.computeVertexNormals();
+    geometry.computeBoundingSphere();
+    if (wireframe) wireframe.geometry.attributes.position.needsUpdate = true;
+    state.pendingFrameId = id;
+  }
+}
+
+function receiveMessage(message) {
+  const sent = message.id !== undefined ? sentAt.get(message.id) : undefined;
+  switch (message.type) {
+    case 'mesh':
+      state.mesh = message;
+      statusElement.textContent = `${message.vertices} vertices, ${message.elements} ` +
+        `${message.tetrahedral ? 'tetrahedra' : 'triangles'}`;
+      setChoices(message.choices);
+      break;
+    case 'status':
+      statusElement.textContent = message.stage;
+      break;
+    case 'ready':
+      state.ready = true;
+      state.session = message;
+      statusElement.textContent = `${state.mesh.vertices} vertices · ${message.optimizer}, ` +
+        `${message.energy}, ${message.solver}, ${message.levels} level(s) · set up in ` +
+        `${message.setup.seconds.toFixed(2)} s`;
+      settings.optimizer = message.optimizer;
+      settings.energy = message.energy;
+      settings.solver = message.solver;
+      gui.controllersRecursive().forEach((c) => c.updateDisplay());
+      break;
+    case 'handles':
+      setGroups(message.groups);
+      if (sent && (sent.kind === 'add_handle' || sent.kind === 'remove_handle'))
+        afterNextDraw(() => state.timings.edit.push(performance.now() - sent.time));
+      break;
+    case 'edit': {
+      const routes = message.edits.flatMap((e) => e.levels.map((l) => `${l.level}:${l.route}`));
+      editInfoElement.textContent = `handle edit ${(1000 * message.seconds).toFixed(0)} ms` +
+        (routes.length ? ` (routes ${routes.join(', ')})` : '');
+      state.lastEdit = message;
+      break;
+    }
+    case 'solved':
+      afterNextDraw(() => solved(message, sent));
+      break;
+    case 'scenario':
+      state.scenarioToml = message.toml;
+      download(new Blob([message.toml], { type: 'text/plain' }), 'scenario.toml');
+      break;
+    case 'error':
+      state.errors.push(message);
+      errorsElement.insertAdjacentHTML('afterbegin', '<li></li>');
+      errorsElement.firstChild.textContent = message.message;
+      if (message.id === previewInFlight) previewInFlight = null;
+      break;
+    default:
+      break;
+  }
+  if (message.type === 'scenario' || message.type === 'error') sentAt.delete(message.id);
+}
+
+// Runs `callback` once the frame with the newest positions is on the screen.
+function afterNextDraw(callback) {
+  requestAnimationFrame(() => requestAnimationFrame(callback));
+}
+
+function solved(message, sent) {
+  state.framesDrawn += 1;
+  state.lastSolve = message;
+  const now = performance.now();
+  if (message.mode === 'full') {
+    state.energy = message.energy;
+    energyElement.textContent = message.energy === null ? '–' : message.energy.toPrecision(10);
+    showTrace(message.trace);
+    if (sent) state.timings.full.push(now - sent.time);
+  } else if (dragEventTime !== null && message.id === previewInFlight) {
+    state.timings.preview.push(now - previewEventTime);
+  }
+  solveInfoElement.textContent = `${message.mode} ${(1000 * message.seconds).toFixed(0)} ms, ` +
+    `${message.total_iterations} iterations`;
+  if (message.id !== undefined) sentAt.delete(message.id);
+  if (message.id === previewInFlight) {
+    previewInFlight = null;
+    if (previewPending) sendPreview();
+  }
+}
+
+function setChoices(choices) {
+  energyController = energyController.options(['', ...choices.energies]);
+  solverController = solverController.options(['', ...choices.solvers]);
+  presetController = presetController.options(choices.presets);
+  optimizerController.options(choices.optimizers);
+}
+
+function buildMesh(positions, index) {
+  geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(positions.slice(), 3));
+  geometry.setIndex(new THREE.BufferAttribute(index.slice(), 1));
+  const colors = new Float32Array(positions.length).fill(kFreeGrey);
+  geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
+  geometry.computeVertexNormals();
+  geometry.computeBoundingSphere();
+  surface = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({
+    vertexColors: true, roughness: 0.8, side: THREE.DoubleSide }));
+  scene.add(surface);
+  const restGeometry = new THREE.BufferGeometry();
+  restGeometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+  restGeometry.setIndex(new THREE.BufferAttribute(index, 1));
+  ghost = new THREE.Mesh(restGeometry, new THREE.MeshBasicMaterial({
+    color: 0x8899aa, transparent: true, opacity: 0.15, depthWrite: false }));
+  scene.add(ghost);
+  wireframe = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
+    color: 0x222222, wireframe: true, transparent: true, opacity: 0.25 }));
+  scene.add(wireframe);
+  const sphere = geometry.boundingSphere;
+  geometry.computeBoundingBox();
+  const extent = geometry.boundingBox.getSize(new THREE.Vector3());
+  diagonal = extent.length();
+  // Up is the mesh's longest axis (a standing figure, a bar); the camera looks from the front.
+  const up = extent.z >= extent.x && extent.z >= extent.y ? new THREE.Vector3(0, 0, 1)
+    : extent.y >= extent.x ? new THREE.Vector3(0, 1, 0) : new THREE.Vector3(1, 0, 0);
+  const side = Math.abs(up.z) === 1 ? new THREE.Vector3(0.7, -1, 0.25)
+    : Math.abs(up.y) === 1 ? new THREE.Vector3(0.7, 0.25, 1) : new THREE.Vector3(0.25, -1, 0.7);
+  camera.up.copy(up);
+  camera.position.copy(sphere.center).add(side.normalize().multiplyScalar(3.6 * sphere.radius));
+  orbit = new OrbitControls(camera, renderer.domElement);
+  orbit.target.copy(sphere.center);
+  camera.near = sphere.radius / 100;
+  camera.far = sphere.radius * 100;
+  camera.updateProjectionMatrix();
+  orbit.update();
+  gizmo.setSize(0.8);
+  updateMaterial();
+}
+
+function updateMaterial() {
+  if (!surface) return;
+  surface.material.flatShading = settings.shading === 'flat';
+  surface.material.needsUpdate = true;
+  wireframe.visible = settings.wireframe;
+  ghost.visible = settings.ghost;
+}
+
+// Handle groups: colours on the mesh, the gizmo on the selected one.
+function setGroups(groups) {
+  state.groups = groups;
+  const colors = geometry.attributes.color.array;
+  colors.fill(kFreeGrey);
+  const colored = new Uint8Array(colors.length / 3);
+  groups.forEach((group) => {
+    for (const v of group.vertices) {
+      if (colored[v]) continue;
+      colored[v] = 1;
+      colors.set(group.color.map((c) => c / 255), 3 * v);
+    }
+  });
+  geometry.attributes.color.needsUpdate = true;
+  const names = groups.map((g, i) => `${i}: ${g.name}`);
+  handleController = handleController.options(names);
+  if (!names.includes(settings.handle)) settings.handle = names[names.length - 1] ?? '';
+  handleController.setValue(settings.handle);
+  selectHandle();
+}
+
+let selectedGroup = -1;
+function selectHandle() {
+  selectedGroup = state.groups.findIndex((g, i) => `${i}: ${g.name}` === settings.handle);
+  if (selectedGroup < 0) {
+    gizmo.detach();
+    return;
+  }
+  const group = state.groups[selectedGroup];
+  const r = group.rotation;
+  const rotation = new THREE.Matrix4().set(r[0], r[1], r[2], 0, r[3], r[4], r[5], 0,
+    r[6], r[7], r[8], 0, 0, 0, 0, 1);
+  const center = new THREE.Vector3(...group.center);
+  pivot.quaternion.setFromRotationMatrix(rotation);
+  pivot.position.copy(center).applyQuaternion(pivot.quaternion)
+    .add(new THREE.Vector3(...group.translation));
+  pivot.updateMatrixWorld();
+  gizmo.attach(pivot);
+}
+
+// The selected group's transform: rotation R = the pivot's, t = pivot position − R · centre.
+function groupTransform() {
+  const group = state.groups[selectedGroup];
+  const m = new THREE.Matrix3().setFromMatrix4(new THREE.Matrix4().makeRotationFromQuaternion(
+    pivot.quaternion));
+  const e = m.elements;  // column-major
+  const t = pivot.position.clone().sub(new THREE.Vector3(...group.center)
+    .applyQuaternion(pivot.quaternion));
+  return [e[0], e[3], e[6], t.x, e[1], e[4], e[7], t.y, e[2], e[5], e[8], t.z];
+}
+
+// Preview frames: one in flight at a time; newer drag events wait and go with the next one.
+let previewInFlight = null, previewPending = false;
+let dragEventTime = null, previewEventTime = null;
+function moveChanged() {
+  if (selectedGroup < 0) return;
+  const group = state.groups[selectedGroup];
+  const transform = groupTransform();
+  group.rotation = [transform[0], transform[1], transform[2], transform[4], transform[5],
+    transform[6], transform[8], transform[9], transform[10]];
+  group.translation = [transform[3], transform[7], transform[11]];
+  if (!previewPending) dragEventTime = performance.now();
+  previewPending = true;
+  if (previewInFlight === null) sendPreview();
+}
+function sendPreview() {
+  previewPending = false;
+  previewEventTime = dragEventTime;
+  previewInFlight = send({ type: 'move', group: selectedGroup, transform: groupTransform(),
+    solve: 'preview' });
+}
+function moveReleased() {
+  if (selectedGroup < 0 || settings.previewOnly) return;
+  previewPending = false;
+  send({ type: 'move', group: selectedGroup, transform: groupTransform(), solve: 'full' });
+}
+window.addEventListener('keydown', (event) => {
+  if (event.key === 'p') {
+    settings.previewOnly = !settings.previewOnly;
+    gui.controllersRecursive().forEach((c) => c.updateDisplay());
+  }
+});
+
+// Adding a handle: a click on the mesh picks the nearest vertex of the hit triangle.
+const raycaster = new THREE.Raycaster();
+renderer.domElement.addEventListener('click', (event) => {
+  if (!settings.addHandle || !surface) return;
+  const rect = renderer.domElement.getBoundingClientRect();
+  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
+    -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(pointer, camera);
+  const hit = raycaster.intersectObject(surface)[0];
+  if (!hit) return;
+  const position = geometry.attributes.position;
+  let best = hit.face.a, bestDistance = Infinity;
+  for (const v of [hit.face.a, hit.face.b, hit.face.c]) {
+    const d = new THREE.Vector3().fromBufferAttribute(position, v).distanceTo(hit.point);
+    if (d < bestDistance) { best = v; bestDistance = d; }
+  }
+  addHandle(best);
+});
+function addHandle(vertex) {
+  return send({ type: 'add_handle', vertex, radius: settings.handleRadius * diagonal });
+}
+function removeSelectedHandle() {
+  if (selectedGroup >= 0) send({ type: 'remove_handle', group: selectedGroup });
+}
+state.addHandle = addHandle;
+state.removeHandle = (group) => send({ type: 'remove_handle', group });
+state.requestScenario = () => send({ type: 'scenario' });
+
+function configure() {
+  send({ type: 'configure', optimizer: settings.optimizer, energy: settings.energy,
+    solver: settings.solver, preset: settings.preset, tolerance: settings.tolerance });
+}
+
+// Where the gizmo's centre is on the screen (CSS pixels), for tests that drag it.
+state.gizmoScreenPosition = () => {
+  const p = pivot.position.clone().project(camera);
+  const rect = renderer.domElement.getBoundingClientRect();
+  return { x: rect.left + (p.x + 1) / 2 * rect.width, y: rect.top + (1 - p.y) / 2 * rect.height };
+};
+state.positions = () => Array.from(geometry.attributes.position.array);
+
+function download(blob, name) {
+  const link = document.createElement('a');
+  link.href = URL.createObjectURL(blob);
+  link.download = name;
+  link.click();
+  setTimeout(() => URL.revokeObjectURL(link.href), 1000);
+}
+function downloadMesh(format) {
+  const exported = new THREE.Mesh(geometry.clone().deleteAttribute('color'));
+  if (format === 'obj') {
+    download(new Blob([new OBJExporter().parse(exported)], { type: 'text/plain' }), 'deformed.obj');
+  } else {
+    new PLYExporter().parse(exported, (ply) => download(new Blob([ply]), 'deformed.ply'),
+      { binary: true });
+  }
+}
+function downloadScreenshot() {
+  renderer.render(scene, camera);
+  renderer.domElement.toBlob((blob) => download(blob, 'harap-view.png'));
+}
+
+window.addEventListener('resize', () => {
+  camera.aspect = window.innerWidth / window.innerHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(window.innerWidth, window.innerHeight);
+});
+renderer.setAnimationLoop(() => renderer.render(scene, camera));

@@ -1,0 +1,205 @@
+// SPDX-License-Identifier: MIT
+// The page of `harap view` in headless Chromium (Debian's /usr/bin/chromium driven by
+// puppeteer-core; nothing downloads a browser). Starts the server itself on a free port.
+//
+//   node web/test/browser_test.mjs HARAP_EXECUTABLE SCENARIO.toml [--screenshot FILE]
+//        [--benchmark DRAGS] [--tolerance T]
+//
+// The test: the page loads and solves; a handle dragged with synthesized mouse events moves the
+// mesh through preview frames and a full solve on release; the energy the page shows equals
+// `harap deform`'s on the scenario the page exports; a handle is added and removed; malformed
+// messages are refused with errors while the page keeps working; the screenshot is not blank.
+// --benchmark N: N drags, then the page's own timers as JSON (docs/results.md).
+// Exits 77 (ctest: skipped) when Chromium is absent.
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const chromium = process.env.HARAP_CHROMIUM ?? '/usr/bin/chromium';
+const [harap, scenario, ...rest] = process.argv.slice(2);
+const option = (name, fallback) => {
+  const i = rest.indexOf(name);
+  return i >= 0 ? rest[i + 1] : fallback;
+};
+const screenshotFile = option('--screenshot', null);
+const benchmarkDrags = Number(option('--benchmark', '0'));
+const tolerance = option('--tolerance', '1e-8');
+if (!existsSync(chromium)) {
+  console.log(`skipped: no Chromium at ${chromium} (Debian: apt-get install chromium; ` +
+    '.ci/setup installs it)');
+  process.exit(77);
+}
+
+let failures = 0, passes = 0;
+function check(condition, what) {
+  if (condition) {
+    passes += 1;
+    console.log(`ok: ${what}`);
+  } else {
+    failures += 1;
+    console.log(`FAILED: ${what}`);
+  }
+}
+
+const server = spawn(harap, ['view', scenario, '--port', '0', '--tolerance', tolerance,
+  '--threads', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+const url = await new Promise((resolve, reject) => {
+  let output = '';
+  server.stdout.on('data', (chunk) => {
+    output += chunk;
+    const match = output.match(/http:\/\/127\.0\.0\.1:\d+\//);
+    if (match) resolve(match[0]);
+  });
+  server.on('exit', (code) => reject(new Error(`harap view exited with ${code}: ${output}`)));
+});
+const browser = await puppeteer.launch({
+  executablePath: chromium, headless: true,
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--window-size=1000,700'],
+  defaultViewport: { width: 1000, height: 700 },
+});
+const page = await browser.newPage();
+page.on('pageerror', (error) => check(false, `no page error (${error.message})`));
+const waitFor = (fn, arg, timeout = 60000) =>
+  page.waitForFunction(fn, { timeout, polling: 20 }, arg);
+
+try {
+  await page.goto(url);
+  await waitFor(() => window.harapView.ready && window.harapView.lastSolve?.mode === 'full',
+    undefined, 120000);
+  const first = await page.evaluate(() => ({ energy: window.harapView.energy,
+    positions: window.harapView.positions(), groups: window.harapView.groups.length }));
+  check(first.groups >= 1 && Number.isFinite(first.energy), 'the page loads and solves');
+
+  // Drag the last handle's gizmo centre across the screen.
+  async function drag(dx, dy, steps) {
+    const framesBefore = await page.evaluate(() => window.harapView.framesDrawn);
+    const fullBefore = await page.evaluate(() => window.harapView.timings.full.length);
+    const start = await page.evaluate(() => window.harapView.gizmoScreenPosition());
+    await page.mouse.move(start.x, start.y);
+    await page.mouse.down();
+    for (let i = 1; i <= steps; ++i) {
+      await page.mouse.move(start.x + (dx * i) / steps, start.y + (dy * i) / steps);
+      await new Promise((resolve) => setTimeout(resolve, 16));
+    }
+    await page.mouse.up();
+    await waitFor((n) => window.harapView.timings.full.length > n, fullBefore);
+    return framesBefore;
+  }
+  const framesBefore = await drag(120, -60, 12);
+  const after = await page.evaluate(() => ({ energy: window.harapView.energy,
+    positions: window.harapView.positions(), frames: window.harapView.framesDrawn,
+    previews: window.harapView.timings.preview.length,
+    shown: document.getElementById('energy').textContent }));
+  let moved = 0;
+  for (let i = 0; i < after.positions.length; ++i)
+    moved = Math.max(moved, Math.abs(after.positions[i] - first.positions[i]));
+  check(moved > 1e-3, `dragging the gizmo moved the mesh (by up to ${moved.toFixed(4)})`);
+  check(after.previews >= 1 && after.frames > framesBefore + 1,
+    `preview frames streamed while dragging (${after.previews}) and a full solve followed`);
+
+  // The energy shown against `harap deform` on the scenario the page exports.
+  await page.evaluate(() => window.harapView.requestScenario());
+  await waitFor(() => window.harapView.scenarioToml !== null);
+  const toml = await page.evaluate(() => window.harapView.scenarioToml);
+  const dir = mkdtempSync(join(tmpdir(), 'harap-view-test-'));
+  writeFileSync(join(dir, 'scenario.toml'), toml);
+  const deform = spawnSync(harap, ['deform', join(dir, 'scenario.toml'), '--tolerance', tolerance,
+    '--report', join(dir, 'report.json'), '--threads', '2', '-q'], { encoding: 'utf8' });
+  check(deform.status === 0, `harap deform runs the exported scenario ${deform.stderr ?? ''}`);
+  if (deform.status === 0) {
+    const library = JSON.parse(readFileSync(join(dir, "report.json"), "utf8")).energy;
+    const relative = Math.abs(after.energy - library) / Math.abs(library);
+    check(relative < 1e-4 && Math.abs(Number(after.shown) - after.energy) <= 1e-9 * after.energy,
+      `energy shown ${after.shown} equals harap deform's ${library} (relative ${relative.toExponential(2)})`);
+  }
+
+  // Add a handle at a vertex halfway up, then remove it.
+  const editsBefore = await page.evaluate(() => window.harapView.timings.edit.length);
+  await page.evaluate(() => {
+    const rest = window.harapView.positions();
+    let best = 0;
+    for (let v = 0; v < rest.length / 3; ++v)
+      if (Math.abs(rest[3 * v + 2] - 0.5) < Math.abs(rest[3 * best + 2] - 0.5)) best = v;
+    window.harapView.addHandle(best);
+  });
+  await waitFor((n) => window.harapView.groups.length === n + 1, first.groups);
+  await page.evaluate((g) => window.harapView.removeHandle(g), first.groups);
+  await waitFor((n) => window.harapView.groups.length === n, first.groups);
+  check(true, 'a handle was added and removed');
+  await waitFor((n) => window.harapView.timings.edit.length === n + 2, editsBefore);
+  check(await page.evaluate((n) => window.harapView.timings.edit.length === n + 2, editsBefore),
+    'the page timed both handle edits');
+
+  // Malformed messages: each answered with an error; the session still solves.
+  const errorsBefore = await page.evaluate(() => window.harapView.errors.length);
+  await page.evaluate(() => {
+    const send = window.harapView.sendRaw;
+    send('not json');
+    send(JSON.stringify({ type: 'move', group: 99, transform: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0] }));
+    send(JSON.stringify({ type: 'move', group: 0, transform: [2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0] }));
+    send(JSON.stringify({ type: 'add_handle', vertex: -1, radius: 0.1 }));
+    send('{"type":"add_handle","vertex":0,"radius":NaN}');
+    send(new Uint8Array([1, 2, 3, 4]));
+  });
+  await waitFor((n) => window.harapView.errors.length >= n + 6, errorsBefore);
+  const errors = await page.evaluate((n) => window.harapView.errors.slice(n).map((e) => e.message),
+    errorsBefore);
+  check(errors.length === 6, `malformed messages refused: ${errors.join(' | ')}`);
+  const solvesBefore = await page.evaluate(() => window.harapView.timings.full.length);
+  await page.evaluate(() => window.harapView.sendRaw(JSON.stringify({ type: 'solve', id: 100000 })));
+  await waitFor(() => window.harapView.lastSolve?.id === 100000);
+  check(solvesBefore >= 1, 'the session still solves after them');
+
+  // The picture: not blank (mesh pixels differ from the background).
+  const coloured = await page.evaluate(async () => {
+    const canvas = document.querySelector('#viewport canvas');
+    const image = new Image();
+    image.src = canvas.toDataURL('image/png');
+    await image.decode();
+    const scratch = document.createElement('canvas');
+    scratch.width = image.width;
+    scratch.height = image.height;
+    const context = scratch.getContext('2d');
+    context.drawImage(image, 0, 0);
+    const pixels = context.getImageData(0, 0, image.width, image.height).data;
+    let differing = 0;
+    for (let i = 0; i < pixels.length; i += 4) {
+      if (Math.abs(pixels[i] - 244) + Math.abs(pixels[i + 1] - 244) + Math.abs(pixels[i + 2] - 242) > 30)
+        differing += 1;
+    }
+    return differing / (pixels.length / 4);
+  });
+  check(coloured > 0.02, `the screenshot is not blank (${(100 * coloured).toFixed(1)}% mesh pixels)`);
+  if (screenshotFile) await page.screenshot({ path: screenshotFile });
+
+  if (benchmarkDrags > 0) {
+    await page.evaluate(() => { window.harapView.timings = { preview: [], full: [], edit: [] }; });
+    for (let d = 0; d < benchmarkDrags; ++d) await drag(d % 2 ? -80 : 80, d % 2 ? 40 : -40, 20);
+    for (let e = 0; e < 5; ++e) {
+      const n = await page.evaluate(() => window.harapView.groups.length);
+      await page.evaluate(() => window.harapView.addHandle(0));
+      await waitFor((m) => window.harapView.groups.length === m + 1, n);
+      await page.evaluate((g) => window.harapView.removeHandle(g), n);
+      await waitFor((m) => window.harapView.groups.length === m, n);
+    }
+    const timings = await page.evaluate(() => window.harapView.timings);
+    const median = (values) => {
+      const sorted = [...values].sort((a, b) => a - b);
+      return sorted.length ? sorted[Math.floor(sorted.length / 2)] : null;
+    };
+    console.log(JSON.stringify({ scenario, drags: benchmarkDrags,
+      preview_ms: { median: median(timings.preview), count: timings.preview.length },
+      full_ms: { median: median(timings.full), count: timings.full.length },
+      edit_ms: { median: median(timings.edit), count: timings.edit.length } }));
+  }
+} catch (error) {
+  check(false, `no exception (${error.stack})`);
+} finally {
+  await browser.close();
+  server.kill('SIGTERM');
+}
+console.log(`${passes} passed, ${failures} failed`);
+process.exit(failures ? 1 : 0);
