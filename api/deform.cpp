@@ -51,6 +51,7 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   problem.mesh = &scenario.mesh;
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
+  problem.stiffness = scenario.ElementStiffness();
   Stopwatch check_clock;
   context.ReportPhase("checking the mesh");
   // Built inside the run's arena so the checks' parallel sorts keep to --threads.
@@ -251,6 +252,16 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
     handles.push_back({{"name", handle.name}, {"vertices", handle.vertices.size()}});
   }
   report["handles"] = handles;
+  if (!scenario.stiffness.empty()) {
+    json regions = json::array();
+    for (const auto& region : scenario.stiffness) {
+      regions.push_back({{"name", region.name},
+                         {"vertices", region.vertices.size()},
+                         {"factor", region.factor},
+                         {"selection", region.selection}});
+    }
+    report["stiffness"] = regions;
+  }
   report["levels"] = LevelsJson(outcome);
   // Remarks about the input (scenario loading) first, then those of the run.
   std::vector<std::string> notes = scenario.notes;

@@ -109,6 +109,7 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
       DeformationProblem problem;
       problem.mesh = &scenario.mesh;
       problem.constraints = FrameConstraints(scenario, static_cast<double>(frame) / options.frames);
+      problem.stiffness = scenario.ElementStiffness();
       Context context = Context::WithThreads(options.threads);
       if (options.progress) context.iteration_callback = options.progress;
       Stopwatch clock;
@@ -121,8 +122,8 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   }
 
   Stopwatch setup_clock;
-  auto configured =
-      MakeSession(registries, scenario.mesh, config, options.threads, options.frame_start);
+  auto configured = MakeSession(registries, scenario.mesh, config, options.threads,
+                                options.frame_start, scenario.ElementStiffness());
   outcome.setup_seconds = setup_clock.Seconds();
   outcome.optimizer = configured->optimizer();
   DeformationSession& session = configured->session();

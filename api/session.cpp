@@ -13,7 +13,8 @@ namespace harap {
 
 ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& mesh,
                                      const ConfigNode& run_config, int threads,
-                                     const SessionOptions::FrameStart* frame_start)
+                                     const SessionOptions::FrameStart* frame_start,
+                                     const std::vector<double>& stiffness)
     : registries_(registries), config_(run_config) {
   ValidateRunConfig(config_);
   const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config_.Child("mesh"));
@@ -31,6 +32,7 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
   DeformationProblem problem;
   problem.mesh = &mesh;
   problem.constraints.targets.resize(0, 3);
+  problem.stiffness = stiffness;
   const auto prepared =
       context.Run([&] { return std::make_unique<const PreparedProblem>(problem, mesh_options); });
   mesh_checks_ = prepared->checks();
@@ -73,7 +75,8 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
       if (it != by_first_element.end()) vertex_component_[v] = it->second;
     }
   }
-  session_ = std::make_unique<DeformationSession>(mesh_, *factory_, options, context);
+  session_ = std::make_unique<DeformationSession>(mesh_, *factory_, options, context,
+                                                  prepared->problem().stiffness);
 }
 
 MeshCheckReport ConfiguredSession::MeshChecksFor(const std::vector<Index>& handles) const {
@@ -92,8 +95,10 @@ MeshCheckReport ConfiguredSession::MeshChecksFor(const std::vector<Index>& handl
 
 std::unique_ptr<ConfiguredSession> MakeSession(const Registries& registries, const Mesh& mesh,
                                                const ConfigNode& run_config, int threads,
-                                               SessionOptions::FrameStart frame_start) {
-  return std::make_unique<ConfiguredSession>(registries, mesh, run_config, threads, &frame_start);
+                                               SessionOptions::FrameStart frame_start,
+                                               const std::vector<double>& stiffness) {
+  return std::make_unique<ConfiguredSession>(registries, mesh, run_config, threads, &frame_start,
+                                             stiffness);
 }
 
 std::string_view RefactorRouteName(LinearSolver::RefactorRoute route) {

@@ -21,8 +21,10 @@ namespace harap {
 /// movable (the session points into it); hold it by the unique_ptr MakeSession returns.
 class ConfiguredSession {
  public:
+  /// `stiffness`: per-element factors of `mesh` (framework/stiffness.h; empty: 1 everywhere).
   ConfiguredSession(const Registries& registries, const Mesh& mesh, const ConfigNode& run_config,
-                    int threads, const SessionOptions::FrameStart* frame_start = nullptr);
+                    int threads, const SessionOptions::FrameStart* frame_start = nullptr,
+                    const std::vector<double>& stiffness = {});
   ConfiguredSession(const ConfiguredSession&) = delete;
   ConfiguredSession& operator=(const ConfiguredSession&) = delete;
 
@@ -69,10 +71,12 @@ class ConfiguredSession {
 /// defaults, e.g. the per-element energy for tetrahedral and planar meshes). `threads` 0: all
 /// hardware threads. The mesh is checked like `harap deform`'s; a mesh whose repair would weld
 /// vertices (and so renumber them) is refused with InputError. The hierarchy and every level's
-/// precomputation are done here; call SetHandles() next.
+/// precomputation are done here; call SetHandles() next. `stiffness`: per-element factors of
+/// `mesh` (framework/stiffness.h; empty: 1 everywhere), e.g. a scenario's ElementStiffness().
 std::unique_ptr<ConfiguredSession> MakeSession(
     const Registries& registries, const Mesh& mesh, const ConfigNode& run_config, int threads,
-    SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected);
+    SessionOptions::FrameStart frame_start = SessionOptions::FrameStart::kCorrected,
+    const std::vector<double>& stiffness = {});
 
 /// "full", "numeric", "update" or "partial" (how a handle edit refactored a level).
 std::string_view RefactorRouteName(LinearSolver::RefactorRoute route);

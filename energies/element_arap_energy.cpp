@@ -79,11 +79,18 @@ void RequireSupportedMesh(const Mesh& mesh) {
 void ElementArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context& context) {
   RequireSupportedMesh(rest);
   context.Run([&] {
+    Eigen::MatrixXd weights =
+        rest.kind() == ElementKind::kTetrahedron
+            ? Eigen::MatrixXd(
+                  TetrahedronCotangentWeights(rest.vertices, rest.elements, &num_degenerate_))
+            : Eigen::MatrixXd(HalfCotangents(rest.vertices, rest.elements, &num_degenerate_));
+    // Stiffness multiplies every weight of its element (and so E_t = s_t |t| ‖F_t − R_t‖²).
+    for (size_t t = 0; t < stiffness_.size(); ++t)
+      weights.row(static_cast<Index>(t)) *= stiffness_[t];
     if (rest.kind() == ElementKind::kTetrahedron) {
-      Assemble<4>(rest,
-                  TetrahedronCotangentWeights(rest.vertices, rest.elements, &num_degenerate_));
+      Assemble<4>(rest, weights);
     } else {
-      Assemble<3>(rest, HalfCotangents(rest.vertices, rest.elements, &num_degenerate_));
+      Assemble<3>(rest, weights);
     }
   });
 }
@@ -130,7 +137,8 @@ void ElementArapEnergy::Assemble(const Mesh& rest, const Eigen::MatrixXd& weight
                         const double volume =
                             std::abs(EdgeMatrix<K>(v, &elements(t, 0)).determinant()) /
                             (K == 4 ? 6.0 : 2.0);
-                        measure_[t] = weights.row(t).isZero(0.0) ? 0.0 : volume;
+                        const double factor = stiffness_.empty() ? 1.0 : stiffness_[t];
+                        measure_[t] = weights.row(t).isZero(0.0) ? 0.0 : factor * volume;
                       }
                     });
   coupling_ = MakeElementSiteCoupling(rest.num_vertices(), elements, std::move(coefficient),

@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "framework/energy.h"
@@ -55,6 +56,10 @@ class EnergyWithDataTerm final : public Energy {
 
   void Precompute(const Mesh& rest, const Context& context) override;
   void SetInputMesh(const Mesh& input, const Context& context) override;
+  bool takes_stiffness() const override { return energy_->takes_stiffness(); }
+  void SetStiffness(std::vector<double> element_stiffness) override {
+    energy_->SetStiffness(std::move(element_stiffness));
+  }
   RotationSite rotation_site() const override { return energy_->rotation_site(); }
   Index num_rotations() const override { return energy_->num_rotations(); }
   const SparseMatrix& system_matrix() const override;

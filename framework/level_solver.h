@@ -65,6 +65,9 @@ struct LevelSetup {
   /// edits): keep one system size and pattern and refactor only the rows that change, instead
   /// of eliminating the constrained vertices (the smallest system, for one constraint set).
   bool handle_edits = false;
+  /// Per-element stiffness factors of `mesh` (framework/stiffness.h), or nullptr / empty: 1
+  /// everywhere. Only read during Precompute().
+  const std::vector<double>* stiffness = nullptr;
 };
 
 /// What a driver asks of one level solve. Negative limits take the solver's configured ones.

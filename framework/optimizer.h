@@ -70,6 +70,9 @@ struct DeformationProblem {
   const Mesh* mesh = nullptr;
   Constraints constraints;
   std::optional<Positions> initial;
+  /// Per-element stiffness factors (framework/stiffness.h): empty (1 everywhere) or one finite
+  /// factor > 0 per element of `mesh`. Hierarchies carry them to coarse levels.
+  std::vector<double> stiffness;
 };
 
 /// Creates the pluggable pieces an optimizer uses, configured by the caller (the composition root

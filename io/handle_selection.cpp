@@ -425,4 +425,19 @@ void AddHandles(const std::optional<BenchmarkHandlesSpec>& benchmark,
   }
 }
 
+void AddStiffness(const std::vector<StiffnessSpec>& specs, Scenario& scenario) {
+  const Mesh& mesh = scenario.mesh;
+  const std::vector<bool> referenced = ReferencedVertices(mesh);
+  const Eigen::Vector3d extent = scenario.box_max - scenario.box_min;
+  const double diagonal = BoundingBoxDiagonal(mesh);
+  for (const StiffnessSpec& spec : specs) {
+    ScenarioStiffness region;
+    region.name = spec.region.name;
+    region.factor = spec.factor;
+    region.vertices = Select(spec.region, mesh, referenced, scenario.box_min, extent, diagonal);
+    region.selection = DescribeSelection(spec.region, scenario.box_min, scenario.box_max);
+    scenario.stiffness.push_back(std::move(region));
+  }
+}
+
 }  // namespace harap::io_internal

@@ -52,6 +52,13 @@ struct HandleSpec {
   double weight = std::numeric_limits<double>::infinity();
 };
 
+/// One [[stiffness]] as written: a region selected like a handle's vertices (`region.name`,
+/// `region.label`, the selection and its units) and its factor.
+struct StiffnessSpec {
+  HandleSpec region;
+  double factor = 1.0;
+};
+
 /// `selection = "x.sel"` with `deformation = "x.def"`: the deformation benchmark of Botsch &
 /// Sorkine's survey (per-vertex labels 0 fixed, 1 free, 2 handle; the handle's 4x4 transform).
 struct BenchmarkHandlesSpec {
@@ -67,6 +74,11 @@ struct BenchmarkHandlesSpec {
 /// handle and where it is written; problems with the files named are InputErrors.
 void AddHandles(const std::optional<BenchmarkHandlesSpec>& benchmark,
                 const std::vector<HandleSpec>& specs, Scenario& scenario);
+
+/// Appends the stiffness regions of `specs` to `scenario` (after AddHandles: its selection box
+/// is set). Selections that match nothing are ConfigErrors naming the region and where it is
+/// written.
+void AddStiffness(const std::vector<StiffnessSpec>& specs, Scenario& scenario);
 
 /// "(x, y, z)" with 6 significant digits.
 std::string Vec(const Eigen::Vector3d& v);

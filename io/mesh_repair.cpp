@@ -15,6 +15,7 @@
 
 #include "framework/disjoint_sets.h"
 #include "framework/error.h"
+#include "framework/stiffness.h"
 
 namespace harap {
 
@@ -522,6 +523,7 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
     : problem_(problem) {
   HARAP_CHECK(problem.mesh != nullptr, "DeformationProblem without a mesh");
   const Mesh& mesh = *problem.mesh;
+  ValidateStiffness(problem.stiffness, mesh, "the stiffness");
   checks_ = CheckMesh(mesh, problem.constraints.indices);
 
   if (checks_.non_finite_vertices.count > 0) {
@@ -566,6 +568,13 @@ PreparedProblem::PreparedProblem(const DeformationProblem& problem,
     ++row;
   }
   problem_.mesh = &repaired_mesh_;
+  if (!problem.stiffness.empty()) {
+    // Per kept element, as the elements themselves.
+    problem_.stiffness.clear();
+    for (Index e = 0; e < elements.rows(); ++e) {
+      if (plan.keep[e]) problem_.stiffness.push_back(problem.stiffness[e]);
+    }
+  }
   SetSolvedConstraints(problem, kept_vertices);
   if (problem.initial) {
     Positions initial(kept_vertices, 3);

@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "framework/error.h"
+#include "framework/stiffness.h"
 #include "io/file_reading.h"
 #include "io/handle_selection.h"
 #include "io/mesh_sourcing.h"
@@ -92,6 +93,15 @@ Constraints Scenario::MergedConstraints() const {
   return MergeHandles(mesh.num_vertices(), handles);
 }
 
+std::vector<double> Scenario::ElementStiffness() const {
+  if (stiffness.empty()) return {};
+  std::vector<double> at_vertex(mesh.num_vertices(), 1.0);
+  for (const ScenarioStiffness& region : stiffness) {
+    for (const Index v : region.vertices) at_vertex[v] *= region.factor;
+  }
+  return harap::ElementStiffness(mesh, at_vertex);
+}
+
 std::pair<Eigen::Vector3d, Eigen::Vector3d> SelectionBox(const Mesh& mesh) {
   const std::vector<bool> referenced = ReferencedVertices(mesh);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -138,6 +148,7 @@ Scenario ParseScenario(std::string_view toml_text, const std::string& source_nam
   Scenario scenario;
   io_internal::SourceMesh(description.mesh, limits, scenario);
   io_internal::AddHandles(description.benchmark, description.handles, scenario);
+  io_internal::AddStiffness(description.stiffness, scenario);
   DecidePlanar(scenario, description.planar, description.planar_where);
   return scenario;
 }

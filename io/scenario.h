@@ -29,6 +29,14 @@ struct ScenarioHandle {
   double weight = Constraints::kHardWeight;
 };
 
+/// A `[[stiffness]]` region of a scenario: its vertices' factor (docs/input.md).
+struct ScenarioStiffness {
+  std::string name;             ///< `name`, or "stiffness N" (1-based) if absent.
+  std::vector<Index> vertices;  ///< Selected vertices, ascending.
+  double factor = 1.0;          ///< finite, > 0
+  std::string selection;        ///< What selects the vertices, in words (as ScenarioHandle's).
+};
+
 /// A deformation scenario (../shared/scenarios/FORMAT.md, harap's additions in docs/input.md):
 /// the mesh and its handles.
 struct Scenario {
@@ -36,6 +44,7 @@ struct Scenario {
   std::string mesh_source;     ///< Mesh file path or builtin description, for reports.
   Mesh mesh;                   ///< After `refine` / `tetrahedralize`; `planar` decided.
   std::vector<ScenarioHandle> handles;
+  std::vector<ScenarioStiffness> stiffness;  ///< `[[stiffness]]` regions, as written
   /// The box selections refer to: of the vertices some element references (docs/input.md).
   Eigen::Vector3d box_min = Eigen::Vector3d::Zero(), box_max = Eigen::Vector3d::Zero();
   std::optional<Positions> initial;  ///< From `initial = "file"`.
@@ -45,6 +54,10 @@ struct Scenario {
 
   /// All handles merged; a vertex selected by several handles takes the first handle's target.
   Constraints MergedConstraints() const;
+  /// Per-element stiffness factors (framework/stiffness.h) from the `[[stiffness]]` regions: a
+  /// vertex takes the product of the factors of the regions that select it (1 outside all), an
+  /// element the mean of its vertices'. Empty without regions.
+  std::vector<double> ElementStiffness() const;
 };
 
 /// The box that selections refer to, {min, max}: of the vertices some element references, so

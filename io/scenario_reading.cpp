@@ -52,10 +52,10 @@ class ScenarioTextReader {
 
   ScenarioDescription Read(std::string_view toml_text) const {
     const toml::table root = toml_.Parse(toml_text);
-    toml_.CheckKeys(
-        root,
-        {"mesh", "refine", "initial", "planar", "handle", "units", "selection", "deformation"},
-        "the top level");
+    toml_.CheckKeys(root,
+                    {"mesh", "refine", "initial", "planar", "handle", "stiffness", "units",
+                     "selection", "deformation"},
+                    "the top level");
     ScenarioDescription description;
     const Units default_units = ParseUnits(toml_, root, Units::kFractions);
     // selection = "x.sel" with deformation = "x.def": the deformation benchmark's handles.
@@ -103,7 +103,52 @@ class ScenarioTextReader {
         }
       }
     }
+    if (const toml::node* node = root.get("stiffness")) {
+      const toml::array* regions = node->as_array();
+      if (!regions) toml_.Fail(*node, "'stiffness' must be an array of tables ([[stiffness]])");
+      int number = 0;
+      for (const toml::node& entry : *regions) {
+        ++number;
+        const toml::table* table = entry.as_table();
+        if (!table) toml_.In(fmt::format("stiffness {}", number)).Fail(entry, "must be a table");
+        description.stiffness.push_back(ParseStiffness(*table, number, default_units));
+      }
+    }
     return description;
+  }
+
+  // A [[stiffness]] region: name, a selection as a handle's (select, units) and factor > 0.
+  StiffnessSpec ParseStiffness(const toml::table& table, int number, Units default_units) const {
+    StiffnessSpec spec;
+    HandleSpec& region = spec.region;
+    region.label = fmt::format("stiffness {}", number);
+    region.name = region.label;
+    if (const toml::node* name = table.get("name")) {
+      if (!name->is_string()) toml_.In(region.label).Fail(*name, "'name' must be a string");
+      region.name = name->as_string()->get();
+      region.label = fmt::format("stiffness '{}'", region.name);
+    }
+    const TomlReader toml = toml_.In(region.label);
+    toml.CheckKeys(table, {"name", "select", "units", "factor"}, "a [[stiffness]]");
+    region.units = ParseUnits(toml, table, default_units);
+    const toml::node* factor = table.get("factor");
+    if (!factor) {
+      toml.Fail(toml_.Where(table),
+                "needs factor = s, the finite number > 0 multiplying the region's energy terms");
+    }
+    spec.factor = toml.Number(*factor, "factor");
+    if (!(spec.factor > 0.0) || !std::isfinite(spec.factor)) {
+      toml.Fail(*factor, "'factor' must be a finite number > 0 (1 = as stiff as the rest)");
+    }
+    const toml::node* select = table.get("select");
+    if (!select || !select->as_table()) {
+      toml.Fail(select ? toml_.Where(*select) : toml_.Where(table),
+                "needs select = a table with one of slab, ball, indices, index_file (as a "
+                "[[handle]]'s)");
+    }
+    region.select_where = toml_.Where(*select);
+    ParseSelection(toml, *select->as_table(), region);
+    return spec;
   }
 
   // A handle-edit file: [[edit]] frame = N with add = { a [[handle]] table } or remove = "name".

@@ -21,6 +21,7 @@ struct ScenarioDescription {
   MeshSpec mesh;
   std::optional<BenchmarkHandlesSpec> benchmark;
   std::vector<HandleSpec> handles;
+  std::vector<StiffnessSpec> stiffness;
   std::optional<bool> planar;
   std::string planar_where;
 };

@@ -134,7 +134,8 @@ void PageSession::Build(const ConfigNode& config) {
       Json{{"type", "status"}, {"stage", "setting up: hierarchy, precomputation and factorization"}}
           .dump());
   std::unique_ptr<ConfiguredSession> session =
-      MakeSession(registries_, source_.scenario.mesh, config, source_.threads);
+      MakeSession(registries_, source_.scenario.mesh, config, source_.threads,
+                  SessionOptions::FrameStart::kCorrected, source_.scenario.ElementStiffness());
   const Positions previous = session_ ? session_->session().positions() : Positions();
   session_ = std::move(session);
   config_ = config;

@@ -4,6 +4,7 @@
 #include "energies/kernels/cotangent_weights.h"
 #include "energies/kernels/mesh_adjacency.h"
 #include "energies/kernels/triangle_stencil.h"
+#include "framework/stiffness.h"
 
 namespace harap {
 
@@ -24,6 +25,23 @@ std::pair<Index, Index> CountEdges(const SparseMatrix& a) {
 }
 
 }  // namespace
+
+void CotangentArapEnergy::ApplyStiffness(const Mesh& rest, TriangleWeights& weights) const {
+  if (stiffness_.empty()) return;
+  // A triangle of the mesh takes its own factor. Triangles the weight scheme made (intrinsic
+  // Delaunay flips) are not the mesh's: they take the mean of their corners' factors.
+  std::vector<double> at_vertex;
+  for (Index f = 0; f < weights.triangles.rows(); ++f) {
+    double factor = stiffness_[f];
+    if (weights.triangles.row(f) != rest.elements.row(f)) {
+      if (at_vertex.empty()) at_vertex = VertexStiffness(rest, stiffness_);
+      factor = (at_vertex[weights.triangles(f, 0)] + at_vertex[weights.triangles(f, 1)] +
+                at_vertex[weights.triangles(f, 2)]) /
+               3.0;
+    }
+    weights.half_cot.row(f) *= factor;
+  }
+}
 
 WeightOptions WeightOptions::FromConfig(const ConfigNode& node, const WeightOptions& defaults) {
   WeightOptions options = defaults;
@@ -58,6 +76,7 @@ void CotangentArapEnergy::PrecomputeCoupledForm(const Mesh& rest, const Context&
     TriangleWeights weights =
         ComputeTriangleWeights(rest.vertices, rest.elements, scheme, weight_options_.min_cotangent);
     num_degenerate_ = weights.degenerate;
+    ApplyStiffness(rest, weights);
     const Elements& faces = weights.triangles;
     const auto& half_cot = weights.half_cot;
     a_ = AdjacencyPattern(rest.num_vertices(), faces);

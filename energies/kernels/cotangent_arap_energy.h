@@ -81,6 +81,9 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
   virtual void AddNonFaceTerms(const RestGeometry& /*geometry*/, const Context& /*context*/) {}
 
  private:
+  /// Multiplies each triangle's weights by its stiffness factor (none without stiffness).
+  void ApplyStiffness(const Mesh& rest, TriangleWeights& weights) const;
+
   std::string_view name_;
   WeightOptions weight_options_;
   bool negative_weights_break_squares_;

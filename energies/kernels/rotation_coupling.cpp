@@ -360,6 +360,9 @@ void CoupledQuadraticEnergy::Precompute(const Mesh& rest, const Context& context
     rest_positions_ = rest.vertices;
     twist_metric_.clear();
   }
+  HARAP_CHECK(stiffness_.empty() || static_cast<Index>(stiffness_.size()) == rest.num_elements(),
+              "{} stiffness factors for a mesh of {} elements", stiffness_.size(),
+              rest.num_elements());
   PrecomputeCoupledForm(rest, context);
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "framework/config.h"
@@ -138,6 +139,12 @@ class CoupledQuadraticEnergy : public Energy {
   /// PrecomputeCoupledForm.
   void Precompute(const Mesh& rest, const Context& context) final;
   RotationSite rotation_site() const override { return site_; }
+  /// Every element's weights are multiplied by its factor before A, the coupling and the
+  /// constant are assembled, so the energy keeps the coupled form.
+  bool takes_stiffness() const override { return true; }
+  void SetStiffness(std::vector<double> element_stiffness) override {
+    stiffness_ = std::move(element_stiffness);
+  }
   Index num_rotations() const override { return coupling_.num_sites; }
   const SparseMatrix& system_matrix() const override { return a_; }
   double FitRotations(const Positions& u, Rotations& rotations,
@@ -165,6 +172,8 @@ class CoupledQuadraticEnergy : public Energy {
   /// the coefficients the rotations are fitted to (see FitCoupledRotations), for options that
   /// reproduce a published variant.
   std::vector<Eigen::Vector3d> fit_coefficients_;
+  /// SetStiffness()'s factors per element of the next rest mesh; empty: 1 everywhere.
+  std::vector<double> stiffness_;
   /// Builds a_ and coupling_ (and whatever else the energy needs) for the rest mesh.
   virtual void PrecomputeCoupledForm(const Mesh& rest, const Context& context) = 0;
 

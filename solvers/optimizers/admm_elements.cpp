@@ -214,6 +214,11 @@ void AdmmLevelSolver::CheckCompatible(const Energy& energy, bool handle_edits) c
 void AdmmLevelSolver::Precompute(const LevelSetup& setup, const ComponentFactory& factory,
                                  const Context& context) {
   if (setup.handle_edits) throw ConfigError(std::string(kAdmmNoSessions));
+  if (setup.stiffness != nullptr && !setup.stiffness->empty()) {
+    throw ConfigError(
+        "the ADMM level solvers take no stiffness (their splitting weighs every element alike): "
+        "use local_global");
+  }
   const Mesh& mesh = *setup.mesh;
   const int level = setup.level;
   // Only the input level needs the factory's energy (final energy and measures); coarse levels

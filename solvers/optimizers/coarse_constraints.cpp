@@ -3,6 +3,7 @@
 
 #include "framework/error.h"
 #include "framework/rotation.h"
+#include "framework/stiffness.h"
 
 namespace harap {
 
@@ -124,6 +125,24 @@ ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
   rhs.resize(system.num_unknowns(), 3);
   x.resize(system.num_unknowns(), 3);
   return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system.num_unknowns(), seconds};
+}
+
+std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level,
+                                   const std::vector<double>& input_stiffness) {
+  if (input_stiffness.empty() || level == 0) return input_stiffness;
+  const Mesh& input = hierarchy.levels[0].mesh;
+  const Mesh& mesh = hierarchy.levels[level].mesh;
+  const std::vector<double> input_vertex = VertexStiffness(input, input_stiffness);
+  std::vector<double> sum(mesh.num_vertices(), 0.0);
+  std::vector<int> count(mesh.num_vertices(), 0);
+  for (Index m = 0; m < input.num_vertices(); ++m) {
+    const Index c = hierarchy.MapFinestVertex(m, level);
+    if (c == kNoVertex) continue;
+    sum[c] += input_vertex[m];
+    ++count[c];
+  }
+  for (Index c = 0; c < mesh.num_vertices(); ++c) sum[c] = count[c] > 0 ? sum[c] / count[c] : 1.0;
+  return ElementStiffness(mesh, sum);
 }
 
 }  // namespace harap

@@ -53,4 +53,11 @@ ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
                                   const Stopwatch& clock, std::unique_ptr<LinearSolver>& solver,
                                   Eigen::MatrixXd& rhs, Eigen::MatrixXd& x);
 
+/// The stiffness of `level` (framework/stiffness.h) from the input mesh's per-element factors:
+/// the input level's own; on a coarse level each vertex takes the mean of its input members'
+/// vertex factors (VertexStiffness) and each element the mean of its vertices', so a stiff region
+/// stays stiff where the clustering puts it (docs/energies.md, "Stiffness"). Empty in, empty out.
+std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level,
+                                   const std::vector<double>& input_stiffness);
+
 }  // namespace harap

@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "framework/error.h"
+#include "framework/stiffness.h"
 #include "solvers/optimizers/level_setup_pipeline.h"
 #include "solvers/optimizers/local_global_solver.h"
 
@@ -61,8 +62,10 @@ struct DeformationSession::Level {
 };
 
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
-                                       const SessionOptions& options, const Context& context)
+                                       const SessionOptions& options, const Context& context,
+                                       const std::vector<double>& stiffness)
     : mesh_(mesh), factory_(factory), options_(options), context_(context), cascade_(mesh) {
+  ValidateStiffness(stiffness, mesh_, "the session's stiffness");
   Stopwatch clock;
   context_.Run([&] {
     diagonal_ = BoundingBoxDiagonal(mesh_);
@@ -84,8 +87,10 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
       cascade_.set_solver(l, options_.optimizer.level_solver->CreateAnother());
       // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh);
       // every level keeps one system for all handle sets (handle edits).
+      const std::vector<double> level_stiffness =
+          l > 0 ? LevelStiffness(cascade_.hierarchy(), l, stiffness) : stiffness;
       cascade_.solver(l).Precompute(LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
-                                               /*handle_edits=*/true},
+                                               /*handle_edits=*/true, &level_stiffness},
                                     factory_, context_);
       setup_timings_.precompute += cascade_.solver(l).precompute_seconds();
     }

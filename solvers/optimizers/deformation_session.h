@@ -102,8 +102,11 @@ struct HandleEditResult {
 /// must outlive the session (api/session.h bundles them). Not thread-safe.
 class DeformationSession {
  public:
+  /// `stiffness`: per-element factors (framework/stiffness.h; empty: 1 everywhere), used while
+  /// the levels are set up here.
   DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
-                     const SessionOptions& options, const Context& context);
+                     const SessionOptions& options, const Context& context,
+                     const std::vector<double>& stiffness = {});
   ~DeformationSession();
   DeformationSession(const DeformationSession&) = delete;
   DeformationSession& operator=(const DeformationSession&) = delete;

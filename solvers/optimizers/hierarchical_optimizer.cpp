@@ -130,10 +130,13 @@ LevelSetupResult SetUpLevel(int l, const HierarchicalOptimizer::Options& options
   const LevelConstraints constraints =
       l == 0 ? LevelConstraints::Exact(problem.constraints, mesh.planar)
              : MapConstraints(cascade.hierarchy(), l, problem.constraints);
+  const std::vector<double> coarse_stiffness =
+      l > 0 ? LevelStiffness(cascade.hierarchy(), l, problem.stiffness) : std::vector<double>{};
   LevelSetupResult setup;
   setup.solver = options.level_solver->CreateAnother();
   // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-  setup.solver->Precompute(LevelSetup{&cascade.LevelMesh(l), l > 0 ? &mesh : nullptr, l, false},
+  setup.solver->Precompute(LevelSetup{&cascade.LevelMesh(l), l > 0 ? &mesh : nullptr, l, false,
+                                      l > 0 ? &coarse_stiffness : &problem.stiffness},
                            factory, context);
   setup.solver->Constrain(constraints, factory, context);
   setup.precompute_seconds = setup.solver->precompute_seconds();

@@ -7,6 +7,7 @@
 
 #include "framework/config.h"
 #include "framework/error.h"
+#include "framework/stiffness.h"
 #include "solvers/optimizers/coarse_constraints.h"
 
 namespace harap {
@@ -67,6 +68,14 @@ void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFacto
   data_term_ = nullptr;
   CheckCompatible(*energy_, setup.handle_edits);  // the run's check, for callers without one
   ordering_ = LocalityOrdering(*setup.mesh);
+  if (setup.stiffness != nullptr && !setup.stiffness->empty()) {
+    // In the level's own numbering, like its mesh.
+    std::vector<double> stiffness(setup.stiffness->size());
+    for (size_t e = 0; e < stiffness.size(); ++e) {
+      stiffness[e] = (*setup.stiffness)[ordering_.old_element[e]];
+    }
+    energy_->SetStiffness(std::move(stiffness));
+  }
   if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
   energy_->Precompute(ordering_.mesh, context);
   precompute_seconds_ = clock.Seconds();
@@ -534,6 +543,7 @@ Positions InitialPositions(const DeformationProblem& problem) {
   HARAP_CHECK(problem.mesh != nullptr, "deformation problem without a mesh");
   const Mesh& mesh = *problem.mesh;
   const Constraints& constraints = problem.constraints;
+  ValidateStiffness(problem.stiffness, mesh, "the deformation problem");
   Positions u = problem.initial ? *problem.initial : mesh.vertices;
   if (u.rows() != mesh.num_vertices()) {
     throw InputError(fmt::format("the initial configuration has {} vertices, the mesh {}", u.rows(),

@@ -275,3 +275,56 @@ TEST_CASE("scenario weight: soft handles carry their weight into the constraints
 
 }  // namespace
 }  // namespace harap
+
+namespace harap {
+namespace {
+
+TEST_CASE("scenario [[stiffness]]: regions select like handles, factors multiply per vertex",
+          "[io][scenario][stiffness]") {
+  testing::ScratchDir dir;
+  dir.Write("grid.obj", kGridObj);
+  const auto file =
+      dir.Write("s.toml",
+                "mesh = \"grid.obj\"\n"
+                "[[handle]]\nselect.indices = [0, 3]\n"
+                "[[stiffness]]\nname = \"right\"\nselect.slab = { axis = \"x\", from = 0.4, "
+                "to = 1.0 }\nfactor = 10\n"
+                "[[stiffness]]\nunits = \"absolute\"\nselect.indices = [2]\nfactor = 0.5\n");
+  const Scenario scenario = LoadScenario(file);
+  REQUIRE(scenario.stiffness.size() == 2);
+  CHECK(scenario.stiffness[0].name == "right");
+  CHECK(scenario.stiffness[0].vertices == std::vector<Index>{1, 2, 4, 5});
+  CHECK(scenario.stiffness[1].name == "stiffness 2");
+  // Vertex factors 1, 10, 5, 1, 10, 10; each face the mean of its corners.
+  const std::vector<double> stiffness = scenario.ElementStiffness();
+  REQUIRE(stiffness.size() == 4);
+  CHECK(stiffness[0] == Approx(21.0 / 3.0));  // f 1 2 5
+  CHECK(stiffness[1] == Approx(12.0 / 3.0));  // f 1 5 4
+  CHECK(stiffness[2] == Approx(25.0 / 3.0));  // f 2 3 6
+  CHECK(stiffness[3] == Approx(30.0 / 3.0));  // f 2 6 5
+}
+
+TEST_CASE("scenario [[stiffness]]: bad regions name the region and the place",
+          "[io][scenario][stiffness]") {
+  testing::ScratchDir dir;
+  dir.Write("grid.obj", kGridObj);
+  const auto with = [&](const std::string& region) {
+    return MessageOf(dir.Write(
+        "s.toml",
+        "mesh = \"grid.obj\"\n[[handle]]\nselect.indices = [0]\n[[stiffness]]\n" + region));
+  };
+  CHECK_THAT(with("select.indices = [1]\nfactor = 0\n"),
+             Contains("s.toml:6:10: stiffness 1: 'factor' must be a finite number > 0"));
+  CHECK_THAT(with("select.indices = [1]\nfactor = nan\n"),
+             Contains("stiffness 1: factor is a non-finite"));
+  CHECK_THAT(with("select.indices = [1]\n"), Contains("needs factor = s"));
+  CHECK_THAT(with("factor = 2\n"), Contains("needs select"));
+  CHECK_THAT(with("select.indices = [1]\nfactor = 2\nweight = 3\n"), Contains("weight"));
+  CHECK_THAT(with("select.indices = [99]\nfactor = 2\n"), Contains("index 99 out of range"));
+  CHECK_THAT(
+      with("name = \"x\"\nselect.slab = { axis = \"z\", from = 0.5, to = 0.6 }\nfactor = 2\n"),
+      Contains("stiffness 'x'"));
+}
+
+}  // namespace
+}  // namespace harap
