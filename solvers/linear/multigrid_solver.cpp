@@ -36,12 +36,10 @@ constexpr EnumNames<MultigridSolver::Prolongation, 2> kProlongationNames = {{
     {MultigridSolver::Prolongation::kSmoothed, "smoothed"},
 }};
 
-/// y = Mᵀ x (accumulate: y += Mᵀ x) for the first `columns` columns, one row of the result per
-/// column of the compressed column matrix `m`; rows run in parallel. With M = A (symmetric) it
-/// is A x; with M = Pᵀ stored it is P x, and with M = P it is Pᵀ x.
-template <bool kAccumulate>
-void TransposeProduct(const SparseMatrix& m, const Eigen::MatrixXd& x, Eigen::MatrixXd& y,
-                      int columns) {
+/// For each column j of the compressed column matrix `m` (in parallel): the sums
+/// Σ_p m_pj x(p, c) over the first `columns` columns of x, handed to store(j, sums).
+template <class X, class Store>
+void ColumnSums(const SparseMatrix& m, const X& x, int columns, Store&& store) {
   const Index* outer = m.outerIndexPtr();
   const Index* inner = m.innerIndexPtr();
   const double* value = m.valuePtr();
@@ -50,6 +48,17 @@ void TransposeProduct(const SparseMatrix& m, const Eigen::MatrixXd& x, Eigen::Ma
     for (Index p = outer[j]; p < outer[j + 1]; ++p) {
       for (int c = 0; c < columns; ++c) sum[c] += value[p] * x(inner[p], c);
     }
+    store(j, sum);
+  });
+}
+
+/// y = Mᵀ x (accumulate: y += Mᵀ x) for the first `columns` columns, one row of the result per
+/// column of `m`. With M = A (symmetric) it is A x; with M = Pᵀ stored it is P x, and with M = P
+/// it is Pᵀ x.
+template <bool kAccumulate>
+void TransposeProduct(const SparseMatrix& m, const Eigen::MatrixXd& x, Eigen::MatrixXd& y,
+                      int columns) {
+  ColumnSums(m, x, columns, [&](Index j, const auto& sum) {
     for (int c = 0; c < columns; ++c) {
       if constexpr (kAccumulate) {
         y(j, c) += sum[c];
@@ -63,14 +72,7 @@ void TransposeProduct(const SparseMatrix& m, const Eigen::MatrixXd& x, Eigen::Ma
 /// r = b − A x for the first `columns` columns (A symmetric).
 void Residual(const SparseMatrix& a, const Eigen::Ref<const Eigen::MatrixXd>& b,
               const Eigen::Ref<const Eigen::MatrixXd>& x, Eigen::MatrixXd& r, int columns) {
-  const Index* outer = a.outerIndexPtr();
-  const Index* inner = a.innerIndexPtr();
-  const double* value = a.valuePtr();
-  ForRows(static_cast<Index>(a.cols()), [&](Index i) {
-    std::array<double, iterative::kMaxBlockColumns> sum{};
-    for (Index p = outer[i]; p < outer[i + 1]; ++p) {
-      for (int c = 0; c < columns; ++c) sum[c] += value[p] * x(inner[p], c);
-    }
+  ColumnSums(a, x, columns, [&](Index i, const auto& sum) {
     for (int c = 0; c < columns; ++c) r(i, c) = b(i, c) - sum[c];
   });
 }
@@ -114,7 +116,8 @@ MultigridSolver::Options MultigridSolver::Options::FromConfig(const ConfigNode& 
         options.prolongation = node.GetEnum(
             "prolongation", options.prolongation, kProlongationNames,
             "constant = an aggregate's value copied to its unknowns; smoothed = that, smoothed by "
-            "one damped Jacobi step (smoothed aggregation: mesh-independent iteration counts)");
+            "one damped Jacobi step (smoothed aggregation: far fewer iterations, growing slowly "
+            "with the mesh)");
         options.strength_threshold =
             node.Get("strength_threshold", options.strength_threshold,
                      "θ: aggregates follow the couplings with |a_ij| ≥ θ √(a_ii a_jj)",
