@@ -220,7 +220,9 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
       break;
     }
   }
-  if (!diverged && tolerance == 0.0) diverged = !convergence.Update(SquaredResidual<K>(b, x));
+  if (!diverged && tolerance == 0.0 && options_.check_without_tolerance) {
+    diverged = !convergence.Update(SquaredResidual<K>(b, x));
+  }
   summary.outcome = diverged ? SolveOutcome::kFailed : iterative::BlockOutcome(convergence);
   if (diverged) {
     summary.message = iterative::DivergenceMessage(
@@ -229,7 +231,8 @@ SolveSummary GaussSeidelSolver::SolveBlock(const Eigen::Ref<const Eigen::MatrixX
                     "matrix) or the right-hand side is not finite. {}",
                     solver_checks::kNotPositiveDefiniteAdvice));
   }
-  summary.relative_residual = convergence.max_relative_residual();
+  const bool measured = tolerance > 0.0 || options_.check_without_tolerance;
+  summary.relative_residual = measured ? convergence.max_relative_residual() : 0.0;
   ForRows(rows(), [&](Index k) {
     for (int c = 0; c < K; ++c) x_out(order_[k], first + c) = x[k * K + c];
   });

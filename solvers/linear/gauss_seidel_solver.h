@@ -43,6 +43,11 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
     Ordering ordering = Ordering::kColored;
     /// ω: 1 is Gauss–Seidel, (1, 2) over-relaxes (SOR); must lie in (0, 2).
     double relaxation = 1.0;
+    /// Without a tolerance, one residual pass after the sweeps catches a diverging iteration
+    /// (and gives relative_residual). Not a configuration key: the multigrid solver's smoothers
+    /// turn it off, since its CG detects divergence itself and the pass would cost a third of
+    /// each smoothing step (relative_residual is then 0 and the outcome kIterationLimit).
+    bool check_without_tolerance = true;
 
     static Options FromConfig(const ConfigNode& node);
   };

@@ -7,6 +7,7 @@
 #include "solvers/linear/conjugate_gradient_solver.h"
 #include "solvers/linear/eigen_ldlt_solver.h"
 #include "solvers/linear/gauss_seidel_solver.h"
+#include "solvers/linear/multigrid_solver.h"
 #ifdef HARAP_HAVE_CHOLMOD
 #include "solvers/linear/adaptive_solver.h"
 #include "solvers/linear/cholmod_solver.h"
@@ -32,6 +33,10 @@ void RegisterLinearSolvers(Registry<LinearSolver>& registry) {
       "right-hand sides per pass, warm-started");
   registry.Add<ChebyshevSolver>(
       "Chebyshev semi-iterative acceleration of Jacobi [Wang 2015], bounds from Spectra, "
+      "warm-started");
+  registry.Add<MultigridSolver>(
+      "CG preconditioned by a multigrid V-cycle (smoothed aggregation of the matrix graph, "
+      "Galerkin coarse matrices, Gauss–Seidel or Chebyshev smoothing, coarsest level factored), "
       "warm-started");
 }
 
