@@ -78,11 +78,14 @@ std::optional<int64_t> MessageIdOf(std::string_view text);
 
 /// Binary frames the server sends (little-endian). Every frame starts with a uint32 kind.
 enum class FrameKind : uint32_t {
-  /// kind, num_vertices, num_triangles, float32 rest positions [3·V], uint32 triangles [3·T]
-  /// (the surface: the boundary faces of a tetrahedral mesh).
+  /// kind, num_display_vertices D, num_triangles T, num_mesh_vertices V, float32 rest positions
+  /// [3·D], uint32 triangles [3·T] (indices of display vertices), uint32 mesh vertex of each
+  /// display vertex [D]. The display is the surface (the boundary faces of a tetrahedral mesh),
+  /// decimated when it has more vertices than the display budget (DisplayMesh).
   kMesh = 1,
-  /// kind, solve id, count; if count < V: uint32 vertex indices [count]; float32 positions
-  /// [3·count] (only the vertices whose float32 position changed since the last frame).
+  /// kind, solve id, count; if count < D: uint32 display vertex indices [count]; float32
+  /// positions [3·count] (only the display vertices whose float32 position changed since the
+  /// last frame).
   kPositions = 2,
 };
 
