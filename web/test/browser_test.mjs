@@ -3,7 +3,7 @@
 // puppeteer-core; nothing downloads a browser). Starts the server itself on a free port.
 //
 //   node web/test/browser_test.mjs HARAP_EXECUTABLE SCENARIO.toml [--screenshot FILE]
-//        [--benchmark DRAGS] [--tolerance T]
+//        [--benchmark DRAGS] [--tolerance T] [--display-vertices N]
 //
 // The test: the page loads and solves; a handle dragged with synthesized mouse events moves the
 // mesh through preview frames and a full solve on release; the energy the page shows equals
@@ -26,6 +26,7 @@ const option = (name, fallback) => {
 const screenshotFile = option('--screenshot', null);
 const benchmarkDrags = Number(option('--benchmark', '0'));
 const tolerance = option('--tolerance', '1e-8');
+const displayVertices = option('--display-vertices', null);
 if (!existsSync(chromium)) {
   console.log(`skipped: no Chromium at ${chromium} (Debian: apt-get install chromium; ` +
     '.ci/setup installs it)');
@@ -44,7 +45,7 @@ function check(condition, what) {
 }
 
 const server = spawn(harap, ['view', scenario, '--port', '0', '--tolerance', tolerance,
-  '--threads', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  '--threads', '2', ...(displayVertices ? ['--display-vertices', displayVertices] : [])], { stdio: ['ignore', 'pipe', 'inherit'] });
 const url = await new Promise((resolve, reject) => {
   let output = '';
   server.stdout.on('data', (chunk) => {
