@@ -80,6 +80,7 @@ MessageLimits PageSession::limits() const {
   MessageLimits limits;
   limits.num_vertices = source_.scenario.mesh.num_vertices();
   limits.num_groups = static_cast<int>(groups_.size());
+  limits.num_levels = session_ ? session_->session().num_levels() : 0;
   return limits;
 }
 
@@ -312,6 +313,8 @@ void PageSession::Apply(const ParsedMessage& parsed) {
           Solve(true, id);
         } else if constexpr (std::is_same_v<T, ScenarioMessage>) {
           SendText(WithId({{"type", "scenario"}, {"toml", ScenarioToml()}}, id).dump());
+        } else if constexpr (std::is_same_v<T, LevelMessage>) {
+          SendClusters(message.level);
         }
       },
       parsed.message);
@@ -413,6 +416,20 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
                    {"notes", result.notes}},
                   id)
                .dump());
+}
+
+void PageSession::SendClusters(int level) {
+  // The session's own hierarchy (the paper's i ~_l j composed down to the finest level).
+  const MeshHierarchy& hierarchy = session_->session().hierarchy();
+  std::string frame;
+  AppendU32(frame, static_cast<uint32_t>(FrameKind::kClusters));
+  AppendU32(frame, static_cast<uint32_t>(level));
+  AppendU32(frame, static_cast<uint32_t>(display_.vertices.size()));
+  for (const Index v : display_.vertices) {
+    const Index coarse = level < hierarchy.num_levels() ? hierarchy.MapFinestVertex(v, level) : v;
+    AppendU32(frame, coarse == kNoVertex ? 0xffffffffu : static_cast<uint32_t>(coarse));
+  }
+  send_(Outgoing{true, std::move(frame)});
 }
 
 void PageSession::SendPositions(const Positions& positions, int64_t solve_id) {

@@ -82,6 +82,8 @@ class PageSession {
   void ApplyGroupsAsHandles();
   Positions HandleTargets() const;
   void Solve(bool full, std::optional<int64_t> id);
+  /// Level `level`'s clusters as a FrameKind::kClusters frame.
+  void SendClusters(int level);
   void SendPositions(const Positions& positions, int64_t solve_id);
   void SendText(const std::string& json);
   void SendError(const std::string& message, std::optional<int64_t> id);

@@ -45,14 +45,19 @@ struct ConfigureMessage {
 struct SolveMessage {};
 /// Asks for the scenario TOML of the current handles and targets (`harap deform` reproduces it).
 struct ScenarioMessage {};
+/// Asks for hierarchy level `level`'s clusters (FrameKind::kClusters).
+struct LevelMessage {
+  int level = 0;
+};
 
 using ClientMessage = std::variant<MoveMessage, AddHandleMessage, RemoveHandleMessage,
-                                   ConfigureMessage, SolveMessage, ScenarioMessage>;
+                                   ConfigureMessage, SolveMessage, ScenarioMessage, LevelMessage>;
 
 /// What a message is checked against: the session's sizes.
 struct MessageLimits {
   Index num_vertices = 0;
   int num_groups = 0;
+  int num_levels = 1;  ///< the session's hierarchy levels (0: not set up yet)
   /// Longer text messages are refused before parsing (a page's largest message is a few
   /// hundred bytes).
   size_t max_bytes = 64 * 1024;
@@ -87,6 +92,9 @@ enum class FrameKind : uint32_t {
   /// positions [3·count] (only the display vertices whose float32 position changed since the
   /// last frame).
   kPositions = 2,
+  /// kind, level, count D; uint32 [D]: for each display vertex the vertex of hierarchy level
+  /// `level` it maps to (its cluster; 0xffffffff: none), so the page colours the clusters.
+  kClusters = 3,
 };
 
 }  // namespace harap::view

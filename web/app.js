@@ -12,6 +12,7 @@ import uPlot from 'uplot';
 
 const kMeshFrame = 1;
 const kPositionsFrame = 2;
+const kClustersFrame = 3;
 const kFreeGrey = 190 / 255;
 const kLevelColors = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#17becf'];
 
@@ -69,7 +70,7 @@ let restPositions = null, diagonal = 1;
 let meshVertexOf = null, displayVertexOf = null;  // display vertex <-> mesh vertex
 
 const settings = {
-  shading: 'smooth', wireframe: false, ghost: true, previewOnly: false, gizmoMode: 'translate',
+  shading: 'smooth', level: 0, wireframe: false, ghost: true, previewOnly: false, gizmoMode: 'translate',
   handle: '', addHandle: false, handleRadius: 0.03,
   optimizer: 'hierarchical', energy: '', solver: '', preset: '', tolerance: 1e-6,
 };
@@ -78,6 +79,8 @@ const display = gui.addFolder('Display');
 display.add(settings, 'shading', ['smooth', 'flat']).onChange(updateMaterial);
 display.add(settings, 'wireframe').onChange(updateMaterial);
 display.add(settings, 'ghost').name('rest pose ghost').onChange(updateMaterial);
+let levelController = display.add(settings, 'level', 0, 0, 1).name('hierarchy level')
+  .onChange(showLevel);
 const handlesFolder = gui.addFolder('Handles');
 let handleController = handlesFolder.add(settings, 'handle', ['']).onChange(selectHandle);
 handlesFolder.add(settings, 'gizmoMode', ['translate', 'rotate']).name('gizmo')
@@ -166,6 +169,10 @@ function receiveFrame(buffer) {
     if (wireframe) wireframe.geometry.attributes.position.needsUpdate = true;
     state.pendingFrameId = id;
     state.timings.frame.push(performance.now() - frameStart);
+  } else if (header[0] === kClustersFrame) {
+    const [, level, count] = header;
+    clustersOfLevel.set(level, new Uint32Array(buffer, 12, count).slice());
+    if (level === settings.level) showLevel();
   }
 }
 
@@ -190,6 +197,10 @@ function receiveMessage(message) {
         `${message.energy}, ${message.solver}, ${message.levels} level(s) · set up in ` +
         `${message.setup.seconds.toFixed(2)} s`;
       settings.optimizer = message.optimizer;
+      clustersOfLevel.clear();
+      levelController = levelController.max(message.levels - 1);
+      if (settings.level > message.levels - 1) settings.level = 0;
+      showLevel();
       settings.energy = message.energy;
       settings.solver = message.solver;
       gui.controllersRecursive().forEach((c) => c.updateDisplay());
@@ -334,9 +345,44 @@ function updateMaterial() {
   requestRender();
 }
 
-// Handle groups: colours on the mesh, the gizmo on the selected one.
+// The hierarchy level slider: level 0 shows the handles' colours; a coarser level colours each
+// of its clusters (the display vertices that map to one of its vertices), asked for once.
+const clustersOfLevel = new Map();
+function showLevel() {
+  if (!geometry) return;
+  if (settings.level === 0) {
+    setGroups(state.groups);
+    return;
+  }
+  const clusters = clustersOfLevel.get(settings.level);
+  if (!clusters) {
+    send({ type: 'level', level: settings.level });
+    return;
+  }
+  const colors = geometry.attributes.color.array;
+  const color = new THREE.Color();
+  for (let v = 0; v < clusters.length; ++v) {
+    const c = clusters[v];
+    if (c === 0xffffffff) color.setRGB(kFreeGrey, kFreeGrey, kFreeGrey);
+    else color.setHSL(((c * 0.6180339887) % 1 + 1) % 1, 0.65, 0.5 + 0.15 * ((c >> 3) % 2));
+    colors[3 * v] = color.r;
+    colors[3 * v + 1] = color.g;
+    colors[3 * v + 2] = color.b;
+  }
+  geometry.attributes.color.needsUpdate = true;
+  state.levelShown = settings.level;
+  requestRender();
+}
+
+// Handle groups: colours on the mesh (level 0 of the slider), the gizmo on the selected one.
 function setGroups(groups) {
   state.groups = groups;
+  if (settings.level !== 0) {
+    showLevel();
+    selectGroupControls(groups);
+    return;
+  }
+  state.levelShown = 0;
   const colors = geometry.attributes.color.array;
   colors.fill(kFreeGrey);
   const colored = new Uint8Array(colors.length / 3);
@@ -350,6 +396,9 @@ function setGroups(groups) {
   });
   geometry.attributes.color.needsUpdate = true;
   requestRender();
+  selectGroupControls(groups);
+}
+function selectGroupControls(groups) {
   const names = groups.map((g, i) => `${i}: ${g.name}`);
   handleController = handleController.options(names);
   if (!names.includes(settings.handle)) settings.handle = names[names.length - 1] ?? '';
@@ -449,6 +498,14 @@ function removeSelectedHandle() {
   if (selectedGroup >= 0) send({ type: 'remove_handle', group: selectedGroup });
 }
 state.addHandle = addHandle;
+state.setLevel = (level) => {
+  settings.level = level;
+  levelController.updateDisplay();
+  showLevel();
+};
+// The number of distinct clusters the shown level colours (level 0: every display vertex).
+state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
+  : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
 state.requestScenario = () => send({ type: 'scenario' });
 

@@ -224,6 +224,17 @@ TEST_CASE("a page's session: mesh, solve, moves, handle edits, bad messages", "[
   CHECK(page.Last("error")["id"] == 13);
   page.page->HandleText(R"({"type":"solve","id":14})");
   CHECK(page.Last("solved")["id"] == 14);
+
+  // A level's clusters: one per display vertex (a classic session's only level: the vertices).
+  page.page->HandleText(R"({"type":"level","level":0,"id":15})");
+  const Outgoing& clusters = page.sent.back();
+  REQUIRE(clusters.binary);
+  CHECK(U32(clusters.data, 0) == static_cast<uint32_t>(FrameKind::kClusters));
+  CHECK(U32(clusters.data, 8) == 400);
+  CHECK(U32(clusters.data, 12 + 4 * 399) == 399);
+  page.page->HandleText(R"({"type":"level","level":1,"id":16})");
+  CHECK(page.Last("error")["message"].get<std::string>().find("'level' = 1 is out of range") !=
+        std::string::npos);
 }
 
 TEST_CASE("a page's session: consecutive preview moves of a group are solved once", "[view]") {

@@ -8,7 +8,8 @@
 // The test: the page loads and solves; a handle dragged with synthesized mouse events moves the
 // mesh through preview frames and a full solve on release; the energy the page shows equals
 // `harap deform`'s on the scenario the page exports; a handle is added and removed; malformed
-// messages are refused with errors while the page keeps working; the screenshot is not blank.
+// messages are refused with errors while the page keeps working; the screenshot is not blank;
+// the hierarchy level slider colours the coarsest level's clusters.
 // --benchmark N: N drags, then the page's own timers as JSON (docs/results.md).
 // Exits 77 (ctest: skipped) when Chromium is absent.
 import { spawn, spawnSync } from 'node:child_process';
@@ -177,6 +178,16 @@ try {
   });
   check(coloured > 0.02, `the screenshot is not blank (${(100 * coloured).toFixed(1)}% mesh pixels)`);
   if (screenshotFile) await page.screenshot({ path: screenshotFile });
+
+  // The hierarchy level slider: the coarsest level's clusters, fewer than the vertices drawn.
+  const levels = await page.evaluate(() => window.harapView.session.levels);
+  await page.evaluate((l) => window.harapView.setLevel(l), levels - 1);
+  await waitFor((l) => window.harapView.levelShown === l, levels - 1);
+  const clusters = await page.evaluate(() => window.harapView.clusterCount());
+  const drawn = await page.evaluate(() => window.harapView.mesh.display_vertices);
+  check(levels > 1 && clusters > 1 && clusters < drawn / 2,
+    `level ${levels - 1} of ${levels} shows ${clusters} clusters of ${drawn} vertices`);
+  await page.evaluate(() => window.harapView.setLevel(0));
 
   if (benchmarkDrags > 0) {
     await page.evaluate(() => {
