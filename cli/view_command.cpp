@@ -60,20 +60,30 @@ CLI::App* AddViewCommand(CLI::App& app, ViewArguments& args) {
   view->add_option("--assets", args.assets,
                    "folder of the page's files (default: share/harap/view of the installation)");
   view->add_option("--config", args.config_file, "TOML file with run-config tables");
-  view->add_option("--optimizer", args.optimizer, "classic or hierarchical (default classic)");
+  view->add_option("--optimizer", args.optimizer,
+                   "classic or hierarchical (default hierarchical: its preview frames are the "
+                   "coarse approximation, the classic optimizer's a full solve)");
   view->add_option("--energy", args.energy, "energy name");
   view->add_option("--solver", args.solver, "linear solver name (default cholmod)");
   view->add_option("--preset", args.preset, "named option set (docs/solvers.md)");
   view->add_option("--tolerance", args.tolerance, "convergence tolerance of a full solve");
   view->add_option("--set", args.settings, "set any option by its config key");
   view->add_option("--threads", args.threads, "worker threads (default: all cores)");
+  view->add_option("--display-vertices", args.display_vertices,
+                   "the page draws at most this many vertices: a larger surface is decimated for "
+                   "the display, never for the solve (default 200000)")
+      ->check(CLI::Range(3, 1 << 30));
   return view;
 }
 
 int RunViewCommand(const ViewArguments& args) {
   const Registries registries = MakeBuiltinRegistries();
-  const ConfigNode config = args.BuildConfig();
-  const view::ViewSource source = view::LoadViewSource(args.file, config, args.threads);
+  ConfigNode config = args.BuildConfig();
+  // Dragging streams Preview() frames: the hierarchical optimizer's are the paper's coarse
+  // approximation (Figs. 15-16), the classic one's would be a full solve of the finest mesh.
+  if (!config.Child("optimizer").Has("type")) config.Set("optimizer.type", "\"hierarchical\"");
+  view::ViewSource source = view::LoadViewSource(args.file, config, args.threads);
+  source.display_vertices = args.display_vertices;
   view::ServerOptions options;
   options.host = args.host;
   options.port = args.port;

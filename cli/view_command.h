@@ -16,6 +16,7 @@ struct ViewArguments : PieceFlags {
   std::string assets;  ///< the page's files; default: share/harap/view beside the executable
   bool open = false;
   int threads = 0;
+  int display_vertices = 200000;  ///< ViewSource::display_vertices
 };
 
 /// `harap view SCENARIO.toml | MESH`: the interactive page (docs/view.md).

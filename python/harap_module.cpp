@@ -10,10 +10,12 @@
 // the callback runs on the caller's thread. A handler that raises (Ctrl-C: KeyboardInterrupt), a
 // callback that raises or returns False ends the solve after its current iteration
 // (CallbackAction::kStop); the exception is raised once the worker has finished.
+#include <fmt/format.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <condition_variable>
@@ -31,6 +33,8 @@
 #include "io/mesh_io.h"
 #include "io/mesh_writers.h"
 #include "io/scenario.h"
+#include "view/page_session.h"
+#include "view/server.h"
 
 namespace py = pybind11;
 
@@ -662,6 +666,125 @@ py::dict Components() {
   return result;
 }
 
+// The handle groups the page drags one by one: as given (`group_sizes` consecutive rows of
+// `vertices`, named `group_names`), or, with no sizes, each connected set of handle vertices
+// (edges of the mesh's elements) one group. Vertices ascending in each group, as a scenario's.
+std::vector<ScenarioHandle> HandleGroups(const Mesh& mesh, const std::vector<Index>& vertices,
+                                         const Positions& targets,
+                                         const std::vector<int>& group_sizes,
+                                         const std::vector<std::string>& group_names) {
+  std::vector<int> group_of(vertices.size(), 0);
+  int num_groups = 0;
+  if (!group_sizes.empty()) {
+    size_t row = 0;
+    for (const int size : group_sizes) {
+      for (int i = 0; i < size && row < vertices.size(); ++i) group_of[row++] = num_groups;
+      ++num_groups;
+    }
+    if (row != vertices.size()) throw InputError("the handle groups' sizes do not add up");
+  } else if (!vertices.empty()) {
+    std::vector<Index> row_of(static_cast<size_t>(mesh.num_vertices()), -1);
+    for (size_t k = 0; k < vertices.size(); ++k) row_of[vertices[k]] = static_cast<Index>(k);
+    std::vector<Index> parent(vertices.size());
+    for (size_t k = 0; k < parent.size(); ++k) parent[k] = static_cast<Index>(k);
+    const auto find = [&](Index k) {
+      while (parent[k] != k) k = parent[k] = parent[parent[k]];
+      return k;
+    };
+    for (Eigen::Index e = 0; e < mesh.elements.rows(); ++e) {
+      for (Eigen::Index a = 0; a < mesh.elements.cols(); ++a) {
+        for (Eigen::Index b = a + 1; b < mesh.elements.cols(); ++b) {
+          const Index ra = row_of[mesh.elements(e, a)], rb = row_of[mesh.elements(e, b)];
+          if (ra >= 0 && rb >= 0) parent[find(ra)] = find(rb);
+        }
+      }
+    }
+    std::vector<int> number(vertices.size(), -1);
+    for (size_t k = 0; k < vertices.size(); ++k) {
+      const Index root = find(static_cast<Index>(k));
+      if (number[root] < 0) number[root] = num_groups++;
+      group_of[k] = number[root];
+    }
+  }
+  std::vector<ScenarioHandle> groups(static_cast<size_t>(num_groups));
+  std::vector<std::vector<size_t>> rows(groups.size());
+  for (size_t k = 0; k < vertices.size(); ++k) rows[group_of[k]].push_back(k);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::sort(rows[g].begin(), rows[g].end(),
+              [&](size_t a, size_t b) { return vertices[a] < vertices[b]; });
+    groups[g].name = g < group_names.size() ? group_names[g] : fmt::format("handle {}", g + 1);
+    groups[g].targets.resize(static_cast<Eigen::Index>(rows[g].size()), 3);
+    for (size_t i = 0; i < rows[g].size(); ++i) {
+      groups[g].vertices.push_back(vertices[rows[g][i]]);
+      groups[g].targets.row(static_cast<Eigen::Index>(i)) =
+          targets.row(static_cast<Eigen::Index>(rows[g][i]));
+    }
+  }
+  std::erase_if(groups, [](const ScenarioHandle& group) { return group.vertices.empty(); });
+  return groups;
+}
+
+// harap._harap.View: the page of `harap view` (view/server.h) served from a thread of its own
+// until stop(); each page that connects solves in a session of its own, as with `harap view`.
+class PyView {
+ public:
+  PyView(py::handle V, py::handle F, py::handle handles, py::handle targets,
+         const std::vector<int>& group_sizes, const std::vector<std::string>& group_names,
+         const Settings& settings, std::optional<bool> planar, int threads, const std::string& host,
+         int port, const std::string& assets, int display_vertices) {
+    CheckThreads(threads);
+    if (port < 0 || port > 65535)
+      throw InputError(fmt::format("port must be in 0..65535 (0: any free port), got {}", port));
+    if (display_vertices < 3)
+      throw InputError(
+          fmt::format("display_vertices must be at least 3, got {}", display_vertices));
+    source_ = std::make_unique<view::ViewSource>();
+    source_->run_config = ConfigFromSettings(settings);
+    const std::vector<Index> vertices = ToIndices(handles, "handles");
+    const Positions positions = ToPositions(targets, "targets");
+    source_->scenario =
+        ScenarioFromArrays(ToMesh(V, F), vertices, positions, std::nullopt, planar, "arrays V, F");
+    source_->scenario.handles =
+        HandleGroups(source_->scenario.mesh, vertices, positions, group_sizes, group_names);
+    // The exported scenario needs a mesh file: arrays have none.
+    source_->mesh_toml =
+        "# The mesh came from Python arrays: write it with harap.write_mesh and name the file\n"
+        "# here (mesh = \"FILE\") for harap deform.\n";
+    source_->threads = threads;
+    source_->display_vertices = display_vertices;
+    view::ServerOptions options;
+    options.host = host;
+    options.port = static_cast<uint16_t>(port);
+    options.assets = assets;
+    options.stop_on_signals = false;  // Ctrl-C stays Python's KeyboardInterrupt
+    server_ = std::make_unique<view::Server>(options, BuiltinRegistries(), *source_);
+    thread_ = std::thread([this] { server_->Run(); });
+  }
+  ~PyView() {
+    if (thread_.joinable()) {
+      server_->Stop();
+      thread_.join();
+    }
+  }
+  PyView(const PyView&) = delete;
+  PyView& operator=(const PyView&) = delete;
+
+  int port() const { return server_->port(); }
+  bool running() const { return thread_.joinable(); }
+  /// Stops serving: open pages are closed after their current message.
+  void Stop() {
+    if (!thread_.joinable()) return;
+    py::gil_scoped_release release;
+    server_->Stop();
+    thread_.join();
+  }
+
+ private:
+  std::unique_ptr<view::ViewSource> source_;
+  std::unique_ptr<view::Server> server_;
+  std::thread thread_;
+};
+
 }  // namespace
 }  // namespace harap
 
@@ -708,6 +831,17 @@ PYBIND11_MODULE(_harap, m) {
   m.def("energy", &EnergyValue, py::arg("V"), py::arg("F"), py::arg("U"), py::arg("settings"),
         py::arg("planar"), py::arg("threads"));
   m.def("components", &Components);
+  py::class_<PyView>(m, "View")
+      .def(py::init<py::handle, py::handle, py::handle, py::handle, const std::vector<int>&,
+                    const std::vector<std::string>&, const Settings&, std::optional<bool>, int,
+                    const std::string&, int, const std::string&, int>(),
+           py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
+           py::arg("group_sizes"), py::arg("group_names"), py::arg("settings"), py::arg("planar"),
+           py::arg("threads"), py::arg("host"), py::arg("port"), py::arg("assets"),
+           py::arg("display_vertices"))
+      .def("port", &PyView::port)
+      .def("running", &PyView::running)
+      .def("stop", &PyView::Stop);
   py::class_<PySession>(m, "Session")
       .def(py::init<py::handle, py::handle, const Settings&, py::handle, std::optional<bool>, int,
                     const std::string&>(),

@@ -2,6 +2,7 @@
 #include "view/page_session.h"
 
 #include <fmt/format.h>
+#include <meshoptimizer.h>
 
 #include <algorithm>
 #include <array>
@@ -79,6 +80,7 @@ MessageLimits PageSession::limits() const {
   MessageLimits limits;
   limits.num_vertices = source_.scenario.mesh.num_vertices();
   limits.num_groups = static_cast<int>(groups_.size());
+  limits.num_levels = session_ ? session_->session().num_levels() : 0;
   return limits;
 }
 
@@ -90,19 +92,28 @@ void PageSession::SendError(const std::string& message, std::optional<int64_t> i
 
 void PageSession::Start() {
   const Mesh& mesh = source_.scenario.mesh;
-  const Elements surface = SurfaceTriangles(mesh);
+  if (mesh.num_vertices() > source_.display_vertices) {
+    SendText(Json{{"type", "status"},
+                  {"stage", fmt::format("decimating the display to at most {} vertices",
+                                        source_.display_vertices)}}
+                 .dump());
+  }
+  display_ = MakeDisplayMesh(mesh, source_.display_vertices);
   {
     // The mesh first, so the page draws while the session is set up.
     std::string frame;
     AppendU32(frame, static_cast<uint32_t>(FrameKind::kMesh));
+    AppendU32(frame, static_cast<uint32_t>(display_.vertices.size()));
+    AppendU32(frame, static_cast<uint32_t>(display_.triangles.rows()));
     AppendU32(frame, static_cast<uint32_t>(mesh.num_vertices()));
-    AppendU32(frame, static_cast<uint32_t>(surface.rows()));
-    const Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> rest =
-        mesh.vertices.cast<float>();
-    AppendFloats(frame, rest.data(), static_cast<size_t>(rest.size()));
-    for (Eigen::Index f = 0; f < surface.rows(); ++f) {
-      for (int k = 0; k < 3; ++k) AppendU32(frame, static_cast<uint32_t>(surface(f, k)));
+    for (const Index v : display_.vertices) {
+      const Eigen::RowVector3f rest = mesh.vertices.row(v).cast<float>();
+      AppendFloats(frame, rest.data(), 3);
     }
+    for (Eigen::Index f = 0; f < display_.triangles.rows(); ++f) {
+      for (int k = 0; k < 3; ++k) AppendU32(frame, static_cast<uint32_t>(display_.triangles(f, k)));
+    }
+    for (const Index v : display_.vertices) AppendU32(frame, static_cast<uint32_t>(v));
     send_(Outgoing{true, std::move(frame)});
   }
   Json options;
@@ -117,7 +128,8 @@ void PageSession::Start() {
                 {"vertices", mesh.num_vertices()},
                 {"elements", mesh.num_elements()},
                 {"tetrahedral", mesh.kind() == ElementKind::kTetrahedron},
-                {"surface_triangles", surface.rows()},
+                {"display_vertices", display_.vertices.size()},
+                {"display_triangles", display_.triangles.rows()},
                 {"choices", options}}
                .dump());
   try {
@@ -302,6 +314,8 @@ void PageSession::Apply(const ParsedMessage& parsed) {
           Solve(true, id);
         } else if constexpr (std::is_same_v<T, ScenarioMessage>) {
           SendText(WithId({{"type", "scenario"}, {"toml", ScenarioToml()}}, id).dump());
+        } else if constexpr (std::is_same_v<T, LevelMessage>) {
+          SendClusters(message.level);
         }
       },
       parsed.message);
@@ -405,13 +419,27 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
                .dump());
 }
 
+void PageSession::SendClusters(int level) {
+  // The session's own hierarchy (the paper's i ~_l j composed down to the finest level).
+  const MeshHierarchy& hierarchy = session_->session().hierarchy();
+  std::string frame;
+  AppendU32(frame, static_cast<uint32_t>(FrameKind::kClusters));
+  AppendU32(frame, static_cast<uint32_t>(level));
+  AppendU32(frame, static_cast<uint32_t>(display_.vertices.size()));
+  for (const Index v : display_.vertices) {
+    const Index coarse = level < hierarchy.num_levels() ? hierarchy.MapFinestVertex(v, level) : v;
+    AppendU32(frame, coarse == kNoVertex ? 0xffffffffu : static_cast<uint32_t>(coarse));
+  }
+  send_(Outgoing{true, std::move(frame)});
+}
+
 void PageSession::SendPositions(const Positions& positions, int64_t solve_id) {
-  const size_t n = static_cast<size_t>(positions.rows());
+  // Only the display's vertices: the page draws nothing else.
+  const size_t n = display_.vertices.size();
   std::vector<float> now(3 * n);
   for (size_t v = 0; v < n; ++v) {
     for (int k = 0; k < 3; ++k)
-      now[3 * v + static_cast<size_t>(k)] =
-          static_cast<float>(positions(static_cast<Eigen::Index>(v), k));
+      now[3 * v + static_cast<size_t>(k)] = static_cast<float>(positions(display_.vertices[v], k));
   }
   std::vector<uint32_t> changed;
   if (sent_.size() == now.size()) {
@@ -481,6 +509,68 @@ std::string PageSession::ScenarioToml() const {
         translation.y(), translation.z());
   }
   return toml;
+}
+
+DisplayMesh MakeDisplayMesh(const Mesh& mesh, Index budget) {
+  const Elements surface = SurfaceTriangles(mesh);
+  std::vector<unsigned int> indices(static_cast<size_t>(surface.size()));
+  for (Eigen::Index f = 0; f < surface.rows(); ++f) {
+    for (int k = 0; k < 3; ++k)
+      indices[3 * static_cast<size_t>(f) + static_cast<size_t>(k)] =
+          static_cast<unsigned int>(surface(f, k));
+  }
+  const auto count_vertices = [&](const std::vector<unsigned int>& triangles) {
+    std::vector<bool> used(static_cast<size_t>(mesh.num_vertices()), false);
+    Index count = 0;
+    for (const unsigned int v : triangles) {
+      if (!used[v]) ++count;
+      used[v] = true;
+    }
+    return count;
+  };
+  const Index surface_vertices = count_vertices(indices);
+  if (surface_vertices > budget && budget >= 3) {
+    const Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> positions =
+        mesh.vertices.cast<float>();
+    std::vector<unsigned int> simplified(indices.size());
+    // A surface has about twice as many triangles as vertices: ask for the budget's share of the
+    // indices; edge collapses can stop short of it (borders, thin parts), then the sloppy
+    // simplifier (vertex clustering) reaches it, and a smaller target is asked while it does not.
+    double fraction = static_cast<double>(budget) / static_cast<double>(surface_vertices);
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      const size_t target = std::max<size_t>(
+          3, 3 * static_cast<size_t>(fraction * static_cast<double>(indices.size() / 3)));
+      size_t count = meshopt_simplify(simplified.data(), indices.data(), indices.size(),
+                                      positions.data(), static_cast<size_t>(positions.rows()),
+                                      3 * sizeof(float), target, 1.0f, 0, nullptr);
+      if (count > target + target / 10) {
+        count = meshopt_simplifySloppy(simplified.data(), indices.data(), indices.size(),
+                                       positions.data(), static_cast<size_t>(positions.rows()),
+                                       3 * sizeof(float), target, 1.0f, nullptr);
+      }
+      simplified.resize(count);
+      const Index kept = count_vertices(simplified);
+      if (kept <= budget && count > 0) {
+        indices = std::move(simplified);
+        break;
+      }
+      fraction *= 0.8 * static_cast<double>(budget) / static_cast<double>(std::max<Index>(kept, 1));
+      simplified.resize(indices.size());
+    }
+  }
+  DisplayMesh display;
+  std::vector<Index> display_index(static_cast<size_t>(mesh.num_vertices()), -1);
+  for (const unsigned int v : indices) display_index[v] = 0;
+  for (Index v = 0; v < mesh.num_vertices(); ++v) {
+    if (display_index[static_cast<size_t>(v)] < 0) continue;
+    display_index[static_cast<size_t>(v)] = static_cast<Index>(display.vertices.size());
+    display.vertices.push_back(v);
+  }
+  display.triangles.resize(static_cast<Eigen::Index>(indices.size() / 3), 3);
+  for (size_t i = 0; i < indices.size(); ++i)
+    display.triangles(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3)) =
+        display_index[indices[i]];
+  return display;
 }
 
 Elements SurfaceTriangles(const Mesh& mesh) {

@@ -30,7 +30,21 @@ struct ViewSource {
   /// absolute (the exported scenario starts with them), e.g. `mesh = "/data/bunny.ply"`.
   std::string mesh_toml;
   int threads = 0;
+  /// The page draws at most this many vertices: a larger surface is decimated for the display
+  /// (DisplayMesh); the session always solves the whole mesh.
+  Index display_vertices = 200000;
 };
+
+/// What the page draws: triangles over a subset of the mesh's vertices.
+struct DisplayMesh {
+  std::vector<Index> vertices;  ///< mesh vertex of each display vertex, ascending
+  Elements triangles;           ///< indices into `vertices`
+};
+
+/// The surface (SurfaceTriangles) as a display mesh of at most `budget` vertices: all of it when
+/// it has no more, otherwise simplified by meshoptimizer (edge collapses onto existing vertices,
+/// so each display vertex is a mesh vertex whose solved position the page is sent).
+DisplayMesh MakeDisplayMesh(const Mesh& mesh, Index budget);
 
 /// One page's deformation: its own ConfiguredSession (one per WebSocket connection, so pages
 /// cannot touch each other's), its handle groups and what it last sent. Turns the page's
@@ -68,6 +82,8 @@ class PageSession {
   void ApplyGroupsAsHandles();
   Positions HandleTargets() const;
   void Solve(bool full, std::optional<int64_t> id);
+  /// Level `level`'s clusters as a FrameKind::kClusters frame.
+  void SendClusters(int level);
   void SendPositions(const Positions& positions, int64_t solve_id);
   void SendText(const std::string& json);
   void SendError(const std::string& message, std::optional<int64_t> id);
@@ -81,7 +97,8 @@ class PageSession {
   std::unique_ptr<ConfiguredSession> session_;
   std::vector<Group> groups_;
   int next_group_number_ = 1;
-  std::vector<float> sent_;  ///< positions as last sent, float32
+  DisplayMesh display_;
+  std::vector<float> sent_;  ///< display positions as last sent, float32
   bool session_has_handles_ = false;
   bool previewed_ = false;  ///< the last solve was a preview
 };

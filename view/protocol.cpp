@@ -182,10 +182,14 @@ ParsedMessage ParseClientMessage(std::string_view text, const MessageLimits& lim
     parsed.message = SolveMessage{};
   } else if (type == "scenario") {
     parsed.message = ScenarioMessage{};
+  } else if (type == "level") {
+    if (limits.num_levels < 1) throw InputError("message 'level': the session is not set up");
+    parsed.message =
+        LevelMessage{static_cast<int>(fields.Integer("level", 0, limits.num_levels - 1))};
   } else {
     throw InputError(fmt::format(
         "unknown message type '{}' (valid: move, add_handle, remove_handle, configure, solve, "
-        "scenario)",
+        "scenario, level)",
         type.substr(0, 64)));
   }
   fields.RejectUnknown();

@@ -45,14 +45,19 @@ struct ConfigureMessage {
 struct SolveMessage {};
 /// Asks for the scenario TOML of the current handles and targets (`harap deform` reproduces it).
 struct ScenarioMessage {};
+/// Asks for hierarchy level `level`'s clusters (FrameKind::kClusters).
+struct LevelMessage {
+  int level = 0;
+};
 
 using ClientMessage = std::variant<MoveMessage, AddHandleMessage, RemoveHandleMessage,
-                                   ConfigureMessage, SolveMessage, ScenarioMessage>;
+                                   ConfigureMessage, SolveMessage, ScenarioMessage, LevelMessage>;
 
 /// What a message is checked against: the session's sizes.
 struct MessageLimits {
   Index num_vertices = 0;
   int num_groups = 0;
+  int num_levels = 1;  ///< the session's hierarchy levels (0: not set up yet)
   /// Longer text messages are refused before parsing (a page's largest message is a few
   /// hundred bytes).
   size_t max_bytes = 64 * 1024;
@@ -78,12 +83,18 @@ std::optional<int64_t> MessageIdOf(std::string_view text);
 
 /// Binary frames the server sends (little-endian). Every frame starts with a uint32 kind.
 enum class FrameKind : uint32_t {
-  /// kind, num_vertices, num_triangles, float32 rest positions [3·V], uint32 triangles [3·T]
-  /// (the surface: the boundary faces of a tetrahedral mesh).
+  /// kind, num_display_vertices D, num_triangles T, num_mesh_vertices V, float32 rest positions
+  /// [3·D], uint32 triangles [3·T] (indices of display vertices), uint32 mesh vertex of each
+  /// display vertex [D]. The display is the surface (the boundary faces of a tetrahedral mesh),
+  /// decimated when it has more vertices than the display budget (DisplayMesh).
   kMesh = 1,
-  /// kind, solve id, count; if count < V: uint32 vertex indices [count]; float32 positions
-  /// [3·count] (only the vertices whose float32 position changed since the last frame).
+  /// kind, solve id, count; if count < D: uint32 display vertex indices [count]; float32
+  /// positions [3·count] (only the display vertices whose float32 position changed since the
+  /// last frame).
   kPositions = 2,
+  /// kind, level, count D; uint32 [D]: for each display vertex the vertex of hierarchy level
+  /// `level` it maps to (its cluster; 0xffffffff: none), so the page colours the clusters.
+  kClusters = 3,
 };
 
 }  // namespace harap::view

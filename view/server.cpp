@@ -17,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -78,6 +79,7 @@ struct Server::Impl {
   const Registries& registries;
   const ViewSource& source;
   std::map<std::string, Asset> assets;
+  bool stop_on_signals = true;
   net::io_context io{1};
   tcp::acceptor acceptor{io};
   // Worker threads still running (each holds its page); Run() waits for them.
@@ -297,6 +299,7 @@ void Server::Impl::Accept() {
 Server::Server(const ServerOptions& options, const Registries& registries, const ViewSource& source)
     : impl_(std::make_unique<Impl>(registries, source)) {
   impl_->assets = ReadAssets(options.assets);
+  impl_->stop_on_signals = options.stop_on_signals;
   beast::error_code error;
   const net::ip::address address = net::ip::make_address(options.host, error);
   if (error)
@@ -319,10 +322,13 @@ Server::~Server() = default;
 uint16_t Server::port() const { return impl_->acceptor.local_endpoint().port(); }
 
 void Server::Run() {
-  net::signal_set signals(impl_->io, SIGINT, SIGTERM);
-  signals.async_wait([this](beast::error_code error, int) {
-    if (!error) Stop();
-  });
+  std::optional<net::signal_set> signals;
+  if (impl_->stop_on_signals) {
+    signals.emplace(impl_->io, SIGINT, SIGTERM);
+    signals->async_wait([this](beast::error_code error, int) {
+      if (!error) Stop();
+    });
+  }
   impl_->Accept();
   impl_->io.run();
   std::unique_lock lock(impl_->workers_mutex);

@@ -19,6 +19,9 @@ struct ServerOptions {
   uint16_t port = 0;
   /// The page's files (index.html, the scripts): only these are served, read once at start.
   std::filesystem::path assets;
+  /// Whether Run() stops on SIGINT and SIGTERM (`harap view`); a host with its own handlers
+  /// (Python's KeyboardInterrupt) calls Stop() instead.
+  bool stop_on_signals = true;
 };
 
 /// The HTTP and WebSocket server of `harap view` (Boost.Beast): serves the page's own files at

@@ -12,6 +12,7 @@ import uPlot from 'uplot';
 
 const kMeshFrame = 1;
 const kPositionsFrame = 2;
+const kClustersFrame = 3;
 const kFreeGrey = 190 / 255;
 const kLevelColors = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#17becf'];
 
@@ -24,13 +25,23 @@ const errorsElement = document.getElementById('errors');
 // What the page shows and what a test or a benchmark reads (window.harapView).
 const state = {
   ready: false, mesh: null, groups: [], energy: null, lastSolve: null, framesDrawn: 0,
-  errors: [], timings: { preview: [], full: [], edit: [] }, scenarioToml: null,
+  errors: [], timings: { preview: [], full: [], edit: [], previewSolve: [], render: [], frame: [] },
+  scenarioToml: null,
 };
 window.harapView = state;
 
 // Renderer, camera, lights.
 const viewport = document.getElementById('viewport');
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+// Multisampling costs a software renderer (SwiftShader, llvmpipe: a machine without a GPU) more
+// than the whole draw otherwise; a GPU does it for free.
+function softwareRenderer() {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  const info = gl?.getExtension('WEBGL_debug_renderer_info');
+  const name = info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : '';
+  return /swiftshader|llvmpipe|software/i.test(name);
+}
+const renderer = new THREE.WebGLRenderer({ antialias: !softwareRenderer(),
+  preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 renderer.setSize(window.innerWidth, window.innerHeight);
 viewport.appendChild(renderer.domElement);
@@ -52,20 +63,24 @@ gizmo.addEventListener('dragging-changed', (event) => {
   if (!event.value) moveReleased();
 });
 gizmo.addEventListener('objectChange', () => moveChanged());
+gizmo.addEventListener('change', () => requestRender());
 
 let geometry = null, surface = null, ghost = null, wireframe = null;
 let restPositions = null, diagonal = 1;
+let meshVertexOf = null, displayVertexOf = null;  // display vertex <-> mesh vertex
 
 const settings = {
-  shading: 'smooth', wireframe: false, ghost: true, previewOnly: false, gizmoMode: 'translate',
+  shading: 'smooth', level: 0, wireframe: false, ghost: true, previewOnly: false, gizmoMode: 'translate',
   handle: '', addHandle: false, handleRadius: 0.03,
-  optimizer: 'classic', energy: '', solver: '', preset: '', tolerance: 1e-6,
+  optimizer: 'hierarchical', energy: '', solver: '', preset: '', tolerance: 1e-6,
 };
 const gui = new GUI({ title: 'harap view' });
 const display = gui.addFolder('Display');
 display.add(settings, 'shading', ['smooth', 'flat']).onChange(updateMaterial);
 display.add(settings, 'wireframe').onChange(updateMaterial);
 display.add(settings, 'ghost').name('rest pose ghost').onChange(updateMaterial);
+let levelController = display.add(settings, 'level', 0, 0, 1).name('hierarchy level')
+  .onChange(showLevel);
 const handlesFolder = gui.addFolder('Handles');
 let handleController = handlesFolder.add(settings, 'handle', ['']).onChange(selectHandle);
 handlesFolder.add(settings, 'gizmoMode', ['translate', 'rotate']).name('gizmo')
@@ -124,11 +139,16 @@ socket.onmessage = (event) => {
 function receiveFrame(buffer) {
   const header = new Uint32Array(buffer, 0, 3);
   if (header[0] === kMeshFrame) {
-    const [, vertices, triangles] = header;
-    restPositions = new Float32Array(buffer, 12, 3 * vertices).slice();
-    const index = new Uint32Array(buffer, 12 + 12 * vertices, 3 * triangles);
+    // The display: a subset of the mesh's vertices (all of a small mesh's surface).
+    const [, vertices, triangles, meshVertices] = new Uint32Array(buffer, 0, 4);
+    restPositions = new Float32Array(buffer, 16, 3 * vertices).slice();
+    const index = new Uint32Array(buffer, 16 + 12 * vertices, 3 * triangles);
+    meshVertexOf = new Uint32Array(buffer, 16 + 12 * (vertices + triangles), vertices).slice();
+    displayVertexOf = new Int32Array(meshVertices).fill(-1);
+    meshVertexOf.forEach((v, d) => { displayVertexOf[v] = d; });
     buildMesh(restPositions, index);
   } else if (header[0] === kPositionsFrame) {
+    const frameStart = performance.now();
     const [, id, count] = header;
     const positions = geometry.attributes.position.array;
     const vertices = positions.length / 3;
@@ -146,9 +166,13 @@ function receiveFrame(buffer) {
     }
     geometry.attributes.position.needsUpdate = true;
     geometry.computeVertexNormals();
-    geometry.computeBoundingSphere();
     if (wireframe) wireframe.geometry.attributes.position.needsUpdate = true;
     state.pendingFrameId = id;
+    state.timings.frame.push(performance.now() - frameStart);
+  } else if (header[0] === kClustersFrame) {
+    const [, level, count] = header;
+    clustersOfLevel.set(level, new Uint32Array(buffer, 12, count).slice());
+    if (level === settings.level) showLevel();
   }
 }
 
@@ -167,10 +191,16 @@ function receiveMessage(message) {
     case 'ready':
       state.ready = true;
       state.session = message;
-      statusElement.textContent = `${state.mesh.vertices} vertices · ${message.optimizer}, ` +
+      statusElement.textContent = `${state.mesh.vertices} vertices` +
+        (state.mesh.display_vertices < state.mesh.vertices
+          ? ` (${state.mesh.display_vertices} drawn)` : '') + ` · ${message.optimizer}, ` +
         `${message.energy}, ${message.solver}, ${message.levels} level(s) · set up in ` +
         `${message.setup.seconds.toFixed(2)} s`;
       settings.optimizer = message.optimizer;
+      clustersOfLevel.clear();
+      levelController = levelController.max(message.levels - 1);
+      if (settings.level > message.levels - 1) settings.level = 0;
+      showLevel();
       settings.energy = message.energy;
       settings.solver = message.solver;
       gui.controllersRecursive().forEach((c) => c.updateDisplay());
@@ -206,9 +236,30 @@ function receiveMessage(message) {
   if (message.type === 'scenario' || message.type === 'error') sentAt.delete(message.id);
 }
 
+// Drawing on demand: a frame is rendered only when something changed. In software WebGL
+// (SwiftShader, a remote machine without a GPU) a continuous render loop would take the CPU
+// the solves need.
+let renderRequested = false;
+let drawnCallbacks = [];
+function requestRender() {
+  if (renderRequested) return;
+  renderRequested = true;
+  requestAnimationFrame(() => {
+    renderRequested = false;
+    const start = performance.now();
+    renderer.render(scene, camera);
+    state.timings.render.push(performance.now() - start);
+    // The frame rendered here is on the screen when the next animation frame starts.
+    const callbacks = drawnCallbacks;
+    drawnCallbacks = [];
+    if (callbacks.length) requestAnimationFrame(() => callbacks.forEach((callback) => callback()));
+  });
+}
+
 // Runs `callback` once the frame with the newest positions is on the screen.
 function afterNextDraw(callback) {
-  requestAnimationFrame(() => requestAnimationFrame(callback));
+  drawnCallbacks.push(callback);
+  requestRender();
 }
 
 function solved(message, sent) {
@@ -222,6 +273,7 @@ function solved(message, sent) {
     if (sent) state.timings.full.push(now - sent.time);
   } else if (dragEventTime !== null && message.id === previewInFlight) {
     state.timings.preview.push(now - previewEventTime);
+    state.timings.previewSolve.push(1000 * message.seconds);
   }
   solveInfoElement.textContent = `${message.mode} ${(1000 * message.seconds).toFixed(0)} ms, ` +
     `${message.total_iterations} iterations`;
@@ -249,6 +301,8 @@ function buildMesh(positions, index) {
   geometry.computeBoundingSphere();
   surface = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({
     vertexColors: true, roughness: 0.8, side: THREE.DoubleSide }));
+  // Frames do not recompute the bounding sphere (a pass over every vertex): never culled.
+  surface.frustumCulled = false;
   scene.add(surface);
   const restGeometry = new THREE.BufferGeometry();
   restGeometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
@@ -258,6 +312,7 @@ function buildMesh(positions, index) {
   scene.add(ghost);
   wireframe = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
     color: 0x222222, wireframe: true, transparent: true, opacity: 0.25 }));
+  wireframe.frustumCulled = false;
   scene.add(wireframe);
   const sphere = geometry.boundingSphere;
   geometry.computeBoundingBox();
@@ -271,6 +326,7 @@ function buildMesh(positions, index) {
   camera.up.copy(up);
   camera.position.copy(sphere.center).add(side.normalize().multiplyScalar(3.6 * sphere.radius));
   orbit = new OrbitControls(camera, renderer.domElement);
+  orbit.addEventListener('change', () => requestRender());
   orbit.target.copy(sphere.center);
   camera.near = sphere.radius / 100;
   camera.far = sphere.radius * 100;
@@ -286,22 +342,63 @@ function updateMaterial() {
   surface.material.needsUpdate = true;
   wireframe.visible = settings.wireframe;
   ghost.visible = settings.ghost;
+  requestRender();
 }
 
-// Handle groups: colours on the mesh, the gizmo on the selected one.
+// The hierarchy level slider: level 0 shows the handles' colours; a coarser level colours each
+// of its clusters (the display vertices that map to one of its vertices), asked for once.
+const clustersOfLevel = new Map();
+function showLevel() {
+  if (!geometry) return;
+  if (settings.level === 0) {
+    setGroups(state.groups);
+    return;
+  }
+  const clusters = clustersOfLevel.get(settings.level);
+  if (!clusters) {
+    send({ type: 'level', level: settings.level });
+    return;
+  }
+  const colors = geometry.attributes.color.array;
+  const color = new THREE.Color();
+  for (let v = 0; v < clusters.length; ++v) {
+    const c = clusters[v];
+    if (c === 0xffffffff) color.setRGB(kFreeGrey, kFreeGrey, kFreeGrey);
+    else color.setHSL(((c * 0.6180339887) % 1 + 1) % 1, 0.65, 0.5 + 0.15 * ((c >> 3) % 2));
+    colors[3 * v] = color.r;
+    colors[3 * v + 1] = color.g;
+    colors[3 * v + 2] = color.b;
+  }
+  geometry.attributes.color.needsUpdate = true;
+  state.levelShown = settings.level;
+  requestRender();
+}
+
+// Handle groups: colours on the mesh (level 0 of the slider), the gizmo on the selected one.
 function setGroups(groups) {
   state.groups = groups;
+  if (settings.level !== 0) {
+    showLevel();
+    selectGroupControls(groups);
+    return;
+  }
+  state.levelShown = 0;
   const colors = geometry.attributes.color.array;
   colors.fill(kFreeGrey);
   const colored = new Uint8Array(colors.length / 3);
   groups.forEach((group) => {
-    for (const v of group.vertices) {
-      if (colored[v]) continue;
+    for (const meshVertex of group.vertices) {
+      const v = displayVertexOf[meshVertex];
+      if (v < 0 || colored[v]) continue;
       colored[v] = 1;
       colors.set(group.color.map((c) => c / 255), 3 * v);
     }
   });
   geometry.attributes.color.needsUpdate = true;
+  requestRender();
+  selectGroupControls(groups);
+}
+function selectGroupControls(groups) {
   const names = groups.map((g, i) => `${i}: ${g.name}`);
   handleController = handleController.options(names);
   if (!names.includes(settings.handle)) settings.handle = names[names.length - 1] ?? '';
@@ -314,6 +411,7 @@ function selectHandle() {
   selectedGroup = state.groups.findIndex((g, i) => `${i}: ${g.name}` === settings.handle);
   if (selectedGroup < 0) {
     gizmo.detach();
+    requestRender();
     return;
   }
   const group = state.groups[selectedGroup];
@@ -326,6 +424,7 @@ function selectHandle() {
     .add(new THREE.Vector3(...group.translation));
   pivot.updateMatrixWorld();
   gizmo.attach(pivot);
+  requestRender();
 }
 
 // The selected group's transform: rotation R = the pivot's, t = pivot position − R · centre.
@@ -379,6 +478,7 @@ renderer.domElement.addEventListener('click', (event) => {
   const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
     -((event.clientY - rect.top) / rect.height) * 2 + 1);
   raycaster.setFromCamera(pointer, camera);
+  geometry.computeBoundingSphere();
   const hit = raycaster.intersectObject(surface)[0];
   if (!hit) return;
   const position = geometry.attributes.position;
@@ -389,13 +489,23 @@ renderer.domElement.addEventListener('click', (event) => {
   }
   addHandle(best);
 });
+// `vertex`: a display vertex.
 function addHandle(vertex) {
-  return send({ type: 'add_handle', vertex, radius: settings.handleRadius * diagonal });
+  return send({ type: 'add_handle', vertex: meshVertexOf[vertex],
+    radius: settings.handleRadius * diagonal });
 }
 function removeSelectedHandle() {
   if (selectedGroup >= 0) send({ type: 'remove_handle', group: selectedGroup });
 }
 state.addHandle = addHandle;
+state.setLevel = (level) => {
+  settings.level = level;
+  levelController.updateDisplay();
+  showLevel();
+};
+// The number of distinct clusters the shown level colours (level 0: every display vertex).
+state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
+  : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
 state.requestScenario = () => send({ type: 'scenario' });
 
@@ -437,5 +547,6 @@ window.addEventListener('resize', () => {
   camera.aspect = window.innerWidth / window.innerHeight;
   camera.updateProjectionMatrix();
   renderer.setSize(window.innerWidth, window.innerHeight);
+  requestRender();
 });
-renderer.setAnimationLoop(() => renderer.render(scene, camera));
+requestRender();

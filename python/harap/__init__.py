@@ -21,6 +21,7 @@ harap.Error subclasses (ValueError) with the same messages.
 import json as _json
 import math as _math
 import numbers as _numbers
+import pathlib as _pathlib
 try:
     import tomllib as _tomllib  # Python 3.11
 except ImportError:  # older Pythons: defaults stay TOML text
@@ -33,7 +34,7 @@ from ._harap import ConfigError, Error, InputError, InternalError, NumericalErro
 
 __all__ = [
     "deform", "DeformResult", "Session", "read_mesh", "write_mesh", "load_scenario", "Scenario",
-    "builtin_mesh", "hierarchy", "HierarchyLevel", "energy", "EnergyValue", "components",
+    "builtin_mesh", "view", "View", "hierarchy", "HierarchyLevel", "energy", "EnergyValue", "components",
     "Error", "ConfigError", "InputError", "NumericalError", "InternalError",
 ]
 
@@ -215,6 +216,9 @@ class Session:
             raise ConfigError(f"threads must be an integer (0: all cores), got {threads!r}")
         self._session = _harap.Session(V, F, settings, initial, planar, int(threads),
                                        frame_start)
+        # What view() serves (copies: the caller may change its arrays afterwards).
+        self._view_source = (_np.array(V, dtype=_np.float64), _np.array(F), settings, planar,
+                             int(threads))
 
     def set_handles(self, indices, targets=None):
         """Makes `indices` (k,) the handles (unique, in range, at least one) with `targets`
@@ -290,10 +294,148 @@ class Session:
         "solved_levels (coarsest first), threads, planar, setup_timings {hierarchy, precompute} "
         "(seconds), mesh_summary, config (TOML).")
 
+    def view(self, *, port=8080, host="127.0.0.1", open=False, display_vertices=200000,
+             assets=None):
+        """Serves the page of `harap view` (docs/view.md) for this session's mesh, handles (each
+        connected set of handle vertices one group to drag) and targets, with its options;
+        returns a running harap.View (see harap.view). The page solves in a session of its own:
+        dragging there does not change this one."""
+        V, F, settings, planar, threads = self._view_source
+        return _start_view(V, F, self.handles, self.targets, None, None, settings, planar,
+                           threads, port, host, open, display_vertices, assets)
+
     def __repr__(self):
         info = self.info
         return (f"Session({len(self.positions)} vertices, {info['optimizer']}, "
                 f"{self.num_levels} levels, {len(self.handles)} handles)")
+
+
+class View:
+    """A running `harap view` server (harap.view, Session.view): its page at `url`, served from
+    a thread of this process until stop() (or the end of a `with` block, or of the process).
+
+        with harap.view(V, F, [bottom, top]) as page:
+            print(page.url)       # open it in a browser (over SSH: forward the port)
+            page.wait()           # until Ctrl-C
+    """
+
+    def __init__(self, server, host):
+        self._server = server
+        self.port = server.port()
+        shown = f"[{host}]" if ":" in host else host
+        self.url = f"http://{shown}:{self.port}/"
+
+    @property
+    def running(self):
+        return self._server.running()
+
+    def stop(self):
+        """Stops serving; open pages are closed after their current message."""
+        self._server.stop()
+
+    def wait(self):
+        """Blocks until Ctrl-C (KeyboardInterrupt), then stops serving."""
+        import time
+        try:
+            while self.running:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            self.stop()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exception):
+        self.stop()
+
+    def __repr__(self):
+        return f"View({self.url}, {'running' if self.running else 'stopped'})"
+
+
+def _assets_folder(assets):
+    """The page's files: `assets`, or share/harap/view of the build tree (beside python/) or of
+    the installation (the prefix of lib/pythonX.Y/site-packages)."""
+    if assets is not None:
+        return str(assets)
+    here = _pathlib.Path(__file__).resolve().parent
+    for prefix in (here.parents[1], here.parents[3]):
+        folder = prefix / "share" / "harap" / "view"
+        if (folder / "index.html").is_file():
+            return str(folder)
+    raise InputError(f"the page's files (share/harap/view) are not beside {here}: build the "
+                     "harap_view_assets target, install harap (cmake --install), or pass assets=")
+
+
+def _rest_positions(V, indices):
+    """V[indices] after checking the indices (numpy's IndexError would not name the problem)."""
+    indices = _np.asarray(indices)
+    if indices.size and (not _np.issubdtype(indices.dtype, _np.integer) or indices.min() < 0
+                         or indices.max() >= len(V)):
+        raise InputError(f"handles: indices must be integers in 0..{len(V) - 1}")
+    return V[indices.astype(_np.int64)]
+
+
+def _start_view(V, F, handles, targets, group_sizes, group_names, settings, planar, threads,
+                port, host, open_browser, display_vertices, assets):
+    if isinstance(port, bool) or not isinstance(port, _numbers.Integral):
+        raise ConfigError(f"port must be an integer (0: any free port), got {port!r}")
+    if isinstance(display_vertices, bool) or not isinstance(display_vertices, _numbers.Integral):
+        raise ConfigError(f"display_vertices must be an integer, got {display_vertices!r}")
+    if not isinstance(host, str):
+        raise ConfigError(f"host must be a string, got {host!r}")
+    server = _harap.View(V, F, handles, targets, group_sizes or [], group_names or [], settings,
+                         planar, int(threads), host, int(port), _assets_folder(assets),
+                         int(display_vertices))
+    page = View(server, host)
+    if host not in ("127.0.0.1", "::1"):
+        import warnings
+        warnings.warn(f"harap.view listens on {host}: anyone who reaches this address can drive "
+                      "the session and read the mesh", stacklevel=3)
+    if open_browser:
+        import webbrowser
+        webbrowser.open(page.url)
+    return page
+
+
+def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=None,
+         solver=None, hierarchy=None, upsampler=None, options=None, tolerance=None,
+         max_iterations=None, planar=None, threads=0, port=8080, host="127.0.0.1", open=False,
+         display_vertices=200000, assets=None):
+    """Serves the page of `harap view` (docs/view.md) for a mesh: drag its handles in a browser
+    while harap solves. Returns a running harap.View (url, stop(), wait(); a context manager).
+
+    handles: None (add them in the page), an index array (k,) whose connected sets of vertices
+    become the groups the page drags, or a list of index arrays, one group each. targets: like
+    handles, (k, 3) or a list of (k_i, 3) (None: where the vertices are). port 0 picks a free
+    port; host 127.0.0.1 (default) accepts this machine only; open=True opens a browser. The
+    page draws at most display_vertices vertices (a larger surface is decimated for the display,
+    never for the solve). The other keywords are harap.deform's.
+    """
+    settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler,
+                             tolerance, max_iterations)
+    V_array = _np.asarray(V, dtype=_np.float64)
+    group_sizes = group_names = None
+    if handles is None:
+        handles = _np.zeros(0, dtype=_np.int64)
+        targets = _np.zeros((0, 3))
+    elif isinstance(handles, (list, tuple)) and handles and _np.ndim(handles[0]) == 1:
+        groups = [_np.asarray(group) for group in handles]
+        if targets is None:
+            targets = [_rest_positions(V_array, group) for group in groups]
+        if not isinstance(targets, (list, tuple)) or len(targets) != len(groups):
+            raise InputError(f"targets: one (k, 3) array per handle group ({len(groups)}), got "
+                             f"{type(targets).__name__}")
+        group_sizes = [len(group) for group in groups]
+        group_names = [f"handle {i + 1}" for i in range(len(groups))]
+        handles = _np.concatenate(groups) if groups else _np.zeros(0, dtype=_np.int64)
+        targets = _np.concatenate([_np.asarray(t, dtype=_np.float64).reshape(-1, 3)
+                                   for t in targets])
+    elif targets is None:
+        targets = _rest_positions(V_array, handles)
+    return _start_view(V, F, handles, targets, group_sizes, group_names, settings, planar,
+                       threads, port, host, open, display_vertices, assets)
 
 
 def read_mesh(path):

@@ -144,6 +144,8 @@ class DeformationSession {
 
   const Mesh& mesh() const { return mesh_; }
   int num_levels() const;
+  /// The hierarchy the session solves on (classic: no levels); level l < num_levels().
+  const MeshHierarchy& hierarchy() const { return cascade_.hierarchy(); }
   /// Levels that are solved (coarsest first); classic: {0}.
   const std::vector<int>& solved_levels() const { return solved_levels_; }
   const std::vector<Index>& handles() const { return handles_; }

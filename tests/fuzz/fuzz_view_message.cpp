@@ -10,6 +10,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   harap::view::MessageLimits limits;
   limits.num_vertices = 100;
   limits.num_groups = 3;
+  limits.num_levels = 4;
   try {
     const harap::view::ParsedMessage parsed = harap::view::ParseClientMessage(text, limits);
     if (const auto* add = std::get_if<harap::view::AddHandleMessage>(&parsed.message)) {
@@ -18,6 +19,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (const auto* move = std::get_if<harap::view::MoveMessage>(&parsed.message)) {
       HARAP_CHECK(move->group >= 0 && move->group < limits.num_groups, "group in range");
       HARAP_CHECK(move->rotation.allFinite() && move->translation.allFinite(), "finite move");
+    }
+    if (const auto* level = std::get_if<harap::view::LevelMessage>(&parsed.message)) {
+      HARAP_CHECK(level->level >= 0 && level->level < limits.num_levels, "level in range");
     }
   } catch (const harap::InputError&) {
     // The expected answer to a malformed message.

@@ -3,6 +3,7 @@
 // session driven message by message, its answers decoded.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -161,7 +162,8 @@ TEST_CASE("a page's session: mesh, solve, moves, handle edits, bad messages", "[
   REQUIRE(page.sent.size() >= 4);
   REQUIRE(page.sent[0].binary);
   CHECK(U32(page.sent[0].data, 0) == static_cast<uint32_t>(FrameKind::kMesh));
-  CHECK(U32(page.sent[0].data, 4) == 400);
+  CHECK(U32(page.sent[0].data, 4) == 400);  // drawn: every vertex (below the display budget)
+  CHECK(U32(page.sent[0].data, 12) == 400);
   CHECK(page.Last("handles")["groups"].size() == 2);
   CHECK(page.Last("solved")["mode"] == "full");
   CHECK(page.Last("solved")["energy"].get<double>() < 1e-12);  // handles at rest: no energy
@@ -222,6 +224,17 @@ TEST_CASE("a page's session: mesh, solve, moves, handle edits, bad messages", "[
   CHECK(page.Last("error")["id"] == 13);
   page.page->HandleText(R"({"type":"solve","id":14})");
   CHECK(page.Last("solved")["id"] == 14);
+
+  // A level's clusters: one per display vertex (a classic session's only level: the vertices).
+  page.page->HandleText(R"({"type":"level","level":0,"id":15})");
+  const Outgoing& clusters = page.sent.back();
+  REQUIRE(clusters.binary);
+  CHECK(U32(clusters.data, 0) == static_cast<uint32_t>(FrameKind::kClusters));
+  CHECK(U32(clusters.data, 8) == 400);
+  CHECK(U32(clusters.data, 12 + 4 * 399) == 399);
+  page.page->HandleText(R"({"type":"level","level":1,"id":16})");
+  CHECK(page.Last("error")["message"].get<std::string>().find("'level' = 1 is out of range") !=
+        std::string::npos);
 }
 
 TEST_CASE("a page's session: consecutive preview moves of a group are solved once", "[view]") {
@@ -247,6 +260,28 @@ TEST_CASE("a page's session: a full solve after a preview of the same targets co
   direct.page->HandleText(full);
   const double energy = direct.Last("solved")["energy"];
   CHECK(previewed.Last("solved")["energy"].get<double>() == Approx(energy).epsilon(1e-4));
+}
+
+TEST_CASE("the display of a large mesh: decimated to the budget, onto mesh vertices", "[view]") {
+  const Mesh sphere = Icosphere(4);  // 2562 vertices
+  const DisplayMesh all = MakeDisplayMesh(sphere, 5000);
+  CHECK(all.vertices.size() == static_cast<size_t>(sphere.num_vertices()));
+  CHECK(all.triangles.rows() == sphere.num_elements());
+  for (const Index budget : {1000, 300}) {
+    const DisplayMesh display = MakeDisplayMesh(sphere, budget);
+    CHECK(display.vertices.size() <= static_cast<size_t>(budget));
+    CHECK(display.vertices.size() > static_cast<size_t>(budget / 4));
+    CHECK(std::is_sorted(display.vertices.begin(), display.vertices.end()));
+    CHECK(display.triangles.minCoeff() >= 0);
+    CHECK(display.triangles.maxCoeff() < static_cast<Index>(display.vertices.size()));
+    // Still a surface around the centre: no triangle faces inwards.
+    for (Eigen::Index f = 0; f < display.triangles.rows(); ++f) {
+      const Eigen::RowVector3d a = sphere.vertices.row(display.vertices[display.triangles(f, 0)]),
+                               b = sphere.vertices.row(display.vertices[display.triangles(f, 1)]),
+                               c = sphere.vertices.row(display.vertices[display.triangles(f, 2)]);
+      CHECK((b - a).cross(c - a).dot(a + b + c) > -1e-12);
+    }
+  }
 }
 
 TEST_CASE("the surface of a tetrahedral mesh: boundary faces, outwards", "[view]") {
