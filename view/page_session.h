@@ -83,7 +83,6 @@ class PageSession {
   int next_group_number_ = 1;
   std::vector<float> sent_;  ///< positions as last sent, float32
   bool session_has_handles_ = false;
-  bool previewed_ = false;  ///< the last solve was a preview
 };
 
 /// The surface triangles of a mesh: its triangles, or the faces of a tetrahedral mesh that
