@@ -387,7 +387,7 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
                                                    bool preview, bool out_of_time,
                                                    bool start_with_global_step) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
-  // before every global step with update_constraints).
+  // before every global step with targets_follow_rotations).
   LevelSolveRequest request =
       options_.optimizer.Request(l, num_levels(), start_with_global_step, diagonal_);
   if (solve_options.tolerance >= 0.0 && request.tolerance < 0.0) {

@@ -95,7 +95,7 @@ struct HandleEditResult {
 /// set up with LevelSetup::handle_edits (local_global: MaskedSystem), so their matrices keep one
 /// size and pattern whatever the handles. Coarse levels are constrained as in the hierarchical
 /// optimizer (coarse_constraints.h): a coarse vertex is constrained when a handle maps to it, its
-/// target follows its rotation (`update_constraints`).
+/// target follows its rotation (`targets_follow_rotations`).
 ///
 /// Every public method validates its input first and throws InputError (naming the problem)
 /// without changing anything, so the session stays usable after a bad call. `mesh` and `factory`
