@@ -94,7 +94,8 @@ SystemComponents::SystemComponents(const SparseMatrix& a) {
 }
 
 FixedVertices ChooseFixedVertices(const SystemComponents& components,
-                                  const std::vector<Index>& constrained) {
+                                  const std::vector<Index>& constrained,
+                                  const std::vector<Index>& anchored) {
   const Index n = components.num_vertices();
   FixedVertices result;
   std::vector<unsigned char>& fixed = result.fixed;
@@ -108,6 +109,10 @@ FixedVertices ChooseFixedVertices(const SystemComponents& components,
   report.constrained_vertices = static_cast<Index>(constrained.size());
   std::vector<unsigned char> component_constrained(n, 0);
   for (Index v : constrained) component_constrained[components.root[v]] = 1;
+  for (Index v : anchored) {
+    HARAP_CHECK(v >= 0 && v < n, "anchored vertex {} out of range (n = {})", v, n);
+    if (components.coupled[v]) component_constrained[components.root[v]] = 1;
+  }
   for (Index v = 0; v < n; ++v) {
     if (fixed[v]) continue;
     if (!components.coupled[v]) {
@@ -137,9 +142,10 @@ FixedVertices ChooseFixedVertices(const SystemComponents& components,
   return result;
 }
 
-ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained) {
+ConstrainedSystem::ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained,
+                                     const std::vector<Index>& anchored) {
   const Index n = static_cast<Index>(a.rows());
-  FixedVertices choice = ChooseFixedVertices(SystemComponents(a), constrained);
+  FixedVertices choice = ChooseFixedVertices(SystemComponents(a), constrained, anchored);
   const std::vector<unsigned char>& fixed = choice.fixed;
   pinned_vertices_ = std::move(choice.pinned);
   report_ = choice.report;
@@ -229,8 +235,9 @@ void MaskedSystem::MaskColumn(Index column) {
   }
 }
 
-std::vector<Index> MaskedSystem::SetConstrained(const std::vector<Index>& constrained) {
-  FixedVertices choice = ChooseFixedVertices(components_, constrained);
+std::vector<Index> MaskedSystem::SetConstrained(const std::vector<Index>& constrained,
+                                                const std::vector<Index>& anchored) {
+  FixedVertices choice = ChooseFixedVertices(components_, constrained, anchored);
   const Index n = num_vertices();
   std::vector<Index> changed;
   for (Index v = 0; v < n; ++v) {

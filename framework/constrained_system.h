@@ -27,9 +27,12 @@ struct FixedVertices {
 };
 
 /// Validates `constrained` (in range, unique; InternalError otherwise) and pins one vertex of each
-/// component without a constrained vertex (its lowest index) and every isolated vertex.
+/// component without a constrained or anchored vertex (its lowest index) and every isolated
+/// vertex. `anchored` vertices stay free but remove their component's null space: those with a
+/// soft target, whose data term adds to A's diagonal (data_term.h).
 FixedVertices ChooseFixedVertices(const SystemComponents& components,
-                                  const std::vector<Index>& constrained);
+                                  const std::vector<Index>& constrained,
+                                  const std::vector<Index>& anchored = {});
 
 /// The global step A U = B with some vertices' positions prescribed, as the local/global
 /// iteration uses it: a matrix to factor (`system_matrix()`, num_unknowns() square) and the maps
@@ -101,8 +104,11 @@ class VertexSplitSystem : public GlobalStepSystem {
 
 class ConstrainedSystem final : public VertexSplitSystem {
  public:
-  /// `constrained`: indices of vertices with prescribed positions (unique, any order).
-  ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained);
+  /// `constrained`: indices of vertices with prescribed positions (unique, any order);
+  /// `anchored`: free vertices whose soft targets make their component's block definite
+  /// (ChooseFixedVertices).
+  ConstrainedSystem(const SparseMatrix& a, const std::vector<Index>& constrained,
+                    const std::vector<Index>& anchored = {});
 
   Index num_vertices() const override { return static_cast<Index>(free_index_.size()); }
   Index num_unknowns() const override { return num_free(); }
@@ -149,7 +155,8 @@ class MaskedSystem final : public VertexSplitSystem {
   /// Fixes `constrained` (unique, in range: InternalError otherwise) and the vertices pinned for
   /// it; returns the vertices whose rows and columns of system_matrix() changed (sorted), i.e.
   /// those that went from free to fixed or back.
-  std::vector<Index> SetConstrained(const std::vector<Index>& constrained);
+  std::vector<Index> SetConstrained(const std::vector<Index>& constrained,
+                                    const std::vector<Index>& anchored = {});
 
   Index num_vertices() const override { return components_.num_vertices(); }
   Index num_unknowns() const override { return num_vertices(); }

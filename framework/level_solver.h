@@ -4,9 +4,11 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "framework/context.h"
+#include "framework/data_term.h"
 #include "framework/linear_solver.h"
 #include "framework/mesh.h"
 #include "framework/optimizer.h"
@@ -28,13 +30,24 @@ struct LevelConstraints {
   std::vector<std::vector<Index>> incident_elements;
   /// The level is planar: per-element rotations average to a rotation of the plane.
   bool planar = false;
+  /// Soft constraints (a pull with a weight, not a pin). On a coarse level each coarse vertex
+  /// takes the summed weight of its soft input members and their weighted mean target
+  /// (MapConstraints; docs/solvers.md, "Soft targets"); they do not follow rotations.
+  SoftTargets soft;
 
-  /// The input level's constraints: exact targets.
+  /// The input level's constraints: exact targets, soft ones as they are.
   static LevelConstraints Exact(const Constraints& constraints, bool planar) {
     LevelConstraints exact;
-    exact.vertices = constraints.indices;
-    exact.mean_target = constraints.targets;
+    const Constraints hard = constraints.HardPart();
+    exact.vertices = hard.indices;
+    exact.mean_target = hard.targets;
     exact.planar = planar;
+    if (constraints.has_soft()) {
+      Constraints soft = constraints.SoftPart();
+      exact.soft.vertices = std::move(soft.indices);
+      exact.soft.targets = std::move(soft.targets);
+      exact.soft.weights = std::move(soft.weights);
+    }
     return exact;
   }
   /// Whether the targets depend on the rotations (a coarse level's).
@@ -135,6 +148,14 @@ class LevelSolver {
                                      const ComponentFactory& factory, const Context& context) = 0;
   /// New `mean_target` rows for the same constrained vertices (no refactoring).
   virtual void MoveTargets(const Positions& mean_target) = 0;
+  /// New targets for the same soft constraints (LevelConstraints::soft; no refactoring). Level
+  /// solvers without soft constraints refuse them in Constrain() (accepts_soft_targets()), so
+  /// the default is never reached by a correct caller.
+  virtual void MoveSoftTargets(const Positions& /*targets*/) {
+    throw InternalError("soft targets moved on a level solver without soft targets");
+  }
+  /// Whether Constrain() takes LevelConstraints::soft (others throw InputError for them).
+  virtual bool accepts_soft_targets() const { return false; }
 
   /// Places the constrained vertices (with the state's rotations where it has them for the
   /// level's sites) and iterates from `state`; on return `state` holds the final positions and

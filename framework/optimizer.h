@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -17,9 +18,50 @@
 namespace harap {
 
 /// Vertex constraints: vertex indices[k] goes to targets.row(k). Indices are unique.
+///
+/// A constraint is hard (the vertex is pinned at its target) or soft: with weight w it adds
+/// w ‖u_k − t_k‖² to the energy instead of pinning (a pull; see SoftTargets in data_term.h).
+/// `weights` is empty (every constraint hard) or has one entry per index, kHardWeight (+∞)
+/// marking a hard one and a finite w > 0 a soft one.
 struct Constraints {
+  static constexpr double kHardWeight = std::numeric_limits<double>::infinity();
   std::vector<Index> indices;
-  Positions targets;  ///< #indices×3
+  Positions targets;            ///< #indices×3
+  std::vector<double> weights;  ///< empty, or #indices (kHardWeight = hard)
+
+  bool is_hard(size_t k) const { return weights.empty() || weights[k] == kHardWeight; }
+  bool has_soft() const {
+    for (size_t k = 0; k < weights.size(); ++k) {
+      if (!is_hard(k)) return true;
+    }
+    return false;
+  }
+  /// The hard constraints alone (weights empty).
+  Constraints HardPart() const {
+    if (!has_soft()) return Constraints{indices, targets, {}};
+    return Select(true);
+  }
+  /// The soft constraints alone (weights all finite).
+  Constraints SoftPart() const {
+    if (!has_soft()) return Constraints{{}, Positions(0, 3), {}};
+    return Select(false);
+  }
+
+ private:
+  Constraints Select(bool hard) const {
+    Constraints part;
+    for (size_t k = 0; k < indices.size(); ++k) {
+      if (is_hard(k) == hard) part.indices.push_back(indices[k]);
+    }
+    part.targets.resize(static_cast<Index>(part.indices.size()), 3);
+    Index row = 0;
+    for (size_t k = 0; k < indices.size(); ++k) {
+      if (is_hard(k) != hard) continue;
+      part.targets.row(row++) = targets.row(static_cast<Index>(k));
+      if (!hard) part.weights.push_back(weights[k]);
+    }
+    return part;
+  }
 };
 
 /// A deformation problem: the rest mesh, the constraints and, optionally, a start configuration

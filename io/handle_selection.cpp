@@ -367,6 +367,7 @@ void AddHandles(const std::optional<BenchmarkHandlesSpec>& benchmark,
   for (const HandleSpec& spec : specs) {
     ScenarioHandle handle;
     handle.name = spec.name;
+    handle.weight = spec.weight;
     if (spec.target == TargetKind::kFile) {
       ReadTargetFile(spec, mesh.num_vertices(), handle);
       handle.selection = fmt::format("the indices of target_file {}", spec.target_file.string());

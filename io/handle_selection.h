@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,6 +48,8 @@ struct HandleSpec {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   std::filesystem::path target_file;  ///< target_file = "...": per-vertex "index x y z" lines
   std::string target_file_where;
+  /// `weight = w`: a soft handle (Constraints::weights); +∞ (the default) pins.
+  double weight = std::numeric_limits<double>::infinity();
 };
 
 /// `selection = "x.sel"` with `deformation = "x.def"`: the deformation benchmark of Botsch &

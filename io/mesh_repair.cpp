@@ -612,11 +612,15 @@ void PreparedProblem::SetSolvedConstraints(const DeformationProblem& problem,
   }
   std::sort(solved_constraints.begin(), solved_constraints.end());
   problem_.constraints.indices.clear();
+  problem_.constraints.weights.clear();
   problem_.constraints.targets.resize(static_cast<Index>(solved_constraints.size()), 3);
   for (size_t k = 0; k < solved_constraints.size(); ++k) {
     problem_.constraints.indices.push_back(solved_constraints[k].first);
     problem_.constraints.targets.row(static_cast<Index>(k)) =
         input.targets.row(solved_constraints[k].second);
+    if (!input.weights.empty()) {
+      problem_.constraints.weights.push_back(input.weights[solved_constraints[k].second]);
+    }
   }
 }
 

@@ -120,9 +120,13 @@ Constraints MergeHandles(Index n, const std::vector<ScenarioHandle>& handles) {
     if (owner[v].first >= 0) constraints.indices.push_back(v);
   }
   constraints.targets.resize(static_cast<Index>(constraints.indices.size()), 3);
+  const bool any_soft = std::any_of(handles.begin(), handles.end(), [](const ScenarioHandle& h) {
+    return h.weight != Constraints::kHardWeight;
+  });
   for (size_t k = 0; k < constraints.indices.size(); ++k) {
     const auto [h, row] = owner[constraints.indices[k]];
     constraints.targets.row(static_cast<Index>(k)) = handles[h].targets.row(row);
+    if (any_soft) constraints.weights.push_back(handles[h].weight);
   }
   return constraints;
 }

@@ -24,6 +24,9 @@ struct ScenarioHandle {
   /// The target motion in words: "fixed", "rotate 90° about (0, 0, 1) through (..), translate
   /// (..)", "per-vertex targets from FILE", "4x4 transform from FILE", ...
   std::string motion;
+  /// `weight = w`: a soft handle pulling its vertices with weight w (Constraints::weights);
+  /// Constraints::kHardWeight (the default) pins them.
+  double weight = Constraints::kHardWeight;
 };
 
 /// A deformation scenario (../shared/scenarios/FORMAT.md, harap's additions in docs/input.md):

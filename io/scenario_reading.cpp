@@ -16,6 +16,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <utility>
@@ -261,10 +262,18 @@ class ScenarioTextReader {
       spec.label = fmt::format("handle '{}'", spec.name);
     }
     const TomlReader toml = toml_.In(spec.label);  // errors name the handle
-    toml.CheckKeys(table,
-                   {"name", "select", "rotate", "translate", "target", "target_file", "units"},
-                   "a [[handle]]");
+    toml.CheckKeys(
+        table,
+        {"name", "select", "rotate", "translate", "target", "target_file", "units", "weight"},
+        "a [[handle]]");
     spec.units = ParseUnits(toml, table, default_units);
+    if (const toml::node* weight = table.get("weight")) {
+      // A soft handle: its vertices are pulled with this weight instead of pinned.
+      spec.weight = toml.Number(*weight, "weight");
+      if (!(spec.weight > 0.0) || !std::isfinite(spec.weight)) {
+        toml.Fail(*weight, "'weight' must be a finite number > 0 (leave it out for a hard handle)");
+      }
+    }
 
     // target_file = "moves.txt": the file's "index x y z" lines are the selection and the motion.
     if (const toml::node* file = table.get("target_file")) {

@@ -267,6 +267,12 @@ ConstrainSummary AdmmLevelSolver::Constrain(const LevelConstraints& constraints,
                                             const ComponentFactory& factory,
                                             const Context& context) {
   Stopwatch clock;
+  if (!constraints.soft.empty()) {
+    throw InputError(
+        "soft handles (a handle with a `weight`) need the local/global level solver "
+        "(optimizer classic or hierarchical with inner = \"local_global\"); ADMM pins its "
+        "handles");
+  }
   context.ReportPhase(fmt::format("factoring level {}", level_));
   const Index num_vertices = a0_.rows();
   for (Index v : constraints.vertices) {

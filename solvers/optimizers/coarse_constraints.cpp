@@ -13,10 +13,18 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
   std::vector<int> count(mesh.num_vertices(), 0);
   Positions sum_target = Positions::Zero(mesh.num_vertices(), 3);
   Positions sum_offset = Positions::Zero(mesh.num_vertices(), 3);
+  // Soft members: summed weight and weighted sum of their targets per coarse vertex.
+  std::vector<double> soft_weight(mesh.num_vertices(), 0.0);
+  Positions soft_sum = Positions::Zero(mesh.num_vertices(), 3);
   for (size_t k = 0; k < finest.indices.size(); ++k) {
     const Index m = finest.indices[k];
     const Index c = hierarchy.MapFinestVertex(m, level);
     if (c == kNoVertex) continue;
+    if (!finest.is_hard(k)) {
+      soft_weight[c] += finest.weights[k];
+      soft_sum.row(c) += finest.weights[k] * finest.targets.row(static_cast<Index>(k));
+      continue;
+    }
     ++count[c];
     sum_target.row(c) += finest.targets.row(k);
     sum_offset.row(c) += input.vertices.row(m) - mesh.vertices.row(c);
@@ -32,6 +40,18 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
     const Index c = result.vertices[k];
     result.mean_target.row(k) = sum_target.row(c) / count[c];
     result.mean_offset.row(k) = sum_offset.row(c) / count[c];
+  }
+  // Σ_m w_m ‖u_c − t_m‖² = W_c ‖u_c − t̄_c‖² + const with W_c = Σ_m w_m and t̄_c the weighted
+  // mean: the coarse vertex stands for its members' pull. A hard member pins the vertex, which
+  // makes the soft ones constant there.
+  for (Index c = 0; c < mesh.num_vertices(); ++c) {
+    if (soft_weight[c] > 0.0 && count[c] == 0) result.soft.vertices.push_back(c);
+  }
+  result.soft.targets.resize(static_cast<Index>(result.soft.vertices.size()), 3);
+  for (size_t k = 0; k < result.soft.vertices.size(); ++k) {
+    const Index c = result.soft.vertices[k];
+    result.soft.weights.push_back(soft_weight[c]);
+    result.soft.targets.row(static_cast<Index>(k)) = soft_sum.row(c) / soft_weight[c];
   }
   return result;
 }
@@ -79,6 +99,7 @@ LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
                                        const std::vector<Index>& new_element) {
   LevelConstraints renumbered = constraints;
   for (Index& v : renumbered.vertices) v = new_vertex[v];
+  for (Index& v : renumbered.soft.vertices) v = new_vertex[v];
   for (auto& elements : renumbered.incident_elements) {
     for (Index& e : elements) e = new_element[e];
   }

@@ -16,6 +16,8 @@ namespace harap {
 /// Maps the finest-level constraints to level `level` through the hierarchy's vertex maps (the
 /// paper's Section 4): the constrained coarse vertices with the mean target and the mean rest
 /// offset of their finest-level members, so that target_c(R_c) = mean_target − R_c · mean_offset.
+/// Soft constraints map to soft ones: a coarse vertex without hard members takes the summed
+/// weight of its soft members and their weighted mean target.
 LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
                                 const Constraints& finest);
 

@@ -257,7 +257,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   HandleEditResult result;
   const ComponentFactory& factory = factory_;  // thread-safe: levels are constrained in parallel
   std::vector<HandleEditResult::Level> done(levels_.size());
-  const Constraints finest{handles_, targets_};
+  const Constraints finest{handles_, targets_, {}};
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
     LevelSolver& solver = cascade_.solver(l);
@@ -328,7 +328,7 @@ void DeformationSession::UpdateCoarseTargets(int l) {
   if (l == 0 || !level.targets_stale) return;
   // The constrained vertices are the same (same handles): only the mean targets move.
   cascade_.solver(l).MoveTargets(
-      MapConstraints(cascade_.hierarchy(), l, Constraints{handles_, targets_}).mean_target);
+      MapConstraints(cascade_.hierarchy(), l, Constraints{handles_, targets_, {}}).mean_target);
   level.targets_stale = false;
 }
 

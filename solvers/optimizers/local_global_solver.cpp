@@ -64,6 +64,7 @@ void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFacto
   level_ = setup.level;
   context.ReportPhase(fmt::format("precomputing level {}", level_));
   energy_ = factory.MakeEnergy();
+  data_term_ = nullptr;
   CheckCompatible(*energy_, setup.handle_edits);  // the run's check, for callers without one
   ordering_ = LocalityOrdering(*setup.mesh);
   if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
@@ -99,9 +100,13 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
   if (mapped.targets_follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
     FindIncidentElements(*setup_.mesh, mapped);
   }
-  const ConstrainSummary summary = setup_.handle_edits
-                                       ? ConstrainMasked(mapped.vertices, factory, context)
-                                       : ConstrainEliminated(mapped.vertices, factory, context);
+  const bool data_term_changed = SetDataTerm(mapped.soft);
+  const std::vector<Index> anchored =
+      data_term_ ? data_term_->soft_targets().vertices : std::vector<Index>{};
+  const ConstrainSummary summary =
+      setup_.handle_edits
+          ? ConstrainMasked(mapped.vertices, anchored, data_term_changed, factory, context)
+          : ConstrainEliminated(mapped.vertices, anchored, factory, context);
   internal_ = RenumberedConstraints(mapped, ordering_.new_vertex, ordering_.new_element);
   constraints_ = std::move(mapped);
   return summary;
@@ -112,14 +117,41 @@ void LocalGlobalSolver::MoveTargets(const Positions& mean_target) {
   internal_.mean_target = mean_target;
 }
 
+void LocalGlobalSolver::MoveSoftTargets(const Positions& targets) {
+  HARAP_CHECK(data_term_ != nullptr, "level {}: soft targets moved before they were set", level_);
+  data_term_->MoveSoftTargets(targets);
+  constraints_.soft.targets = targets;
+  internal_.soft.targets = targets;
+}
+
+bool LocalGlobalSolver::SetDataTerm(const SoftTargets& soft) {
+  if (soft.empty() && data_term_ == nullptr) return false;
+  if (options_.newton > 0) {
+    // The Hessian products apply B to rotation derivatives; B' = B + W T is affine in R.
+    throw ConfigError(
+        "soft handles (a handle with a `weight`) and Newton steps exclude each other: set "
+        "newton = 0 (anderson works with soft handles)");
+  }
+  if (data_term_ == nullptr) {
+    // The energy gains the data term in place: everything downstream sees A + W and B + W T.
+    auto wrapped = std::make_unique<EnergyWithDataTerm>(std::move(energy_));
+    data_term_ = wrapped.get();
+    energy_ = std::move(wrapped);
+  }
+  SoftTargets internal = soft;
+  internal.vertices = Renumbered(soft.vertices, ordering_);
+  return data_term_->SetSoftTargets(std::move(internal));
+}
+
 ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>& constrained,
+                                                        const std::vector<Index>& anchored,
                                                         const ComponentFactory& factory,
                                                         const Context& context) {
   Stopwatch clock;
   context.ReportPhase(fmt::format("factoring level {}", level_));
   masked_ = nullptr;
   auto system = std::make_unique<ConstrainedSystem>(energy_->system_matrix(),
-                                                    Renumbered(constrained, ordering_));
+                                                    Renumbered(constrained, ordering_), anchored);
   const ConstrainSummary summary =
       FactorGlobalStep(*system, level_, factory, context, clock, solver_, reduced_rhs_, reduced_x_);
   system_ = std::move(system);
@@ -128,15 +160,19 @@ ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>
 }
 
 ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& constrained,
+                                                    const std::vector<Index>& anchored,
+                                                    bool matrix_changed,
                                                     const ComponentFactory& factory,
                                                     const Context& context) {
   Stopwatch clock;
+  // Other soft weights change A + W itself, not only which rows are masked: start over.
+  if (matrix_changed) masked_ = nullptr;
   context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
   const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
   ConstrainSummary summary;
   if (masked_ == nullptr) {
     auto system = std::make_unique<MaskedSystem>(energy_->system_matrix());
-    system->SetConstrained(renumbered);
+    system->SetConstrained(renumbered, anchored);
     masked_ = system.get();
     system_ = std::move(system);
     solver_ = factory.MakeLinearSolver(level_, masked_->num_unknowns());
@@ -147,7 +183,7 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
     reduced_x_.resize(system_->num_unknowns(), 3);
     summary.changed_rows = masked_->num_unknowns();
   } else {
-    const std::vector<Index> changed = masked_->SetConstrained(renumbered);
+    const std::vector<Index> changed = masked_->SetConstrained(renumbered, anchored);
     summary.changed_rows = static_cast<Index>(changed.size());
     if (!needs_factorization_ && !changed.empty()) {
       // Until the refactorization succeeds the factor is out of date: a throw leaves it so.
@@ -314,7 +350,8 @@ LevelSolveResult LocalGlobalSolver::GlobalStepFromGathered(LevelState& state,
 
 bool LocalGlobalSolver::accepts_gathered_rotations() const {
   // GatheredGlobalStep's conditions: one rotation per vertex, exact (input-level) targets.
-  return energy_ != nullptr && setup_.mesh != nullptr &&
+  // Soft targets are terms of the energy, which the gathered step does not assemble.
+  return energy_ != nullptr && setup_.mesh != nullptr && constraints_.soft.empty() &&
          energy_->rotation_site() == RotationSite::kVertex &&
          energy_->num_rotations() == setup_.mesh->num_vertices() &&
          !constraints_.targets_follow_rotations();
@@ -505,6 +542,10 @@ Positions InitialPositions(const DeformationProblem& problem) {
     throw InputError(fmt::format("{} constrained vertices but {} targets",
                                  constraints.indices.size(), constraints.targets.rows()));
   }
+  if (!constraints.weights.empty() && constraints.weights.size() != constraints.indices.size()) {
+    throw InputError(fmt::format("{} constrained vertices but {} weights",
+                                 constraints.indices.size(), constraints.weights.size()));
+  }
   for (size_t k = 0; k < constraints.indices.size(); ++k) {
     const Index v = constraints.indices[k];
     if (v < 0 || v >= mesh.num_vertices()) {
@@ -515,6 +556,15 @@ Positions InitialPositions(const DeformationProblem& problem) {
     }
     if (!constraints.targets.row(k).allFinite()) {
       throw InputError(fmt::format("the target of constrained vertex {} is not finite", v));
+    }
+    if (!constraints.weights.empty()) {
+      const double w = constraints.weights[k];
+      if (!(w > 0.0)) {
+        throw InputError(fmt::format(
+            "the weight of constrained vertex {} is {}; a soft handle's weight must be > 0", v, w));
+      }
+      // A soft target pulls the vertex from where it starts.
+      if (!constraints.is_hard(k)) continue;
     }
     u.row(v) = constraints.targets.row(k);
   }

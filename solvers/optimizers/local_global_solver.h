@@ -9,6 +9,7 @@
 
 #include "framework/config.h"
 #include "framework/constrained_system.h"
+#include "framework/data_term.h"
 #include "framework/level_solver.h"
 #include "framework/optimizer.h"
 #include "solvers/optimizers/anderson_acceleration.h"
@@ -91,6 +92,10 @@ class LocalGlobalSolver final : public LevelSolver {
   ConstrainSummary Constrain(const LevelConstraints& constraints, const ComponentFactory& factory,
                              const Context& context) override;
   void MoveTargets(const Positions& mean_target) override;
+  /// Soft constraints (LevelConstraints::soft) become a data term of the level's energy
+  /// (EnergyWithDataTerm): A + W factored once per weight set, moved targets change only B.
+  void MoveSoftTargets(const Positions& targets) override;
+  bool accepts_soft_targets() const override { return true; }
   /// Run() with the level's options (the request's limits), the constrained vertices placed
   /// first and, with request.targets_follow_rotations on a coarse level, before every global
   /// step. Measures: "accelerated_iterations" (with `anderson`), "newton_steps" and
@@ -179,9 +184,14 @@ class LocalGlobalSolver final : public LevelSolver {
                               const Context& context, RunResult& result);
 
   ConstrainSummary ConstrainEliminated(const std::vector<Index>& constrained,
+                                       const std::vector<Index>& anchored,
                                        const ComponentFactory& factory, const Context& context);
   ConstrainSummary ConstrainMasked(const std::vector<Index>& constrained,
+                                   const std::vector<Index>& anchored, bool matrix_changed,
                                    const ComponentFactory& factory, const Context& context);
+  // Gives the energy the data term of `soft` (the mesh's numbering), wrapping it the first
+  // time; returns whether the system matrix changed.
+  bool SetDataTerm(const SoftTargets& soft);
 
   LocalGlobalOptions options_;
   LevelSetup setup_;
@@ -190,6 +200,7 @@ class LocalGlobalSolver final : public LevelSolver {
   LevelConstraints internal_;     ///< the same in the internal numbering (moving targets)
   MeshOrdering ordering_;
   std::unique_ptr<Energy> energy_;
+  EnergyWithDataTerm* data_term_ = nullptr;  ///< energy_ once it has soft targets
   std::unique_ptr<GlobalStepSystem> system_;
   MaskedSystem* masked_ = nullptr;    ///< system_ when masked
   bool needs_factorization_ = false;  ///< masked: a Refactor threw, factor anew next time

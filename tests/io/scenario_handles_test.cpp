@@ -235,5 +235,43 @@ TEST_CASE("scenario: the deformation benchmark's .sel and .def files", "[io][sce
   CHECK(only_handle.handles[0].vertices == std::vector<Index>{15});
 }
 
+TEST_CASE("scenario weight: soft handles carry their weight into the constraints",
+          "[io][scenario][soft]") {
+  ScratchDir dir;
+  dir.Write("grid.obj", kGridObj);
+  const auto file = dir.Write("s.toml",
+                              "mesh = \"grid.obj\"\n"
+                              "[[handle]]\nselect.slab = { axis = \"x\", from = 0.0, to = 0.1 }\n"
+                              "[[handle]]\nselect.slab = { axis = \"x\", from = 0.9, to = 1.0 }\n"
+                              "translate = [0.0, 0.0, 0.5]\nweight = 2.5\n");
+  const Scenario scenario = LoadScenario(file);
+  REQUIRE(scenario.handles.size() == 2);
+  CHECK(scenario.handles[0].weight == Constraints::kHardWeight);
+  CHECK(scenario.handles[1].weight == 2.5);
+  const Constraints merged = scenario.MergedConstraints();
+  REQUIRE(merged.weights.size() == merged.indices.size());
+  for (size_t k = 0; k < merged.indices.size(); ++k) {
+    CHECK(merged.is_hard(k) == (merged.indices[k] == 0 || merged.indices[k] == 3));
+  }
+  CHECK(merged.SoftPart().indices == std::vector<Index>{2, 5});
+  CHECK(merged.HardPart().indices == std::vector<Index>{0, 3});
+  // Without any weight the constraints stay as they were: all hard, no weights.
+  const auto hard = dir.Write("h.toml",
+                              "mesh = \"grid.obj\"\n"
+                              "[[handle]]\nselect.slab = { axis = \"x\", from = 0.0, to = 0.1 }\n");
+  CHECK(LoadScenario(hard).MergedConstraints().weights.empty());
+  for (const char* bad : {"0", "-1.0", "nan", "inf", "\"heavy\""}) {
+    DYNAMIC_SECTION("weight = " << bad) {
+      const auto b = dir.Write("b.toml", std::string("mesh = \"grid.obj\"\n[[handle]]\n"
+                                                     "select.slab = { axis = \"x\", from = 0.0, "
+                                                     "to = 0.1 }\nweight = ") +
+                                             bad + "\n");
+      const std::string message = MessageOf(b);
+      CHECK_THAT(message, Contains("weight"));
+      CHECK_THAT(message, Contains("b.toml:4"));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace harap
