@@ -54,7 +54,7 @@ const std::vector<Preset>& Presets() {
        {{"solver.level_0.type", "\"adaptive\""},
         {"solver.level_0.expected_solves", "4"},
         {"solver.level_0.direct.mode", "\"supernodal\""},
-        {"optimizer.update_constraints", "false"}},
+        {"optimizer.targets_follow_rotations", "false"}},
        {{"optimizer.anderson", "5"}}},
       {"hierarchical",
        "the paper's plain hierarchical method (Algorithm 2 with the default options)",

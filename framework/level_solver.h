@@ -51,7 +51,7 @@ struct LevelConstraints {
     return exact;
   }
   /// Whether the targets depend on the rotations (a coarse level's).
-  bool follow_rotations() const { return mean_offset.rows() > 0; }
+  bool targets_follow_rotations() const { return mean_offset.rows() > 0; }
 };
 
 /// Where a level solver works.
@@ -79,8 +79,8 @@ struct LevelSolveRequest {
   /// state's positions are the start; rotations there, if any, are only a warm start.
   bool start_from_rotations = false;
   /// Coarse levels: the constrained vertices' targets follow their current rotations during
-  /// the iterations, not only at the start (`update_constraints`, Fig. 16). Solvers that place
-  /// the targets once ignore it.
+  /// the iterations, not only at the start (`targets_follow_rotations`, Fig. 16). Solvers that
+  /// place the targets once ignore it.
   bool targets_follow_rotations = false;
   /// With moving targets: after this many iterations that raised the energy, the targets stay
   /// where they are (0: never; see LocalGlobalOptions::freeze_targets_after).

@@ -393,11 +393,6 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
     trace.push_back({s.seconds, Finite(s.energy), s.level});
     return CallbackAction::kContinue;
   });
-  // After a preview, DeformationSession::Solve() takes the preview's level state for a solution
-  // of the current targets and may stop after one iteration far from the minimum; starting the
-  // full solve from the preview's positions (as a one-shot run would) converges.
-  if (full && previewed_) session.SetPositions(Positions(session.positions()));
-  previewed_ = !full;
   const OptimizeResult result = full ? session.Solve() : session.Preview();
   session.set_iteration_callback({});
   const double seconds = SecondsSince(start);

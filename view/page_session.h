@@ -100,7 +100,6 @@ class PageSession {
   DisplayMesh display_;
   std::vector<float> sent_;  ///< display positions as last sent, float32
   bool session_has_handles_ = false;
-  bool previewed_ = false;  ///< the last solve was a preview
 };
 
 /// The surface triangles of a mesh: its triangles, or the faces of a tetrahedral mesh that

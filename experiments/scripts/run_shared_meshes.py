@@ -8,7 +8,7 @@ about a perpendicular axis and moved by 0.1 box diagonals -- and runs `harap def
 each optimizer variant. A run passes when harap exits 0, reports `converged`, the final energy is
 finite and the traced energy never increases within a level (relative slack 1e-9 for rounding)
 wherever the constraints are fixed during the level: on every level of `classic` and
-`hierarchical-fixed-targets` (update_constraints = false), and on the finest level of
+`hierarchical-fixed-targets` (targets_follow_rotations = false), and on the finest level of
 `hierarchical`, whose coarse-level targets follow the cluster rotations at every iteration (the
 energy being minimized changes, so it may rise there; the largest rise is reported).
 
@@ -35,7 +35,7 @@ RELATIVE_SLACK = 1e-9
 VARIANTS = {
     "classic": ("classic", [], True),
     "hierarchical": ("hierarchical", [], False),
-    "hierarchical-fixed-targets": ("hierarchical", ["optimizer.update_constraints=false"], True),
+    "hierarchical-fixed-targets": ("hierarchical", ["optimizer.targets_follow_rotations=false"], True),
 }
 
 

@@ -287,7 +287,7 @@ ConstrainSummary AdmmLevelSolver::Constrain(const LevelConstraints& constraints,
               "{} constrained vertices but {} targets", constraints.vertices.size(),
               constraints.mean_target.rows());
   constraints_ = constraints;
-  if (constraints_.follow_rotations()) FindIncidentElements(*mesh_, constraints_);
+  if (constraints_.targets_follow_rotations()) FindIncidentElements(*mesh_, constraints_);
   system_ = std::make_unique<ConstrainedSystem>(a0_, constraints_.vertices);
   const ConstrainSummary summary = FactorGlobalStep(*system_, level_, factory, context, clock,
                                                     solver_, reduced_rhs_, reduced_x_);

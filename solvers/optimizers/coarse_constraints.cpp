@@ -73,7 +73,7 @@ void FindIncidentElements(const Mesh& mesh, LevelConstraints& constraints) {
 
 void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite site,
                               const Rotations* rotations, Positions& positions) {
-  const bool exact = !constraints.follow_rotations();
+  const bool exact = !constraints.targets_follow_rotations();
   for (size_t k = 0; k < constraints.vertices.size(); ++k) {
     Eigen::RowVector3d target = constraints.mean_target.row(k);
     if (exact) {

@@ -59,6 +59,13 @@ struct DeformationSession::Level {
   bool targets_stale = false;
   /// The session's problem version `state` solves (DeformationSession::version_).
   long long version = -1;
+  /// The solve (Solve() or Preview(), counted by DeformationSession::solves_) that made `state`:
+  /// a coarse-grid correction needs the coarser level's state of that same solve.
+  long long made_by_solve = -1;
+  /// `state` is a preview's one global step: its positions come from its rotations, which are
+  /// not fitted to them, so a global step from it would return the same positions and the
+  /// displacement test would stop at once. A full solve starts from its positions instead.
+  bool global_step_only = false;
 };
 
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
@@ -385,7 +392,7 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
                                                    bool preview, bool out_of_time,
                                                    bool start_with_global_step) const {
   // The level solver places the handles (coarse levels: with the state's rotations, and again
-  // before every global step with update_constraints).
+  // before every global step with targets_follow_rotations).
   LevelSolveRequest request =
       options_.optimizer.Request(l, num_levels(), start_with_global_step, diagonal_);
   if (solve_options.tolerance >= 0.0 && request.tolerance < 0.0) {
@@ -402,7 +409,7 @@ LevelSolveRequest DeformationSession::LevelRequest(int l, const SessionSolveOpti
 }
 
 bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight, bool gather,
-                                    const LevelState* cur, int coarse_before_level,
+                                    const LevelState* cur, bool coarser_previous_matches,
                                     const Context& context) {
   LevelState& work = work_[l];
   if (straight && l == 0 && gather) {
@@ -418,9 +425,11 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
     Level* level = levels_[l].get();
     if (level->has_solution) {
       // Warm start: the previous solution's rotations drive the first global step, which
-      // places the (moved) handles' influence smoothly over the mesh.
+      // places the (moved) handles' influence smoothly over the mesh. After a preview's global
+      // step a full solve fits the rotations to its positions first (a preview again takes one
+      // more global step from the same rotations).
       work = level->state;
-      return true;
+      return preview || !level->global_step_only;
     } else {
       work.positions = l == 0 ? start_positions_ : cascade_.hierarchy().levels[l].mesh.vertices;
       work.rotations.clear();
@@ -433,10 +442,12 @@ bool DeformationSession::StartLevel(int l, int top, bool preview, bool straight,
     work = levels_[l]->state;
     return true;
   } else if (options_.frame_start == SessionOptions::FrameStart::kCorrected && !preview &&
-             levels_[l] && levels_[l]->has_solution && coarse_before_level == l + 1 &&
+             levels_[l] && levels_[l]->has_solution && coarser_previous_matches &&
              work_[l + 1].rotations.size() == cur->rotations.size()) {
     // Coarse-grid correction: the level's previous solution (its fine detail) moved by what
-    // the coarser level's solution changed since then (the smooth motion), up-sampled.
+    // the coarser level's solution changed since then (the smooth motion), up-sampled. Only
+    // when both previous solutions come from the same solve: a preview solves the coarsest
+    // level but skips the levels between.
     LevelState& now = scratch_[l];
     cascade_.Upsample(l, *cur, now, context);
     cascade_.Upsample(l, work_[l + 1], work, context);
@@ -498,16 +509,21 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
     // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
     // numbering.)
     gather_step_ = gathered_ && l == 0 && !user_stop;
+    const bool coarser_previous_matches = coarse_before_level_ == l + 1 && s_.levels_[l] &&
+                                          s_.levels_[l]->made_by_solve == coarse_before_solve_;
     from_rotations = s_.StartLevel(l, top_, preview_, straight_, gather_step_, coarser,
-                                   coarse_before_level_, context_);
+                                   coarser_previous_matches, context_);
     return s_.work_[l];
   }
   void Prepare(int l) override {
     s_.UpdateCoarseTargets(l);
     had_solution_ = s_.levels_[l]->has_solution;
+    previous_made_by_ = s_.levels_[l]->made_by_solve;
   }
   LevelSolveRequest Request(int l, bool from_rotations, bool finishing) override {
-    return s_.LevelRequest(l, options_, preview_, finishing, from_rotations);
+    LevelSolveRequest request = s_.LevelRequest(l, options_, preview_, finishing, from_rotations);
+    global_step_only_ = request.global_step_only;
+    return request;
   }
   LevelSolveResult Solve(LevelSolver& solver, LevelState& state, const LevelSolveRequest& request,
                          const Context& context) override {
@@ -521,6 +537,8 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
   LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
     Level& level = *s_.levels_[l];
     level.has_solution = true;
+    level.made_by_solve = s_.solves_;
+    level.global_step_only = run != nullptr && global_step_only_;
     if (run == nullptr) {
       // As a one-shot run stopped on a coarse level: the up-sampled state, rotations fitted.
       level.state = state;
@@ -532,6 +550,7 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
     // After a gathered preview the finest rotations stay pending (MaterializePreviewRotations).
     if (l == 0) s_.preview_rotations_pending_ = gather_step_;
     coarse_before_level_ = had_solution_ ? l : -1;
+    coarse_before_solve_ = previous_made_by_;
     // A stopped run or a preview is no finished solution: the next solve redoes the level.
     level.version = run->stopped_by_callback || preview_ ? s_.version_ - 1 : s_.version_;
     return level.state;
@@ -547,8 +566,11 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
   const int top_;
   const Context& context_;
   bool straight_ = false, gathered_ = false, gather_step_ = false, had_solution_ = false;
-  // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_.
+  bool global_step_only_ = false;
+  // FrameStart::kCorrected: the level whose previous solution (before this solve) is in work_,
+  // and the solve that made it.
   int coarse_before_level_ = -1;
+  long long coarse_before_solve_ = -1, previous_made_by_ = -1;
 };
 
 OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options, bool preview) {
@@ -570,6 +592,7 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
     work_.assign(num_levels(), LevelState());
     scratch_.assign(num_levels(), LevelState());
   }
+  ++solves_;
   Context context = context_;
   context.run_clock.Restart();
   Frame frame(*this, solve_options, preview, top, context);

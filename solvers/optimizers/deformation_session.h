@@ -95,7 +95,7 @@ struct HandleEditResult {
 /// set up with LevelSetup::handle_edits (local_global: MaskedSystem), so their matrices keep one
 /// size and pattern whatever the handles. Coarse levels are constrained as in the hierarchical
 /// optimizer (coarse_constraints.h): a coarse vertex is constrained when a handle maps to it, its
-/// target follows its rotation (`update_constraints`).
+/// target follows its rotation (`targets_follow_rotations`).
 ///
 /// Every public method validates its input first and throws InputError (naming the problem)
 /// without changing anything, so the session stays usable after a bad call. `mesh` and `factory`
@@ -182,9 +182,10 @@ class DeformationSession {
   /// Where level `l` starts this solve, into work_[l] (`cur`: the state of the level above, the
   /// cascade's `top` level has none); returns whether it starts with a global step. `gather`:
   /// a straight preview's finest level that takes the coarse rotations gathered (kept in
-  /// preview_coarse_rotations_, not written out).
+  /// preview_coarse_rotations_, not written out). `coarser_previous_matches`: work_[l + 1]
+  /// holds level l + 1's previous solution, made by the solve that made level l's.
   bool StartLevel(int l, int top, bool preview, bool straight, bool gather, const LevelState* cur,
-                  int coarse_before_level, const Context& context);
+                  bool coarser_previous_matches, const Context& context);
   /// Whether a preview goes straight from level `top` to the finest (see Run()); builds the
   /// composed vertex map on first use.
   bool StraightPreview(bool preview, int top);
@@ -210,6 +211,7 @@ class DeformationSession {
   Positions targets_;
   Positions start_positions_;  ///< finest positions without a solution (SetPositions)
   long long version_ = 0;      ///< bumped by every change of handles, targets or positions
+  long long solves_ = 0;       ///< Solve() and Preview() calls so far
   /// Solve()'s per-level states, kept between solves (see Run()).
   std::vector<LevelState> work_, scratch_;
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's

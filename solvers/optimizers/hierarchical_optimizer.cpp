@@ -37,18 +37,25 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
       node.Get("coarse_approximation", options.coarse_approximation,
                "up-sample the coarsest solution straight to the finest level and solve once "
                "(Fig. 15)");
-  options.update_constraints =
-      node.Get("update_constraints", options.update_constraints,
+  if (node.Has("update_constraints")) {
+    // The option's name before it became the same as LevelSolveRequest's.
+    throw ConfigError(fmt::format(
+        "{}: option '{}update_constraints' is now called 'targets_follow_rotations'",
+        node.Where("update_constraints"), node.path().empty() ? "" : node.path() + "."));
+  }
+  options.targets_follow_rotations =
+      node.Get("targets_follow_rotations", options.targets_follow_rotations,
                "re-evaluate coarse constraint targets with the current rotations (Fig. 16)");
   options.overlap_setup =
       node.Get("overlap_setup", options.overlap_setup,
                "set up (precompute, factor) finer levels on another thread while coarser levels "
                "are solved; phase times then overlap");
-  options.freeze_targets_after = node.Get(
-      "freeze_targets_after", options.freeze_targets_after,
-      "with update_constraints: keep a level's coarse targets fixed after this many iterations "
-      "raised its energy (0: never; moving targets can make the energy cycle)",
-      Range::AtLeast(0));
+  options.freeze_targets_after =
+      node.Get("freeze_targets_after", options.freeze_targets_after,
+               "with targets_follow_rotations: keep a level's coarse targets fixed after this many "
+               "iterations "
+               "raised its energy (0: never; moving targets can make the energy cycle)",
+               Range::AtLeast(0));
   node.RejectUnknownKeys();
   return options;
 }
@@ -85,7 +92,7 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   request.diagonal = diagonal;
   if (level > 0 && coarse_tolerance >= 0.0) request.tolerance = coarse_tolerance;
   if (level == 0 && coarse_approximation && num_levels > 1) request.max_iterations = 1;
-  request.targets_follow_rotations = update_constraints;
+  request.targets_follow_rotations = targets_follow_rotations;
   request.freeze_targets_after = freeze_targets_after;
   return request;
 }

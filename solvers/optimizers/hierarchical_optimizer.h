@@ -23,7 +23,7 @@ namespace harap {
 ///   `inner` chooses the level solver: `local_global` (the paper's), or the ADMM solvers
 ///   `admm_pd` / `wrapd` (the paper's "hierarchical WRAPD", Section 7), energy `elements` only.
 ///   With an ADMM level solver `tolerance`, `max_iterations` and `coarse_tolerance` take the ADMM
-///   meanings (relative energy change, see admm_elements.h); update_constraints and
+///   meanings (relative energy change, see admm_elements.h); targets_follow_rotations and
 ///   freeze_targets_after do not apply (targets are placed once per level).
 /// - `classic` [Sorkine & Alexa 2007], `admm_pd` [Overby et al. 2017] and `wrapd` [Brown &
 ///   Narain 2021]: one-level runs of the same loop on the input mesh with that level solver
@@ -32,7 +32,7 @@ namespace harap {
 /// Constraints on coarse levels (Section 4): a coarse vertex is constrained if any finest-level
 /// vertex mapped to it is; its target is the average over those members of
 /// (target_m − R_c (v̄_m − v̄_c)), with R_c the coarse vertex's current rotation (identity at
-/// first). The level solver places its constrained vertices itself; with `update_constraints`
+/// first). The level solver places its constrained vertices itself; with `targets_follow_rotations`
 /// the targets follow R_c before every global step (Fig. 16, right).
 ///
 /// The coarsest level starts like classic ARAP: coarse rest positions with constrained vertices
@@ -60,9 +60,9 @@ class HierarchicalOptimizer final : public Optimizer {
     /// and do one global solve there (no iterations on the finest level).
     bool coarse_approximation = false;
     /// Re-evaluate coarse constraint targets with the current rotations during each level.
-    bool update_constraints = true;
-    /// With update_constraints: keep a level's coarse targets fixed after this many iterations
-    /// raised its energy (LevelSolveRequest::freeze_targets_after).
+    bool targets_follow_rotations = true;
+    /// With targets_follow_rotations: keep a level's coarse targets fixed after this many
+    /// iterations raised its energy (LevelSolveRequest::freeze_targets_after).
     int freeze_targets_after = 3;
     /// Set up (precompute and factor) the finer levels on another thread while the coarser ones
     /// are solved. The finest level's setup is mostly sequential (ordering, symbolic analysis)

@@ -106,7 +106,7 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
               "{} constrained vertices but {} targets", constraints.vertices.size(),
               constraints.mean_target.rows());
   LevelConstraints mapped = constraints;
-  if (mapped.follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
+  if (mapped.targets_follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
     FindIncidentElements(*setup_.mesh, mapped);
   }
   const bool data_term_changed = SetDataTerm(mapped.soft);
@@ -218,11 +218,10 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
   return summary;
 }
 
-LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
-                                                    bool start_with_global_step,
-                                                    const LocalGlobalOptions& options,
-                                                    double diagonal, const Context& context,
-                                                    const FixedPositionUpdate& update_fixed) {
+LocalGlobalSolver::RunResult LocalGlobalSolver::Run(
+    LevelState& caller_state, bool start_with_global_step, const LocalGlobalOptions& options,
+    double diagonal, const Context& context,
+    const TargetsFollowRotations& targets_follow_rotations) {
   HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
   HARAP_CHECK(caller_state.positions.rows() == system_->num_vertices(),
               "{} positions for {} vertices", caller_state.positions.rows(),
@@ -233,7 +232,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Run(LevelState& caller_state,
   ordering_.ToNew(caller_state.positions, state.positions);
   ordering_.ToNew(caller_state.rotations, per_element, state.rotations);
   const RunResult result =
-      Iterate(state, start_with_global_step, options, diagonal, context, update_fixed);
+      Iterate(state, start_with_global_step, options, diagonal, context, targets_follow_rotations);
   ordering_.ToOld(state.positions, caller_state.positions);
   ordering_.ToOld(state.rotations, per_element, caller_state.rotations);
   return result;
@@ -274,15 +273,15 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
     result.energy = std::numeric_limits<double>::quiet_NaN();
     return result;
   }
-  FixedPositionUpdate update;
-  if (request.targets_follow_rotations && constraints_.follow_rotations()) {
+  TargetsFollowRotations follow;
+  if (request.targets_follow_rotations && constraints_.targets_follow_rotations()) {
     // Before every global step, in the internal numbering of the iteration.
-    update = [this, site](const Rotations& rotations, Positions& positions) {
+    follow = [this, site](const Rotations& rotations, Positions& positions) {
       PlaceConstrainedVertices(internal_, site, &rotations, positions);
     };
   }
   const RunResult run =
-      Run(state, request.start_from_rotations, options, request.diagonal, context, update);
+      Run(state, request.start_from_rotations, options, request.diagonal, context, follow);
   result.iterations = run.iterations;
   result.energy = run.energy;
   result.converged = run.converged;
@@ -364,7 +363,7 @@ bool LocalGlobalSolver::accepts_gathered_rotations() const {
   return energy_ != nullptr && setup_.mesh != nullptr && constraints_.soft.empty() &&
          energy_->rotation_site() == RotationSite::kVertex &&
          energy_->num_rotations() == setup_.mesh->num_vertices() &&
-         !constraints_.follow_rotations();
+         !constraints_.targets_follow_rotations();
 }
 
 std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
@@ -384,11 +383,10 @@ std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelSt
                                     ordering_.ToNew(state.rotations, per_element), context);
 }
 
-LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
-                                                        bool start_with_global_step,
-                                                        const LocalGlobalOptions& options,
-                                                        double diagonal, const Context& context,
-                                                        const FixedPositionUpdate& update_fixed) {
+LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
+    LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
+    double diagonal, const Context& context,
+    const TargetsFollowRotations& targets_follow_rotations) {
   if (static_cast<Index>(state.rotations.size()) != energy_->num_rotations()) {
     state.rotations.assign(energy_->num_rotations(), Rotation::Identity());
   }
@@ -429,9 +427,9 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
     newton_.Reset(system_->num_vertices(), system_->num_free(), options.newton_exact_hessian);
   }
   while (result.iterations < options.max_iterations) {
-    const bool targets_move = update_fixed && !targets_frozen;
+    const bool targets_move = targets_follow_rotations && !targets_frozen;
     if (targets_move) {
-      update_fixed(state.rotations, state.positions);
+      targets_follow_rotations(state.rotations, state.positions);
       system_->SetFixedPositions(state.positions);
     }
     // Global step: A_ff U_f = B_f(R) − A_fc U_c, all three coordinates at once.
@@ -460,7 +458,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(LevelState& state,
       throw NumericalError(fmt::format("the energy became {} on level {} at iteration {}", energy,
                                        level_, result.iterations));
     }
-    if (update_fixed && !targets_frozen && result.iterations > 1 &&
+    if (targets_follow_rotations && !targets_frozen && result.iterations > 1 &&
         energy > previous_energy * (1.0 + 1e-12) &&
         ++energy_increases == options.freeze_targets_after) {
       targets_frozen = true;

@@ -25,8 +25,8 @@ struct LocalGlobalOptions {
   /// Section 5.1; 1e-6 in its experiments). 0 runs to max_iterations.
   double tolerance = 1e-6;
   int max_iterations = 1000;  ///< Cap on local/global iterations on the level.
-  /// With moving constraint targets (Run's `update_fixed`): after this many iterations that
-  /// raised the energy, the targets stay where they are for the rest of the run (0: never).
+  /// With moving constraint targets (Run's `targets_follow_rotations`): after this many iterations
+  /// that raised the energy, the targets stay where they are for the rest of the run (0: never).
   /// Moving targets make an iteration no longer a descent step; a few increases are a normal
   /// transient while they swing into place, but some levels cycle forever (tetrahedral meshes,
   /// edge-collapse hierarchies, smooth_arap). Set by hierarchical's `freeze_targets_after`.
@@ -143,17 +143,17 @@ class LocalGlobalSolver final : public LevelSolver {
   /// from state.positions. Fixed vertices keep their rows of state.positions. `diagonal` scales the
   /// convergence test. On return `state` holds the final positions and fitted rotations.
   ///
-  /// `update_fixed`, if set, is called before every global step with the current rotations and
-  /// may move constrained vertices in the positions (Solve(): coarse constraint targets that
-  /// follow the cluster rotations, Section 4); the reduced right-hand side then uses the new
-  /// positions.
-  /// Both arrays are in the internal numbering of ordering(). Moving targets make the iteration
-  /// non-monotone in principle: after the first iteration that increases the energy, the targets
-  /// stay where they are and the run continues as a plain, monotone local/global iteration.
-  using FixedPositionUpdate = std::function<void(const Rotations&, Positions&)>;
+  /// `targets_follow_rotations`, if set, is called before every global step with the current
+  /// rotations and may move constrained vertices in the positions (Solve(): coarse constraint
+  /// targets that follow the cluster rotations, Section 4); the reduced right-hand side then uses
+  /// the new positions. Both arrays are in the internal numbering of ordering(). Moving targets
+  /// make the iteration non-monotone in principle: after the first iteration that increases the
+  /// energy, the targets stay where they are and the run continues as a plain, monotone
+  /// local/global iteration.
+  using TargetsFollowRotations = std::function<void(const Rotations&, Positions&)>;
   RunResult Run(LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
                 double diagonal, const Context& context,
-                const FixedPositionUpdate& update_fixed = {});
+                const TargetsFollowRotations& targets_follow_rotations = {});
 
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
   /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
@@ -173,7 +173,7 @@ class LocalGlobalSolver final : public LevelSolver {
  private:
   RunResult Iterate(LevelState& state, bool start_with_global_step,
                     const LocalGlobalOptions& options, double diagonal, const Context& context,
-                    const FixedPositionUpdate& update_fixed);
+                    const TargetsFollowRotations& targets_follow_rotations);
   // One iteration from `state` (rotations fitted unless !energy_is_fitted) after the global
   // step's solve into reduced_x_; updates `energy` and returns the plain step's displacement
   // for the convergence test.

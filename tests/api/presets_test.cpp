@@ -32,7 +32,7 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
   // If it factors, it solves with the supernodal factor (few solves: no conversion).
   CHECK(level0.Child("direct").Get("mode", std::string(), "") == "supernodal");
   // Fixed coarse targets, so that Anderson acceleration takes effect on the coarse levels.
-  CHECK_FALSE(config.Child("optimizer").Get("update_constraints", true, ""));
+  CHECK_FALSE(config.Child("optimizer").Get("targets_follow_rotations", true, ""));
   CHECK(config.Child("optimizer").Get("anderson", 0, "") == 5);
   // The factory then gives level 0 the adaptive solver and the other levels [solver]'s.
   const Registries registries = MakeBuiltinRegistries();
@@ -66,7 +66,7 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   flags.settings = {"optimizer.inner=\"admm_pd\""};
   const ConfigNode admm = flags.BuildConfig();
   CHECK_FALSE(admm.Child("optimizer").Has("anderson"));
-  CHECK_FALSE(admm.Child("optimizer").Get("update_constraints", true, ""));
+  CHECK_FALSE(admm.Child("optimizer").Get("targets_follow_rotations", true, ""));
 }
 
 TEST_CASE("presets: unknown names are rejected, the config's preset key is read",

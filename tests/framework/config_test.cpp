@@ -51,11 +51,11 @@ TEST_CASE("ConfigNode::Set parses command-line values", "[framework]") {
   root.Set("energy.lambda", "0.5");
   root.Set("solver.type", "cholmod");  // bare word: a string
   root.Set("solver.sweeps", "10");
-  root.Set("optimizer.update_constraints", "false");
+  root.Set("optimizer.targets_follow_rotations", "false");
   CHECK(root.Child("energy").Get("lambda", 0.0, "h") == 0.5);
   CHECK(root.Child("solver").Get("type", "x", "h") == "cholmod");
   CHECK(root.Child("solver").Get("sweeps", 1, "h") == 10);
-  CHECK(root.Child("optimizer").Get("update_constraints", true, "h") == false);
+  CHECK(root.Child("optimizer").Get("targets_follow_rotations", true, "h") == false);
   CHECK_THROWS_AS(root.Set("energy..x", "1"), ConfigError);
   root.Set("energy.lambda", "0.25");  // overrides
   CHECK(root.Child("energy").Get("lambda", 0.0, "h") == 0.25);

@@ -170,11 +170,12 @@ TEST_CASE("guide adding-a-hierarchy: the hierarchical optimizer runs on the exam
   const Registries registries = RegistriesWithExample();
   const BentTube tube(24, 16, 2.0, M_PI / 4, Eigen::Vector3d(0.0, 0.4, -0.2));
   std::map<int, std::vector<double>> energies;
-  const OptimizeResult result = RunConfigured(
-      registries, tube.problem,
-      "[optimizer]\ntype = \"hierarchical\"\nupdate_constraints = false\nmax_iterations = 300\n"
-      "[hierarchy]\ntype = \"grid_clustering\"\n",
-      &energies);
+  const OptimizeResult result =
+      RunConfigured(registries, tube.problem,
+                    "[optimizer]\ntype = \"hierarchical\"\ntargets_follow_rotations = "
+                    "false\nmax_iterations = 300\n"
+                    "[hierarchy]\ntype = \"grid_clustering\"\n",
+                    &energies);
   CHECK(result.levels.size() >= 3);
   CHECK(MonotonePerLevel(energies));  // fixed coarse targets: plain local/global on each level
   CHECK(std::isfinite(result.energy));

@@ -472,11 +472,12 @@ TEST_CASE("edge_collapse: hierarchical ARAP on it lowers the energy level by lev
   for (const char* upsampler : {"rotations", "positions"}) {
     DYNAMIC_SECTION("upsampler " << upsampler) {
       // Fixed coarse targets make every level a plain local/global run, which must be monotone.
-      TestSetup setup(fmt::format(
-          "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
-          "[hierarchy]\ntype = \"edge_collapse\"\nmin_vertices = 100\n"
-          "[upsampler]\ntype = \"{}\"\n",
-          upsampler));
+      TestSetup setup(
+          fmt::format("[optimizer]\ntype = \"hierarchical\"\ntolerance = "
+                      "1e-7\ntargets_follow_rotations = false\n"
+                      "[hierarchy]\ntype = \"edge_collapse\"\nmin_vertices = 100\n"
+                      "[upsampler]\ntype = \"{}\"\n",
+                      upsampler));
       std::map<int, std::vector<double>> energies;
       Context context;
       context.iteration_callback = [&](const IterationSummary& s) {

@@ -81,7 +81,7 @@ TEST_CASE("local/global with Anderson acceleration: monotone, same minimum, fewe
     // Coarse targets that follow the rotations are not a descent step (and switch the
     // acceleration off); fixed ones keep every level monotone.
     const std::string fixed_targets =
-        std::string(optimizer) == "hierarchical" ? "update_constraints = false\n" : "";
+        std::string(optimizer) == "hierarchical" ? "targets_follow_rotations = false\n" : "";
     TestSetup setup(
         fmt::format("[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\n"
                     "max_iterations = 3000\nanderson = {}\n{}",

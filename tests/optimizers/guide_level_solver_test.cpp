@@ -73,7 +73,7 @@ class SweepsLevelSolver final : public LevelSolver {
     Stopwatch clock;
     constraints_ = constraints;
     // Coarse targets follow the vertex rotations; per-element energies average them (Eq. 11).
-    if (constraints_.follow_rotations() && rotation_site() == RotationSite::kElement) {
+    if (constraints_.targets_follow_rotations() && rotation_site() == RotationSite::kElement) {
       FindIncidentElements(*mesh_, constraints_);
     }
     system_ = std::make_unique<ConstrainedSystem>(energy_->system_matrix(), constraints_.vertices);
@@ -108,8 +108,8 @@ class SweepsLevelSolver final : public LevelSolver {
     Positions rhs(state.positions.rows(), 3);
     Eigen::MatrixXd b, x;
     while (result.iterations < max_iterations) {
-      // Moving coarse targets (update_constraints): placed before every global step.
-      if (request.targets_follow_rotations && constraints_.follow_rotations()) {
+      // Moving coarse targets (targets_follow_rotations): placed before every global step.
+      if (request.targets_follow_rotations && constraints_.targets_follow_rotations()) {
         PlaceConstrainedVertices(constraints_, site, &state.rotations, state.positions);
       }
       system_->SetFixedPositions(state.positions);
@@ -220,12 +220,12 @@ TEST_CASE("guide: a level solver registered by name runs on every level", "[opti
   const OptimizeResult sweeps = Run(registries,
                                     "[optimizer]\ntype = \"hierarchical\"\ninner = \"sweeps\"\n"
                                     "sweeps = 8\ntolerance = 1e-10\nmax_iterations = 3000\n"
-                                    "update_constraints = false\n" +
+                                    "targets_follow_rotations = false\n" +
                                         hierarchy,
                                     tube.problem, &trace);
   const OptimizeResult exact = Run(registries,
                                    "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-10\n"
-                                   "max_iterations = 3000\nupdate_constraints = false\n" +
+                                   "max_iterations = 3000\ntargets_follow_rotations = false\n" +
                                        hierarchy,
                                    tube.problem);
   REQUIRE(sweeps.levels.size() >= 3);

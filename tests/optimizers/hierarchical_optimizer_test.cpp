@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: MIT
+#include "solvers/optimizers/hierarchical_optimizer.h"
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
@@ -88,12 +90,13 @@ TEST_CASE(
   LongBentTube tube;
   for (const char* upsampler : {"rotations", "positions", "smoothed_rotations"}) {
     DYNAMIC_SECTION("upsampler " << upsampler) {
-      // Fixed coarse targets (update_constraints = false) make each level a plain local/global
-      // run, which must be monotone.
-      TestSetup setup(fmt::format(
-          "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
-          "[hierarchy]\nmin_vertices = 100\n[upsampler]\ntype = \"{}\"\n",
-          upsampler));
+      // Fixed coarse targets (targets_follow_rotations = false) make each level a plain
+      // local/global run, which must be monotone.
+      TestSetup setup(
+          fmt::format("[optimizer]\ntype = \"hierarchical\"\ntolerance = "
+                      "1e-7\ntargets_follow_rotations = false\n"
+                      "[hierarchy]\nmin_vertices = 100\n[upsampler]\ntype = \"{}\"\n",
+                      upsampler));
       EnergyTrace energies;
       const OptimizeResult result = OptimizeWithTrace(setup, tube.problem, energies);
       REQUIRE(result.levels.size() >= 3);
@@ -167,4 +170,14 @@ TEST_CASE("hierarchical options are validated", "[optimizers]") {
       Catch::Contains("level_step"));
   CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevels = 2\n").MakeOptimizer(),
                     Catch::Contains("level_step") && Catch::Contains("levels"));
+  // The option's former name says what it is called now, and where it was written.
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nupdate_constraints = false\n")
+                        .MakeOptimizer(),
+                    Catch::Contains("test config:3:") &&
+                        Catch::Contains("'optimizer.update_constraints'") &&
+                        Catch::Contains("'targets_follow_rotations'"));
+  const TestSetup fixed_targets("[optimizer]\ntargets_follow_rotations = false\n");
+  CHECK_FALSE(HierarchicalOptimizer::Options::FromConfig(fixed_targets.config.Child("optimizer"),
+                                                         fixed_targets.registries.level_solvers)
+                  .targets_follow_rotations);
 }

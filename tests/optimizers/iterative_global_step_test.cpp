@@ -62,7 +62,8 @@ TEST_CASE("hierarchical ARAP with each solver: the energy decreases on every lev
       // Fixed coarse targets make each level a plain local/global run, which must be monotone.
       TestSetup setup(fmt::format(
           "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nmax_iterations = 60\n"
-          "update_constraints = false\n[hierarchy]\nmin_vertices = 100\n[solver]\ntype = \"{}\"\n",
+          "targets_follow_rotations = false\n[hierarchy]\nmin_vertices = 100\n[solver]\ntype = "
+          "\"{}\"\n",
           solver));
       EnergyTrace energies;
       const OptimizeResult result = OptimizeWithTrace(setup, tube.problem, energies);

@@ -17,7 +17,7 @@ std::string Config(const char* optimizer, const char* energy, int newton, int ma
   // Coarse targets that follow the rotations switch Newton steps off while they move; fixed
   // ones keep every level a plain minimization.
   const std::string fixed_targets =
-      std::string(optimizer) == "hierarchical" ? "update_constraints = false\n" : "";
+      std::string(optimizer) == "hierarchical" ? "targets_follow_rotations = false\n" : "";
   return fmt::format(
       "[optimizer]\ntype = \"{}\"\ntolerance = 1e-12\nmax_iterations = {}\n"
       "newton = {}\nnewton_hessian = \"{}\"\n{}[energy]\ntype = \"{}\"\n",

@@ -73,7 +73,7 @@ TEST_CASE("classic and hierarchical: tetrahedral and planar meshes with every so
           // Fixed coarse targets make each level a plain local/global descent.
           const TestSetup setup(RunConfig(
               optimizer, solver,
-              std::string(optimizer) == "hierarchical" ? "update_constraints = false" : ""));
+              std::string(optimizer) == "hierarchical" ? "targets_follow_rotations = false" : ""));
           std::vector<IterationSummary> trace;
           Context context;
           context.iteration_callback = [&](const IterationSummary& s) {

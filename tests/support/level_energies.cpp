@@ -17,7 +17,7 @@ OptimizeResult LevelEnergies::RunHierarchicalWithFixedTargets(const DeformationP
                                                               int min_vertices,
                                                               const std::string& tables) {
   const TestSetup setup(fmt::format(
-      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\nupdate_constraints = false\n"
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-7\ntargets_follow_rotations = false\n"
       "[hierarchy]\nmin_vertices = {}\n{}",
       min_vertices, tables));
   Context context;
