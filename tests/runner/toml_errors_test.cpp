@@ -66,7 +66,7 @@ TEST_CASE("TOML readers: an unknown key is named where it is written, with the v
   const Readers readers;
   CHECK(readers.Scenario("mesh = \"x.obj\"\nrefin = 2\n") ==
         "scene.toml:2:1: unknown key 'refin' in the top level; valid keys: mesh, refine, "
-        "initial, planar, handle, units, selection, deformation");
+        "initial, planar, handle, stiffness, units, selection, deformation");
   CHECK(readers.Experiment(kScenarios + "[run]\nthread = 2\n") ==
         "sweep.toml:4:1: unknown key 'thread' in [run]; valid keys: threads, save_mesh, timeout");
   // Inside a handle the handle is named too.
