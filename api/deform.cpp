@@ -51,7 +51,7 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   problem.mesh = &scenario.mesh;
   problem.constraints = scenario.MergedConstraints();
   problem.initial = scenario.initial;
-  problem.stiffness = scenario.ElementStiffness();
+  problem.stiffness = options.stiffness.empty() ? scenario.ElementStiffness() : options.stiffness;
   Stopwatch check_clock;
   context.ReportPhase("checking the mesh");
   // Built inside the run's arena so the checks' parallel sorts keep to --threads.

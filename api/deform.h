@@ -36,6 +36,9 @@ struct DeformOptions {
   /// its Jacobi scaling; Spectra, see solvers/spectral_bounds.h). The matrices are copied during
   /// the run and analysed after it, so the run's timings do not include the analysis.
   bool diagnostics = false;
+  /// Per-element stiffness factors of the scenario's mesh (framework/stiffness.h), e.g. from
+  /// arrays; empty: the scenario's `[[stiffness]]` regions (Scenario::ElementStiffness).
+  std::vector<double> stiffness;
 };
 
 /// Everything a `harap deform` run produced.

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <chrono>
 #include <climits>
+#include <cmath>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -29,6 +30,7 @@
 #include "api/library.h"
 #include "api/session.h"
 #include "framework/error.h"
+#include "framework/stiffness.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_io.h"
 #include "io/mesh_writers.h"
@@ -109,6 +111,43 @@ Positions ToPositions(py::handle object, const std::string& name) {
     for (int d = 0; d < 3; ++d) positions(static_cast<Index>(i), d) = view(i, d);
   }
   return positions;
+}
+
+// Stiffness factors: a 1-D array with one factor per element of `mesh`, or one per vertex
+// (converted: each element the mean of its vertices'; framework/stiffness.h). None: empty.
+std::vector<double> ToStiffness(py::handle object, const Mesh& mesh) {
+  if (object.is_none()) return {};
+  const py::array array = AsArray(object, "stiffness");
+  const char kind = array.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    throw InputError(
+        fmt::format("stiffness must hold real numbers, got dtype {}", DtypeText(array)));
+  }
+  const bool per_element = array.ndim() == 1 && array.shape(0) == mesh.num_elements();
+  const bool per_vertex = array.ndim() == 1 && array.shape(0) == mesh.num_vertices();
+  if (!per_element && !per_vertex) {
+    throw InputError(
+        fmt::format("stiffness must be a 1-D array with one factor per element ({}) "
+                    "or per vertex ({}), got shape {}",
+                    mesh.num_elements(), mesh.num_vertices(), ShapeText(array)));
+  }
+  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!values) throw InputError("stiffness: cannot convert to float64");
+  const auto view = values.unchecked<1>();
+  std::vector<double> factors(static_cast<size_t>(view.shape(0)));
+  for (py::ssize_t k = 0; k < view.shape(0); ++k) factors[static_cast<size_t>(k)] = view(k);
+  if (per_element) {
+    ValidateStiffness(factors, mesh, "stiffness");
+    return factors;
+  }
+  for (size_t v = 0; v < factors.size(); ++v) {
+    if (!std::isfinite(factors[v]) || factors[v] <= 0.0) {
+      throw InputError(
+          fmt::format("stiffness: the factor of vertex {} is {}; factors must be finite and > 0", v,
+                      factors[v]));
+    }
+  }
+  return ElementStiffness(mesh, factors);
 }
 
 // An integer array (any integer dtype and layout) as int64.
@@ -328,7 +367,7 @@ class WatchedSolve {
 // harap._harap.deform: (positions, report JSON text, stopped by the callback).
 py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targets,
                  const Settings& settings, py::handle initial, std::optional<bool> planar,
-                 py::object callback, int threads, bool trace) {
+                 py::object callback, int threads, bool trace, py::handle stiffness) {
   CheckThreads(threads);
   CheckCallback(callback);
   const ConfigNode config = ConfigFromSettings(settings);
@@ -342,6 +381,7 @@ py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targ
   WatchedSolve solve(std::move(callback));
   DeformOptions options;
   options.threads = threads;
+  options.stiffness = ToStiffness(stiffness, scenario.mesh);
   options.progress = [&](const IterationSummary& summary) { return solve.OnIteration(summary); };
   DeformOutcome outcome;
   solve.Run([&] { outcome = RunDeform(BuiltinRegistries(), scenario, config, options); });
@@ -821,7 +861,7 @@ PYBIND11_MODULE(_harap, m) {
 
   m.def("deform", &Deform, py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
         py::arg("settings"), py::arg("initial"), py::arg("planar"), py::arg("callback"),
-        py::arg("threads"), py::arg("trace"));
+        py::arg("threads"), py::arg("trace"), py::arg("stiffness"));
   m.def("read_mesh", &ReadMeshArrays, py::arg("path"));
   m.def("write_mesh", &WriteMeshArrays, py::arg("path"), py::arg("V"), py::arg("F"));
   m.def("load_scenario", &LoadScenarioArrays, py::arg("path"));

@@ -126,7 +126,7 @@ class DeformResult:
 
 def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, solver=None,
            hierarchy=None, upsampler=None, options=None, tolerance=None, max_iterations=None,
-           initial=None, planar=None, callback=None, threads=0, trace=True):
+           initial=None, planar=None, callback=None, threads=0, trace=True, stiffness=None):
     """Deforms the mesh (V, F) so that vertices `handles` reach `targets`, minimizing an ARAP
     energy, as `harap deform` does for a scenario file.
 
@@ -145,13 +145,16 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
     the solve after that iteration, an exception stops it and propagates. Ctrl-C
     (KeyboardInterrupt) stops the solve within one iteration.
     threads: worker threads (0: all cores). trace: include the per-iteration trace in the report.
+    stiffness: None, or (m,) factors > 0 multiplying each element's energy terms (a stiff region
+    stays closer to rigid; docs/energies.md, "Stiffness"), or (n,) per-vertex factors (each
+    element takes the mean of its vertices'); an array of length m is read per element.
 
     Returns a DeformResult (positions, report, stopped).
     """
     settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
                              max_iterations)
     positions, report, stopped = _harap.deform(V, F, handles, targets, settings, initial, planar,
-                                               callback, int(threads), bool(trace))
+                                               callback, int(threads), bool(trace), stiffness)
     return DeformResult(positions, _json.loads(report), stopped)
 
 

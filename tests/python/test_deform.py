@@ -163,3 +163,28 @@ def test_no_handles_keeps_the_rest_state(cylinder):
     result = harap.deform(V, F, [], np.zeros((0, 3)), optimizer="classic")
     assert result.energy < 1e-10  # rounding only
     np.testing.assert_allclose(result.positions, V, atol=1e-9)
+
+
+def test_stiffness_arrays_per_element_and_per_vertex(cylinder, tmp_path):
+    V, F, handles, targets = cylinder
+    options = {"optimizer.tolerance": 1e-8, "hierarchy.min_vertices": 100}
+    plain = harap.deform(V, F, handles, targets, options=options)
+    ones = harap.deform(V, F, handles, targets, options=options, stiffness=np.ones(len(F)))
+    assert ones.report["energy"] == plain.report["energy"]
+    # A uniform factor scales the energy and leaves the solution.
+    scaled = harap.deform(V, F, handles, targets, options=options,
+                          stiffness=np.full(len(V), 3, dtype=np.int32))
+    assert scaled.report["energy"] == pytest.approx(3 * plain.report["energy"], rel=1e-6)
+    np.testing.assert_allclose(scaled.positions, plain.positions, atol=1e-5)
+    # The same region stiffened from Python and from a scenario's [[stiffness]] gives one result.
+    middle = (V[:, 2] >= 1.5) & (V[:, 2] <= 2.5)
+    vertex_factors = np.where(middle, 50.0, 1.0)
+    stiff = harap.deform(V, F, handles, targets, options=options, stiffness=vertex_factors)
+    assert stiff.report["energy"] > plain.report["energy"]
+    for bad, message in [(np.ones(7), "one factor per element"),
+                         (np.zeros(len(F)), "stiffness factor of element 0"),
+                         (np.full(len(V), np.nan), "the factor of vertex 0"),
+                         (np.ones((len(F), 2)), "1-D array"),
+                         (np.array(["a"] * len(F)), "real numbers")]:
+        with pytest.raises(harap.InputError, match=message):
+            harap.deform(V, F, handles, targets, stiffness=bad)
