@@ -86,35 +86,37 @@ class ScenarioTextReader {
       description.planar = node->as_boolean()->get();
       description.planar_where = toml_.Where(*node);
     }
-    if (const toml::node* node = root.get("handle")) {
-      const toml::array* handles = node->as_array();
-      if (!handles) toml_.Fail(*node, "'handle' must be an array of tables ([[handle]])");
-      int number = 0;
-      for (const toml::node& entry : *handles) {
-        ++number;
-        const toml::table* table = entry.as_table();
-        if (!table) toml_.In(fmt::format("handle {}", number)).Fail(entry, "must be a table");
-        description.handles.push_back(ParseHandle(*table, number, default_units));
-        if (description.handles.back().target == TargetKind::kInitial &&
-            !description.mesh.initial) {
-          toml_.In(description.handles.back().label)
-              .Fail(*table->get("target"),
-                    "target = \"initial\" needs a top-level initial = \"file\"");
-        }
+    ForEachTable(root, "handle", [&](const toml::table& table, int number) {
+      description.handles.push_back(ParseHandle(table, number, default_units));
+      if (description.handles.back().target == TargetKind::kInitial && !description.mesh.initial) {
+        toml_.In(description.handles.back().label)
+            .Fail(*table.get("target"),
+                  "target = \"initial\" needs a top-level initial = \"file\"");
       }
-    }
-    if (const toml::node* node = root.get("stiffness")) {
-      const toml::array* regions = node->as_array();
-      if (!regions) toml_.Fail(*node, "'stiffness' must be an array of tables ([[stiffness]])");
-      int number = 0;
-      for (const toml::node& entry : *regions) {
-        ++number;
-        const toml::table* table = entry.as_table();
-        if (!table) toml_.In(fmt::format("stiffness {}", number)).Fail(entry, "must be a table");
-        description.stiffness.push_back(ParseStiffness(*table, number, default_units));
-      }
-    }
+    });
+    ForEachTable(root, "stiffness", [&](const toml::table& table, int number) {
+      description.stiffness.push_back(ParseStiffness(table, number, default_units));
+    });
     return description;
+  }
+
+  // Calls parse(table, number) for each table of the array of tables `key` ([[key]]), numbered
+  // from 1; anything else under `key` is an error naming it.
+  template <class Parse>
+  void ForEachTable(const toml::table& root, std::string_view key, Parse&& parse) const {
+    const toml::node* node = root.get(key);
+    if (!node) return;
+    const toml::array* entries = node->as_array();
+    if (!entries) {
+      toml_.Fail(*node, fmt::format("'{}' must be an array of tables ([[{}]])", key, key));
+    }
+    int number = 0;
+    for (const toml::node& entry : *entries) {
+      ++number;
+      const toml::table* table = entry.as_table();
+      if (!table) toml_.In(fmt::format("{} {}", key, number)).Fail(entry, "must be a table");
+      parse(*table, number);
+    }
   }
 
   // A [[stiffness]] region: name, a selection as a handle's (select, units) and factor > 0.
