@@ -105,11 +105,12 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
     const auto& optimizer = run.optimizer;
     const RegistryComponentFactory& factory = run.factory;
     outcome.optimizer = run.optimizer_name;
+    // The mesh and its stiffness are the same for every frame; only the targets move.
+    DeformationProblem problem;
+    problem.mesh = &scenario.mesh;
+    problem.stiffness = scenario.ElementStiffness();
     for (int frame = 1; frame <= options.frames; ++frame) {
-      DeformationProblem problem;
-      problem.mesh = &scenario.mesh;
       problem.constraints = FrameConstraints(scenario, static_cast<double>(frame) / options.frames);
-      problem.stiffness = scenario.ElementStiffness();
       Context context = Context::WithThreads(options.threads);
       if (options.progress) context.iteration_callback = options.progress;
       Stopwatch clock;

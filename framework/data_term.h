@@ -56,7 +56,6 @@ class EnergyWithDataTerm final : public Energy {
 
   void Precompute(const Mesh& rest, const Context& context) override;
   void SetInputMesh(const Mesh& input, const Context& context) override;
-  bool takes_stiffness() const override { return energy_->takes_stiffness(); }
   void SetStiffness(std::vector<double> element_stiffness) override {
     energy_->SetStiffness(std::move(element_stiffness));
   }

@@ -69,16 +69,11 @@ class Energy {
   /// The weights of the last Precompute() (default: none to report).
   virtual EnergyWeights weights() const { return {}; }
 
-  /// Whether SetStiffness() is supported (answered from the options alone, before Precompute():
-  /// a run with stiffness checks it before any work).
-  virtual bool takes_stiffness() const { return false; }
   /// Stiffness for the next Precompute(): one factor > 0 per element of the mesh it will be
   /// precomputed on, multiplying that element's terms (framework/stiffness.h; docs/energies.md,
   /// "Stiffness"). Empty: 1 everywhere, the energy as defined. The default accepts only empty.
   virtual void SetStiffness(std::vector<double> element_stiffness) {
-    if (!element_stiffness.empty()) {
-      throw InputError("this energy takes no stiffness (takes_stiffness() is false)");
-    }
+    if (!element_stiffness.empty()) throw InputError("this energy takes no stiffness");
   }
 
   virtual RotationSite rotation_site() const = 0;

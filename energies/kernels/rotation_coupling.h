@@ -141,7 +141,6 @@ class CoupledQuadraticEnergy : public Energy {
   RotationSite rotation_site() const override { return site_; }
   /// Every element's weights are multiplied by its factor before A, the coupling and the
   /// constant are assembled, so the energy keeps the coupled form.
-  bool takes_stiffness() const override { return true; }
   void SetStiffness(std::vector<double> element_stiffness) override {
     stiffness_ = std::move(element_stiffness);
   }

@@ -94,11 +94,12 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
       cascade_.set_solver(l, options_.optimizer.level_solver->CreateAnother());
       // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh);
       // every level keeps one system for all handle sets (handle edits).
-      const std::vector<double> level_stiffness =
-          l > 0 ? LevelStiffness(cascade_.hierarchy(), l, stiffness) : stiffness;
-      cascade_.solver(l).Precompute(LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
-                                               /*handle_edits=*/true, &level_stiffness},
-                                    factory_, context_);
+      const std::vector<double> coarse_stiffness =
+          l > 0 ? LevelStiffness(cascade_.hierarchy(), l, stiffness) : std::vector<double>{};
+      cascade_.solver(l).Precompute(
+          LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
+                     /*handle_edits=*/true, l > 0 ? &coarse_stiffness : &stiffness},
+          factory_, context_);
       setup_timings_.precompute += cascade_.solver(l).precompute_seconds();
     }
     cascade_.TakeRotationSite(solved_levels_.front());
