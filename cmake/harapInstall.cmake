@@ -18,7 +18,7 @@ set_target_properties(harap_library PROPERTIES EXPORT_NAME harap)
 add_library(harap::harap ALIAS harap_library)
 
 set(harap_exported_libraries harap_framework harap_io harap_energies harap_solvers
-    harap_optimizers harap_hierarchies harap_upsamplers harap_api)
+    harap_optimizers harap_hierarchies harap_upsamplers harap_spatial harap_api)
 foreach(library ${harap_exported_libraries})
   string(REPLACE "harap_" "" export_name ${library})
   set_target_properties(${library} PROPERTIES EXPORT_NAME ${export_name})
@@ -32,7 +32,7 @@ install(TARGETS ${harap_exported_libraries} harap_library harap_warnings harap_f
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/harap)
 install(TARGETS harap RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
-foreach(module framework io energies solvers hierarchies api)
+foreach(module framework io energies solvers hierarchies spatial api)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${module} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/harap
           FILES_MATCHING PATTERN "*.h"
           # Internal: exposes toml++, which the installed interface does not.

@@ -104,6 +104,19 @@ std::string DecompressXz(std::string_view compressed, const std::string& what) {
   return out;
 }
 
+FileFormat DetectFormat(const std::filesystem::path& file) {
+  FileFormat format;
+  std::filesystem::path name = file.filename();
+  if (io_internal::Lower(name.extension().string()) == ".xz") {
+    format.xz = true;
+    name = name.stem();
+  }
+  std::string extension = io_internal::Lower(name.extension().string());
+  if (!extension.empty()) extension.erase(0, 1);
+  format.extension = extension;
+  return format;
+}
+
 std::string ReadFileMaybeXz(const std::filesystem::path& file) {
   std::string data = ReadWholeFile(file);
   if (io_internal::Lower(file.extension().string()) == ".xz") {

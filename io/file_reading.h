@@ -15,6 +15,14 @@
 
 namespace harap {
 
+/// A file name's format: its extension in lower case without the dot ("obj", "ply"; "" if
+/// none), looking through a trailing ".xz" (`xz` says whether there was one).
+struct FileFormat {
+  std::string extension;
+  bool xz = false;
+};
+FileFormat DetectFormat(const std::filesystem::path& file);
+
 /// Reads the whole file, decompressing it in memory when the name ends in `.xz`
 /// (case-insensitive). Throws InputError naming the file when it is missing, a directory, a
 /// device or socket, unreadable, or not valid xz data.

@@ -27,25 +27,6 @@ constexpr std::string_view kSupportedFormats =
     ".obj, .ply, .off, .stl (surfaces), .node/.ele (TetGen), .mesh (MEDIT) (each optionally "
     "compressed as .xz, e.g. .obj.xz)";
 
-// The format extension ("obj", "ply", ...) of a file name, looking through a trailing ".xz".
-struct FileFormat {
-  std::string extension;  // lower case, without dot; "" if none
-  bool xz = false;
-};
-
-FileFormat DetectFormat(const std::filesystem::path& file) {
-  FileFormat format;
-  std::filesystem::path name = file.filename();
-  if (Lower(name.extension().string()) == ".xz") {
-    format.xz = true;
-    name = name.stem();
-  }
-  std::string extension = Lower(name.extension().string());
-  if (!extension.empty()) extension.erase(0, 1);
-  format.extension = extension;
-  return format;
-}
-
 bool IsTetrahedralFormat(const FileFormat& format) {
   return format.extension == "node" || format.extension == "ele" || format.extension == "mesh";
 }

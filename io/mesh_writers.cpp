@@ -89,22 +89,33 @@ void PutLittleEndian(std::string& out, T value) {
 }
 
 // Binary little-endian PLY, double coordinates, int indices (see WritePly).
-std::string PlyBinary(const Positions& vertices, const Elements& triangles) {
+// Binary PLY; `values` become per-vertex double properties after x y z.
+std::string PlyBinary(const Positions& vertices, const Elements& triangles,
+                      const std::vector<VertexValues>& values) {
+  std::string properties;
+  for (const VertexValues& column : values) {
+    properties += fmt::format("property double {}\n", column.name);
+  }
   std::string out = fmt::format(
       "ply\nformat binary_little_endian 1.0\ncomment written by harap\n"
-      "element vertex {}\nproperty double x\nproperty double y\nproperty double z\n"
+      "element vertex {}\nproperty double x\nproperty double y\nproperty double z\n{}"
       "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
-      vertices.rows(), triangles.rows());
-  out.reserve(out.size() + static_cast<size_t>(vertices.rows()) * 24 +
+      vertices.rows(), properties, triangles.rows());
+  out.reserve(out.size() + static_cast<size_t>(vertices.rows()) * 8 * (3 + values.size()) +
               static_cast<size_t>(triangles.rows()) * 13);
   for (Index v = 0; v < vertices.rows(); ++v) {
     for (int d = 0; d < 3; ++d) PutLittleEndian(out, static_cast<double>(vertices(v, d)));
+    for (const VertexValues& column : values) PutLittleEndian(out, column.values[v]);
   }
   for (Index f = 0; f < triangles.rows(); ++f) {
     PutLittleEndian(out, static_cast<uint8_t>(3));
     for (int a = 0; a < 3; ++a) PutLittleEndian(out, static_cast<int32_t>(triangles(f, a)));
   }
   return out;
+}
+
+std::string PlyBinary(const Positions& vertices, const Elements& triangles) {
+  return PlyBinary(vertices, triangles, {});
 }
 
 std::string StlBinary(const Positions& vertices, const Elements& triangles) {
@@ -191,9 +202,18 @@ Elements SurfaceTriangles(const Elements& elements) {
 }  // namespace
 
 void WritePly(const std::filesystem::path& file, const Positions& vertices,
-              const Elements& elements) {
+              const Elements& elements, const std::vector<VertexValues>& values) {
   CheckElements(vertices, elements, "WritePly");
-  WriteWholeFile(file, PlyBinary(vertices, SurfaceTriangles(elements)));
+  for (const VertexValues& column : values) {
+    const bool name_ok = !column.name.empty() && column.name != "x" && column.name != "y" &&
+                         column.name != "z" &&
+                         column.name.find_first_of(" \t\r\n") == std::string::npos;
+    if (!name_ok || static_cast<Index>(column.values.size()) != vertices.rows()) {
+      throw InternalError(fmt::format("WritePly: vertex values '{}' ({} of them) for {} vertices",
+                                      column.name, column.values.size(), vertices.rows()));
+    }
+  }
+  WriteWholeFile(file, PlyBinary(vertices, SurfaceTriangles(elements), values));
 }
 
 std::string MeshOutputFormats(ElementKind kind) {

@@ -10,13 +10,20 @@
 
 namespace harap {
 
+/// One value per vertex under a name: a PLY vertex property (e.g. `distance`).
+struct VertexValues {
+  std::string name;
+  std::vector<double> values;
+};
+
 /// Writes binary little-endian PLY with double-precision coordinates (`property double x`) and
 /// int triangle indices, in the given vertex order, so results can be compared exactly.
 /// Tetrahedra (4 columns) are written as their boundary triangles, oriented outwards; every
-/// vertex is still written, so the file lines up with the input vertex by vertex. Throws Error
-/// when the file cannot be written.
+/// vertex is still written, so the file lines up with the input vertex by vertex. `values` become
+/// `property double NAME` of the vertices, after x y z (names without spaces, one value per
+/// vertex). Throws Error when the file cannot be written.
 void WritePly(const std::filesystem::path& file, const Positions& vertices,
-              const Elements& elements);
+              const Elements& elements, const std::vector<VertexValues>& values = {});
 
 /// The extensions WriteMesh accepts for meshes of `kind`, with what each writes, for messages:
 /// triangle meshes .ply .obj .off .stl; tetrahedral meshes the same four (their boundary

@@ -313,10 +313,15 @@ struct PlyLayout {
   const PlyElement* vertex_element = nullptr;
   const PlyElement* face_element = nullptr;
   int coordinate_slot[3] = {-1, -1, -1};
+  int normal_slot[3] = {-1, -1, -1};  // nx ny nz, where all three are there
   int index_slot = -1;
+  bool has_normals() const {
+    return normal_slot[0] >= 0 && normal_slot[1] >= 0 && normal_slot[2] >= 0;
+  }
 };
 
-PlyLayout LocatePlyData(const PlyHeader& header, const std::string& what) {
+// `faces`: whether a face element is required (a mesh) or ignored (a point cloud).
+PlyLayout LocatePlyData(const PlyHeader& header, const std::string& what, bool faces = true) {
   PlyLayout layout;
   for (const PlyElement& element : header.elements) {
     // A second 'vertex' or 'face' element would leave the slots below pointing into the first
@@ -330,9 +335,10 @@ PlyLayout LocatePlyData(const PlyHeader& header, const std::string& what) {
       for (size_t p = 0; p < element.properties.size(); ++p) {
         const PlyProperty& property = element.properties[p];
         for (int d = 0; d < 3; ++d) {
-          if (property.name == std::string(1, static_cast<char>('x' + d)) && !property.is_list) {
-            layout.coordinate_slot[d] = static_cast<int>(p);
-          }
+          const std::string axis(1, static_cast<char>('x' + d));
+          if (property.is_list) continue;
+          if (property.name == axis) layout.coordinate_slot[d] = static_cast<int>(p);
+          if (property.name == "n" + axis) layout.normal_slot[d] = static_cast<int>(p);
         }
       }
     } else if (element.name == "face") {
@@ -352,6 +358,10 @@ PlyLayout LocatePlyData(const PlyHeader& header, const std::string& what) {
       Fail(what, fmt::format("PLY 'vertex' element has no scalar property '{}'",
                              static_cast<char>('x' + d)));
     }
+  }
+  if (!faces) {
+    layout.face_element = nullptr;  // skipped like any other element
+    return layout;
   }
   if (!layout.face_element || layout.face_element->count == 0) {
     Fail(what, fmt::format("no faces: the PLY file declares {} vertices but no faces",
@@ -387,8 +397,8 @@ void CheckPlyCounts(const PlyHeader& header, std::string_view body, const std::s
 // Reads item `item` of `element` into `raw`: a vertex's coordinates, a face's polygon; every
 // other property is skipped. `polygon` is a workspace.
 void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElement& element,
-                 int64_t item, RawMesh& raw, std::vector<int64_t>& polygon,
-                 const std::string& what) {
+                 int64_t item, RawMesh& raw, std::vector<int64_t>& polygon, const std::string& what,
+                 std::vector<double>* normals = nullptr) {
   const bool is_vertex = &element == layout.vertex_element;
   const bool is_face = &element == layout.face_element;
   const auto truncated = [&] {
@@ -397,13 +407,15 @@ void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElemen
                            element.name, item, element.count, reader.Where()));
   };
   const int64_t item_location = reader.Location();
-  double xyz[3] = {0.0, 0.0, 0.0};
+  double xyz[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // x y z nx ny nz
+  const bool read_normals = normals != nullptr && layout.has_normals();
   for (size_t p = 0; p < element.properties.size(); ++p) {
     const PlyProperty& property = element.properties[p];
     if (!property.is_list) {
       int slot = -1;
       for (int d = 0; d < 3; ++d) {
         slot = layout.coordinate_slot[d] == static_cast<int>(p) ? d : slot;
+        if (read_normals && layout.normal_slot[d] == static_cast<int>(p)) slot = 3 + d;
       }
       const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
                                              : reader.Skip(property.type);
@@ -441,6 +453,13 @@ void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElemen
                              raw.location_kind, item_location, item, xyz[0], xyz[1], xyz[2]));
     }
     raw.xyz.insert(raw.xyz.end(), xyz, xyz + 3);
+    if (read_normals) {
+      if (!std::isfinite(xyz[3]) || !std::isfinite(xyz[4]) || !std::isfinite(xyz[5])) {
+        Fail(what, fmt::format("{} {}: non-finite normal: vertex {} (0-based) has ({}, {}, {})",
+                               raw.location_kind, item_location, item, xyz[3], xyz[4], xyz[5]));
+      }
+      normals->insert(normals->end(), xyz + 3, xyz + 6);
+    }
   }
 }
 
@@ -470,6 +489,30 @@ Mesh ParsePly(std::string_view data, const std::string& what) {
     if (&element == layout.face_element && vertices_done) break;
   }
   return BuildMesh(raw, what);
+}
+
+PointCloud ParsePlyPoints(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const PlyLayout layout = LocatePlyData(header, what, /*faces=*/false);
+  CheckPlyCounts(header, data.substr(header.data_offset), what);
+  if (layout.vertex_element->count == 0) Fail(what, "the PLY file declares no vertices");
+  RawMesh raw;
+  std::vector<double> normals;
+  raw.xyz.reserve(static_cast<size_t>(layout.vertex_element->count) * 3);
+  std::vector<int64_t> polygon;
+  PlyBodyReader reader(data, header, what);
+  raw.location_kind = reader.location_kind();
+  for (const PlyElement& element : header.elements) {
+    if (element.properties.empty()) continue;
+    for (int64_t item = 0; item < element.count; ++item) {
+      ReadPlyItem(reader, layout, element, item, raw, polygon, what, &normals);
+    }
+    if (&element == layout.vertex_element) break;  // nothing later is used
+  }
+  PointCloud cloud;
+  cloud.points = ToPositions(raw.xyz);
+  if (!normals.empty()) cloud.normals = ToPositions(normals);
+  return cloud;
 }
 
 }  // namespace harap

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "framework/mesh.h"
+#include "io/point_cloud.h"
 
 namespace harap {
 
@@ -15,5 +16,9 @@ namespace harap {
 /// polygons fan-triangulated; other elements and properties are skipped. Throws InputError
 /// naming `source` and the header line, data line or byte offset of the problem.
 Mesh ParsePly(std::string_view data, const std::string& source);
+
+/// The `vertex` element of PLY data as a point cloud: x y z and, where all three are there, the
+/// normals nx ny nz; faces and everything else are ignored. Errors as ParsePly's.
+PointCloud ParsePlyPoints(std::string_view data, const std::string& source);
 
 }  // namespace harap
