@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The `harap` command line: `harap deform SCENARIO.toml ...`, `harap list`, `harap hierarchy`,
-// `harap run CONFIG.toml` (experiment sweeps) and `harap report DIR`.
+// `harap register SOURCE TARGET`, `harap run CONFIG.toml` (experiment sweeps) and
+// `harap report DIR`.
 #include <fmt/format.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -23,6 +24,7 @@
 #include "cli/output_checks.h"
 #include "cli/piece_flags.h"
 #include "cli/progress.h"
+#include "cli/register_command.h"
 #include "cli/scenario_command.h"
 #include "cli/slurm_command.h"
 #include "cli/view_command.h"
@@ -386,6 +388,8 @@ int main(int argc, char** argv) {
   auto* report = AddReportCommand(app, report_args);
   ViewArguments view_args;
   auto* view = AddViewCommand(app, view_args);
+  RegisterCommandArguments register_args;
+  auto* register_command = AddRegisterCommand(app, register_args);
 
   try {
     app.parse(argc, argv);
@@ -405,6 +409,7 @@ int main(int argc, char** argv) {
     if (*report) return Report(report_args);
     if (*drag) return RunDragCommand(drag_args);
     if (*view) return RunViewCommand(view_args);
+    if (*register_command) return RunRegisterCommand(register_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

@@ -28,6 +28,7 @@
 #include "api/builtins.h"
 #include "api/deform.h"
 #include "api/library.h"
+#include "api/register.h"
 #include "api/session.h"
 #include "framework/error.h"
 #include "framework/stiffness.h"
@@ -388,6 +389,48 @@ py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targ
   return py::make_tuple(FromPositions(outcome.result.positions),
                         DeformReportJson(scenario, outcome, trace),
                         outcome.result.stopped_by_callback);
+}
+
+// harap._harap.register_: (positions, distance, report JSON text, stopped by the callback).
+py::tuple RegisterArrays(py::handle V, py::handle F, py::handle target_points,
+                         py::handle target_faces, py::handle target_normals,
+                         py::handle landmark_vertices, py::handle landmark_points,
+                         const Settings& settings, py::object callback, int threads,
+                         py::handle stiffness) {
+  CheckThreads(threads);
+  CheckCallback(callback);
+  const ConfigNode config = ConfigFromSettings(settings);
+  const Mesh source = ToMesh(V, F);
+  RegistrationTarget target;
+  target.name = "arrays";
+  if (!target_faces.is_none()) {
+    target.mesh = ToMesh(target_points, target_faces);
+  } else {
+    target.points = ToPositions(target_points, "target");
+    if (!target_normals.is_none()) target.normals = ToPositions(target_normals, "normals");
+  }
+  RegisterOptions options;
+  options.threads = threads;
+  options.stiffness = ToStiffness(stiffness, source);
+  if (!landmark_vertices.is_none()) {
+    options.landmarks.indices = ToIndices(landmark_vertices, "landmarks");
+    options.landmarks.targets = ToPositions(landmark_points, "landmark_targets");
+    if (options.landmarks.targets.rows() != static_cast<Index>(options.landmarks.indices.size())) {
+      throw InputError(fmt::format("{} landmarks but {} landmark_targets",
+                                   options.landmarks.indices.size(),
+                                   options.landmarks.targets.rows()));
+    }
+  }
+  WatchedSolve solve(std::move(callback));
+  options.progress = [&](const IterationSummary& summary) { return solve.OnIteration(summary); };
+  RegisterOutcome outcome;
+  solve.Run([&] { outcome = RunRegister(BuiltinRegistries(), source, target, config, options); });
+  py::array_t<double> distance(static_cast<py::ssize_t>(outcome.result.distance.size()));
+  std::copy(outcome.result.distance.begin(), outcome.result.distance.end(),
+            distance.mutable_data());
+  return py::make_tuple(FromPositions(outcome.result.run.positions), distance,
+                        RegisterReportJson("arrays", source, target, outcome),
+                        outcome.result.run.stopped_by_callback);
 }
 
 // harap._harap.Session: a ConfiguredSession (api/session.h) driven from Python. The calls
@@ -859,6 +902,10 @@ PYBIND11_MODULE(_harap, m) {
     }
   });
 
+  m.def("register_", &RegisterArrays, py::arg("V"), py::arg("F"), py::arg("target"),
+        py::arg("target_faces"), py::arg("target_normals"), py::arg("landmarks"),
+        py::arg("landmark_targets"), py::arg("settings"), py::arg("callback"), py::arg("threads"),
+        py::arg("stiffness"));
   m.def("deform", &Deform, py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
         py::arg("settings"), py::arg("initial"), py::arg("planar"), py::arg("callback"),
         py::arg("threads"), py::arg("trace"), py::arg("stiffness"));

@@ -33,7 +33,7 @@ from . import _harap
 from ._harap import ConfigError, Error, InputError, InternalError, NumericalError
 
 __all__ = [
-    "deform", "DeformResult", "Session", "read_mesh", "write_mesh", "load_scenario", "Scenario",
+    "deform", "DeformResult", "register", "RegisterResult", "Session", "read_mesh", "write_mesh", "load_scenario", "Scenario",
     "builtin_mesh", "view", "View", "hierarchy", "HierarchyLevel", "energy", "EnergyValue", "components",
     "Error", "ConfigError", "InputError", "NumericalError", "InternalError",
 ]
@@ -156,6 +156,58 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
     positions, report, stopped = _harap.deform(V, F, handles, targets, settings, initial, planar,
                                                callback, int(threads), bool(trace), stiffness)
     return DeformResult(positions, _json.loads(report), stopped)
+
+
+class RegisterResult:
+    """What harap.register returns.
+
+    positions: (n, 3) float64, the registered source vertices in the input's order.
+    distance:  (n,) float64, each vertex's distance to the target's closest point.
+    report:    a dict with the keys of `harap register --report` (docs/registration.md):
+               arap_energy, residual (rms, max), correspondences (kept, rejected by reason),
+               correspondence_updates, levels, timings, ...
+    stopped:   True if the callback returned False (the registration stopped early).
+    """
+
+    def __init__(self, positions, distance, report, stopped):
+        self.positions = positions
+        self.distance = distance
+        self.report = report
+        self.stopped = stopped
+
+    def __repr__(self):
+        r = self.report
+        return (f"RegisterResult(residual_rms={r['residual']['rms']:.3e}, "
+                f"kept={r['correspondences']['kept']}, "
+                f"updates={r['correspondence_updates']}, total={r['timings']['total']:.3f} s)")
+
+
+def register(V, F, target, *, target_faces=None, target_normals=None, landmarks=None,
+             landmark_targets=None, hierarchical=True, energy=None, solver=None, hierarchy=None,
+             upsampler=None, options=None, callback=None, threads=0, stiffness=None):
+    """Deforms the mesh (V, F) onto a target with ARAP as the regularizer (non-rigid ICP, coarse
+    to fine), as `harap register` does (docs/registration.md).
+
+    target: (p, 3) points: a point cloud, or with target_faces (q, 3) the vertices of a target
+    mesh. target_normals: (p, 3) normals of a point cloud (optional; used to reject
+    correspondences whose normals disagree).
+    landmarks: (k,) source vertex indices pulled towards landmark_targets (k, 3).
+    hierarchical: False registers the input mesh alone (the flat baseline).
+    energy, solver, hierarchy, upsampler, options: as for deform; registration options by their
+    config key, e.g. {"registration.max_distance": 0.05, "registration.stages": 4}.
+    callback(level, iteration, energy), threads, stiffness: as for deform.
+
+    Returns a RegisterResult (positions, distance, report, stopped).
+    """
+    settings = _with_types(_settings(options),
+                           optimizer="hierarchical" if hierarchical else "classic",
+                           energy=energy, solver=solver, hierarchy=hierarchy, upsampler=upsampler)
+    if (landmarks is None) != (landmark_targets is None):
+        raise ConfigError("landmarks and landmark_targets go together")
+    positions, distance, report, stopped = _harap.register_(
+        V, F, target, target_faces, target_normals, landmarks, landmark_targets, settings,
+        callback, int(threads), stiffness)
+    return RegisterResult(positions, distance, _json.loads(report), stopped)
 
 
 def _limit(name, value, *, integer=False, positive=False):

@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: MIT
+// `harap register SOURCE TARGET`: the command end to end on a generated mesh, and its refusals.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/mesh_io.h"
+#include "tests/support/run_harap.h"
+#include "tests/support/temp_folder.h"
+
+namespace harap {
+namespace {
+
+namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+using testing::RunHarap;
+using testing::TempFolder;
+
+// A capped cylinder bent by 45 degrees: the known answer the tests register to.
+constexpr const char* kBendScenario = R"(mesh = { builtin = "cylinder", vertices = 3000 }
+[[handle]]
+name = "bottom"
+select.slab = { axis = "z", from = 0.0, to = 0.05 }
+[[handle]]
+name = "top"
+select.slab = { axis = "z", from = 0.95, to = 1.0 }
+rotate = { axis = [1.0, 0.0, 0.0], degrees = 45.0 }
+translate = [0.0, 0.2, -0.1]
+)";
+
+double MeanDistance(const Positions& a, const Positions& b) {
+  return (a - b).rowwise().norm().mean();
+}
+
+// Deforms the scenario into `answer.ply` (and `rest.ply`) in `folder`.
+void MakeKnownAnswer(const TempFolder& folder) {
+  const std::string scenario = folder.Write("bend.toml", kBendScenario);
+  const auto run = RunHarap(fmt::format("deform {} --out {} --out-rest {} -q", scenario,
+                                        (folder.dir / "answer.ply").string(),
+                                        (folder.dir / "rest.ply").string()));
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+}
+
+TEST_CASE("harap register recovers a deformation from its mesh and from its points",
+          "[cli][registration]") {
+  const TempFolder folder("register");
+  MakeKnownAnswer(folder);
+  const Mesh rest = ReadMesh(folder.dir / "rest.ply");
+  const Mesh answer = ReadMesh(folder.dir / "answer.ply");
+  const double diagonal = BoundingBoxDiagonal(rest);
+  const double rest_error = MeanDistance(rest.vertices, answer.vertices);
+
+  // The answer's vertices with normals as a point cloud.
+  std::ofstream cloud(folder.dir / "answer.xyz");
+  Positions normals = Positions::Zero(answer.num_vertices(), 3);
+  for (Index f = 0; f < answer.num_elements(); ++f) {
+    const Eigen::Vector3d a = answer.vertices.row(answer.elements(f, 0));
+    const Eigen::Vector3d b = answer.vertices.row(answer.elements(f, 1));
+    const Eigen::Vector3d c = answer.vertices.row(answer.elements(f, 2));
+    for (int k = 0; k < 3; ++k) normals.row(answer.elements(f, k)) += (b - a).cross(c - a);
+  }
+  for (Index v = 0; v < answer.num_vertices(); ++v) {
+    cloud << fmt::format("{} {} {} {} {} {}\n", answer.vertices(v, 0), answer.vertices(v, 1),
+                         answer.vertices(v, 2), normals(v, 0), normals(v, 1), normals(v, 2));
+  }
+  cloud.close();
+
+  for (const char* target : {"answer.ply", "answer.xyz"}) {
+    DYNAMIC_SECTION(target) {
+      const auto run = RunHarap(fmt::format(
+          "register {} {} --out {} --report {} --threads 2", (folder.dir / "rest.ply").string(),
+          (folder.dir / target).string(), (folder.dir / "registered.ply").string(),
+          (folder.dir / "report.json").string()));
+      INFO(run.output);
+      REQUIRE(run.status == 0);
+      CHECK_THAT(run.output, Contains("correspondence updates") && Contains("residual RMS"));
+      const Mesh registered = ReadMesh(folder.dir / "registered.ply");
+      REQUIRE(registered.num_vertices() == rest.num_vertices());
+      const double error = MeanDistance(registered.vertices, answer.vertices);
+      INFO("rest error " << rest_error / diagonal << ", registered " << error / diagonal);
+      // A cylinder may twist about its axis and stay on the target: the vertices are not pinned
+      // down as on a shape with features (the shared meshes, docs/results.md), so the bound is on
+      // the error's drop.
+      CHECK(error < 0.35 * rest_error);
+      std::ifstream report_file(folder.dir / "report.json");
+      const nlohmann::json report = nlohmann::json::parse(report_file);
+      CHECK(report["mode"] == "hierarchical");
+      CHECK(report["target"]["kind"] == (std::string(target) == "answer.ply" ? "mesh" : "points"));
+      CHECK(report["levels"].size() > 1);
+      CHECK(report["residual"]["rms_relative"].get<double>() < 0.005);
+      CHECK(report["correspondences"]["kept"].get<int>() > 0.9 * rest.num_vertices());
+      CHECK(report["arap_energy"].get<double>() > 0.0);
+      for (const auto& level : report["levels"]) {
+        CHECK(level["correspondence_updates"].get<int>() >= 1);
+        CHECK(level.contains("correspondence_seconds"));
+      }
+      // The PLY carries each vertex's distance to the target.
+      std::ifstream ply(folder.dir / "registered.ply", std::ios::binary);
+      std::string header((std::istreambuf_iterator<char>(ply)), {});
+      CHECK_THAT(header.substr(0, 400), Contains("property double distance"));
+    }
+  }
+}
+
+TEST_CASE("harap register refuses bad input or says what happened", "[cli][registration]") {
+  const TempFolder folder("register-bad");
+  MakeKnownAnswer(folder);
+  const std::string rest = (folder.dir / "rest.ply").string();
+  const std::string answer = (folder.dir / "answer.ply").string();
+  SECTION("an empty point cloud") {
+    const auto run = RunHarap(fmt::format("register {} {}", rest, folder.Write("empty.xyz", "")));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("empty.xyz") && Contains("no points"));
+  }
+  SECTION("a NaN point") {
+    const auto run =
+        RunHarap(fmt::format("register {} {}", rest, folder.Write("nan.xyz", "0 0 0\n1 nan 0\n")));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("nan.xyz:2") && Contains("not finite"));
+  }
+  SECTION("a landmark out of range") {
+    const std::string landmarks = folder.Write("landmarks.txt", "# vertex x y z\n99999 0 0 0\n");
+    const auto run =
+        RunHarap(fmt::format("register {} {} --landmarks {}", rest, answer, landmarks));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("landmark 1") && Contains("out of range"));
+  }
+  SECTION("a malformed landmark") {
+    const std::string landmarks = folder.Write("landmarks.txt", "3 0 0\n");
+    const auto run =
+        RunHarap(fmt::format("register {} {} --landmarks {}", rest, answer, landmarks));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("landmarks.txt:1"));
+  }
+  SECTION("an unknown option") {
+    const auto run =
+        RunHarap(fmt::format("register {} {} --set registration.stagez=3", rest, answer));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("stagez") && Contains("stages"));
+  }
+  SECTION("an optimizer registration does not run") {
+    const auto run = RunHarap(fmt::format("register {} {} --optimizer admm_pd", rest, answer));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("admm_pd") && Contains("hierarchical"));
+  }
+  SECTION("a target far away: no correspondences, the source stays, the report says so") {
+    const std::string far = folder.Write("far.xyz", "100 100 100\n101 100 100\n100 101 100\n");
+    const std::string report = (folder.dir / "far.json").string();
+    const auto run = RunHarap(fmt::format("register {} {} --report {} --out {}", rest, far, report,
+                                          (folder.dir / "far.ply").string()));
+    INFO(run.output);
+    CHECK(run.status == 0);
+    CHECK_THAT(run.output, Contains("no correspondence within registration.max_distance"));
+    std::ifstream report_file(report);
+    CHECK(nlohmann::json::parse(report_file)["status"] == "no_correspondences");
+    const Mesh out = ReadMesh(folder.dir / "far.ply");
+    CHECK((out.vertices - ReadMesh(rest).vertices).cwiseAbs().maxCoeff() < 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace harap
