@@ -14,6 +14,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 
 #include "framework/error.h"
@@ -203,7 +204,8 @@ std::vector<HandleEdit> LoadHandleEdits(const std::filesystem::path& file,
 
 Scenario ScenarioFromArrays(Mesh mesh, const std::vector<Index>& handle_vertices,
                             const Positions& targets, std::optional<Positions> initial,
-                            std::optional<bool> planar, const std::string& source) {
+                            std::optional<bool> planar, const std::string& source,
+                            const std::vector<double>& weights) {
   mesh.planar = false;
   ValidateMesh(mesh, source);
   Scenario scenario;
@@ -268,20 +270,46 @@ Scenario ScenarioFromArrays(Mesh mesh, const std::vector<Index>& handle_vertices
       }
     }
   }
+  if (!weights.empty() && weights.size() != handle_vertices.size()) {
+    throw InputError(fmt::format("{}: {} handle vertices but {} weights (one per handle vertex)",
+                                 source, handle_vertices.size(), weights.size()));
+  }
+  for (size_t k = 0; k < weights.size(); ++k) {
+    if (!(weights[k] > 0.0)) {  // NaN too
+      throw InputError(fmt::format(
+          "{}: the weight of handle vertex {} (row {}) is {}; a weight is > 0 (inf: a hard "
+          "handle)",
+          source, handle_vertices[k], k, weights[k]));
+    }
+  }
   scenario.mesh = std::move(mesh);
-  ScenarioHandle handle;
-  handle.name = "handles";
-  // ScenarioHandle keeps its vertices ascending (the selections' order).
+  // One handle per distinct weight (hard first), each with its vertices ascending (the
+  // selections' order).
+  std::vector<double> distinct =
+      weights.empty() ? std::vector<double>{Constraints::kHardWeight} : weights;
+  std::sort(distinct.begin(), distinct.end(), std::greater<>());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
   std::vector<Index> order(handle_vertices.size());
   for (size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Index>(k);
   std::sort(order.begin(), order.end(),
             [&](Index a, Index b) { return handle_vertices[a] < handle_vertices[b]; });
-  handle.targets.resize(static_cast<Index>(order.size()), 3);
-  for (size_t k = 0; k < order.size(); ++k) {
-    handle.vertices.push_back(handle_vertices[order[k]]);
-    handle.targets.row(static_cast<Index>(k)) = targets.row(order[k]);
+  for (const double weight : distinct) {
+    ScenarioHandle handle;
+    handle.weight = weight;
+    handle.name = weight == Constraints::kHardWeight
+                      ? std::string("handles")
+                      : fmt::format("soft handles (weight {})", weight);
+    std::vector<Index> rows;
+    for (const Index k : order) {
+      if (weights.empty() || weights[k] == weight) rows.push_back(k);
+    }
+    handle.targets.resize(static_cast<Index>(rows.size()), 3);
+    for (size_t i = 0; i < rows.size(); ++i) {
+      handle.vertices.push_back(handle_vertices[rows[i]]);
+      handle.targets.row(static_cast<Index>(i)) = targets.row(rows[i]);
+    }
+    if (!handle.vertices.empty()) scenario.handles.push_back(std::move(handle));
   }
-  if (!handle.vertices.empty()) scenario.handles.push_back(std::move(handle));
   scenario.initial = std::move(initial);
   DecidePlanar(scenario, planar, source);
   return scenario;

@@ -124,8 +124,12 @@ void DecidePlanar(Scenario& scenario, std::optional<bool> setting, const std::st
 /// offending row: the mesh (ValidateMesh; flat tetrahedra), handle vertices out of range or
 /// repeated, a targets or initial array of the wrong size, non-finite targets or initial
 /// positions. Tetrahedra are oriented positively as the file readers do (a note says so).
+/// `weights`: empty (every handle vertex hard) or one per handle vertex, each > 0: a finite w makes
+/// the vertex a soft handle with weight w, +inf keeps it hard (Constraints::kHardWeight); the
+/// vertices become one handle per distinct weight ("handles", "soft handles (weight w)").
 Scenario ScenarioFromArrays(Mesh mesh, const std::vector<Index>& handle_vertices,
                             const Positions& targets, std::optional<Positions> initial,
-                            std::optional<bool> planar, const std::string& source);
+                            std::optional<bool> planar, const std::string& source,
+                            const std::vector<double>& weights = {});
 
 }  // namespace harap

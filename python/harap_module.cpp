@@ -151,6 +151,23 @@ std::vector<double> ToStiffness(py::handle object, const Mesh& mesh) {
   return ElementStiffness(mesh, factors);
 }
 
+// Per-handle-vertex weights (None: every handle hard): a 1-D real array of `count` values, each
+// > 0; inf marks a hard handle (ScenarioFromArrays checks the values).
+std::vector<double> ToWeights(py::handle object, size_t count) {
+  if (object.is_none()) return {};
+  const py::array array = AsArray(object, "weights");
+  const char kind = array.dtype().kind();
+  if ((kind != 'f' && kind != 'i' && kind != 'u') || array.ndim() != 1 ||
+      static_cast<size_t>(array.shape(0)) != count) {
+    throw InputError(fmt::format(
+        "weights must be a 1-D array of real numbers, one per handle ({}), got dtype {} shape {}",
+        count, DtypeText(array), ShapeText(array)));
+  }
+  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!values) throw InputError("weights: cannot convert to float64");
+  return std::vector<double>(values.data(), values.data() + values.size());
+}
+
 // An integer array (any integer dtype and layout) as int64.
 py::array_t<long long, py::array::c_style | py::array::forcecast> ToIntegers(
     const py::array& array, const std::string& name) {
@@ -368,16 +385,17 @@ class WatchedSolve {
 // harap._harap.deform: (positions, report JSON text, stopped by the callback).
 py::tuple Deform(py::handle V, py::handle F, py::handle handles, py::handle targets,
                  const Settings& settings, py::handle initial, std::optional<bool> planar,
-                 py::object callback, int threads, bool trace, py::handle stiffness) {
+                 py::object callback, int threads, bool trace, py::handle stiffness,
+                 py::handle weights) {
   CheckThreads(threads);
   CheckCallback(callback);
   const ConfigNode config = ConfigFromSettings(settings);
   Mesh mesh = ToMesh(V, F);
   const std::vector<Index> handle_vertices = ToIndices(handles, "handles");
   const Positions handle_targets = ToPositions(targets, "targets");
-  const Scenario scenario =
-      ScenarioFromArrays(std::move(mesh), handle_vertices, handle_targets,
-                         ToOptionalPositions(initial, "initial"), planar, "arrays V, F");
+  const Scenario scenario = ScenarioFromArrays(
+      std::move(mesh), handle_vertices, handle_targets, ToOptionalPositions(initial, "initial"),
+      planar, "arrays V, F", ToWeights(weights, handle_vertices.size()));
 
   WatchedSolve solve(std::move(callback));
   DeformOptions options;
@@ -908,7 +926,7 @@ PYBIND11_MODULE(_harap, m) {
         py::arg("stiffness"));
   m.def("deform", &Deform, py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
         py::arg("settings"), py::arg("initial"), py::arg("planar"), py::arg("callback"),
-        py::arg("threads"), py::arg("trace"), py::arg("stiffness"));
+        py::arg("threads"), py::arg("trace"), py::arg("stiffness"), py::arg("weights"));
   m.def("read_mesh", &ReadMeshArrays, py::arg("path"));
   m.def("write_mesh", &WriteMeshArrays, py::arg("path"), py::arg("V"), py::arg("F"));
   m.def("load_scenario", &LoadScenarioArrays, py::arg("path"));

@@ -126,7 +126,8 @@ class DeformResult:
 
 def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, solver=None,
            hierarchy=None, upsampler=None, options=None, tolerance=None, max_iterations=None,
-           initial=None, planar=None, callback=None, threads=0, trace=True, stiffness=None):
+           initial=None, planar=None, callback=None, threads=0, trace=True, stiffness=None,
+           weights=None):
     """Deforms the mesh (V, F) so that vertices `handles` reach `targets`, minimizing an ARAP
     energy, as `harap deform` does for a scenario file.
 
@@ -148,13 +149,17 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
     stiffness: None, or (m,) factors > 0 multiplying each element's energy terms (a stiff region
     stays closer to rigid; docs/energies.md, "Stiffness"), or (n,) per-vertex factors (each
     element takes the mean of its vertices'); an array of length m is read per element.
+    weights: None (every handle pins its vertex), or (k,) weights > 0, one per handle: a finite w
+    makes that handle soft, a pull w ||u - t||^2 instead of a pin (docs/input.md, soft handles);
+    inf keeps it hard. Hard and soft handles mix.
 
     Returns a DeformResult (positions, report, stopped).
     """
     settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
                              max_iterations)
     positions, report, stopped = _harap.deform(V, F, handles, targets, settings, initial, planar,
-                                               callback, int(threads), bool(trace), stiffness)
+                                               callback, int(threads), bool(trace), stiffness,
+                                               weights)
     return DeformResult(positions, _json.loads(report), stopped)
 
 

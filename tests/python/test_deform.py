@@ -188,3 +188,27 @@ def test_stiffness_arrays_per_element_and_per_vertex(cylinder, tmp_path):
                          (np.array(["a"] * len(F)), "real numbers")]:
         with pytest.raises(harap.InputError, match=message):
             harap.deform(V, F, handles, targets, stiffness=bad)
+
+
+def test_soft_handles_by_weight():
+    """weights=: a finite weight pulls instead of pinning; a very large one is the pin."""
+    V, F = harap.builtin_mesh("cylinder", vertices=800)
+    bottom = np.flatnonzero(V[:, 2] < 0.05)
+    top = np.flatnonzero(V[:, 2] > 0.95)
+    handles = np.concatenate([bottom, top])
+    targets = np.vstack([V[bottom], V[top] + [0.3, 0.0, 0.0]])
+    options = {"optimizer.tolerance": 1e-13, "optimizer.max_iterations": 20000}
+    hard = harap.deform(V, F, handles, targets, optimizer="classic", options=options)
+    stiff = np.where(np.arange(len(handles)) < len(bottom), np.inf, 1e9)
+    near_hard = harap.deform(V, F, handles, targets, optimizer="classic", options=options,
+                             weights=stiff)
+    assert abs(near_hard.energy - hard.energy) <= 1e-6 * hard.energy
+    soft = harap.deform(V, F, handles, targets, optimizer="classic", options=options,
+                        weights=np.where(np.isinf(stiff), np.inf, 1e-2))
+    gap = np.linalg.norm(soft.positions[top] - targets[len(bottom):], axis=1).max()
+    assert gap > 1e-3  # a weak pull does not reach the targets
+    assert np.allclose(soft.positions[bottom], V[bottom])  # the hard ones do
+    with pytest.raises(harap.InputError, match="weight of handle vertex"):
+        harap.deform(V, F, handles, targets, weights=np.full(len(handles), -1.0))
+    with pytest.raises(harap.InputError, match="one per handle"):
+        harap.deform(V, F, handles, targets, weights=np.ones(3))
