@@ -26,25 +26,12 @@ RegistrationTarget ReadRegistrationTarget(const std::filesystem::path& file) {
   if (!std::filesystem::exists(file)) {
     throw InputError(fmt::format("{}: the target file does not exist", file.string()));
   }
-  if (IsPointCloudFile(file)) {
+  if (HoldsPointCloud(file)) {
     PointCloud cloud = ReadPointCloud(file);
     target.points = std::move(cloud.points);
     target.normals = std::move(cloud.normals);
-    return target;
-  }
-  try {
+  } else {
     target.mesh = ReadMesh(file);
-  } catch (const InputError& mesh_error) {
-    // A PLY file of vertices alone is a point cloud.
-    if (DetectFormat(file).extension != "ply") throw;
-    PointCloud cloud;
-    try {
-      cloud = ReadPointCloud(file);
-    } catch (const InputError&) {
-      throw mesh_error;
-    }
-    target.points = std::move(cloud.points);
-    target.normals = std::move(cloud.normals);
   }
   return target;
 }

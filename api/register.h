@@ -28,9 +28,9 @@ struct RegistrationTarget {
   Index num_points() const { return mesh ? mesh->num_vertices() : points.rows(); }
 };
 
-/// Reads a target file: point-cloud files (.xyz, .pts, .txt, and PLY files without faces) as
-/// points, every other mesh file as a mesh (its surface triangles; a tetrahedral mesh's
-/// boundary). Throws InputError naming the file.
+/// Reads a target file: point-cloud files (.xyz, .pts, .txt, and PLY files that declare no faces;
+/// HoldsPointCloud) as points, every other mesh file as a mesh (a tetrahedral one is searched on
+/// its boundary). Throws InputError naming the file.
 RegistrationTarget ReadRegistrationTarget(const std::filesystem::path& file);
 
 /// Reads landmarks: one per line, `vertex x y z` (0-based source vertex and the target point);

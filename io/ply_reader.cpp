@@ -515,4 +515,10 @@ PointCloud ParsePlyPoints(std::string_view data, const std::string& what) {
   return cloud;
 }
 
+bool PlyDeclaresFaces(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  return std::any_of(header.elements.begin(), header.elements.end(),
+                     [](const PlyElement& e) { return e.name == "face" && e.count > 0; });
+}
+
 }  // namespace harap

@@ -21,4 +21,8 @@ Mesh ParsePly(std::string_view data, const std::string& source);
 /// normals nx ny nz; faces and everything else are ignored. Errors as ParsePly's.
 PointCloud ParsePlyPoints(std::string_view data, const std::string& source);
 
+/// Whether PLY data's header declares a non-empty `face` element (a mesh rather than a point
+/// cloud). Throws InputError for a malformed header.
+bool PlyDeclaresFaces(std::string_view data, const std::string& source);
+
 }  // namespace harap

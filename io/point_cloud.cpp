@@ -22,6 +22,12 @@ bool IsPointCloudFile(const std::filesystem::path& file) {
   return extension == "xyz" || extension == "pts" || extension == "txt";
 }
 
+bool HoldsPointCloud(const std::filesystem::path& file) {
+  if (IsPointCloudFile(file)) return true;
+  if (DetectFormat(file).extension != "ply") return false;
+  return !PlyDeclaresFaces(ReadFileMaybeXz(file), file.string());
+}
+
 PointCloud ParsePointCloudText(std::string_view data, const std::string& what) {
   LineReader lines(data);
   std::string_view line;

@@ -17,6 +17,11 @@ struct PointCloud {
 /// Whether the file name says point cloud: .xyz, .pts or .txt (optionally .xz-compressed).
 bool IsPointCloudFile(const std::filesystem::path& file);
 
+/// Whether `file` holds a point cloud rather than a mesh: a point-cloud extension, or a PLY file
+/// (optionally .xz) whose header declares no faces (the file is read for that). Throws InputError
+/// for a missing file or a malformed PLY header.
+bool HoldsPointCloud(const std::filesystem::path& file);
+
 /// Reads a point cloud: text files (.xyz, .pts, .txt: one point per line, `x y z` or
 /// `x y z nx ny nz`, the first point line fixing the column count; `#` comments and blank lines
 /// skipped) or the vertices of a PLY file (normals where it has nx ny nz; faces ignored), each

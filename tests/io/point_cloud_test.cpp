@@ -48,6 +48,16 @@ TEST_CASE("point clouds are read from text and PLY files", "[io][point_cloud]") 
     CHECK(cloud.points.rows() == 2);
     CHECK(cloud.normals.rows() == 0);
     CHECK_THROWS_WITH(ReadMesh(dir.path() / "b.ply"), Catch::Contains("no faces"));
+    CHECK(HoldsPointCloud(dir.path() / "b.ply"));
+  }
+  SECTION("a PLY mesh, even with broken faces, is a mesh, not points") {
+    const std::string ply =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
+    const std::filesystem::path file = dir.Write("broken.ply", ply);
+    CHECK_FALSE(HoldsPointCloud(file));
+    CHECK_THROWS_WITH(ReadMesh(file), Catch::Contains("7"));
   }
   CHECK(IsPointCloudFile("scan.xyz"));
   CHECK(IsPointCloudFile("scan.TXT.xz"));
