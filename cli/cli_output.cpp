@@ -76,6 +76,10 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
   if (!outcome.hierarchy.empty()) pieces += fmt::format(" | hierarchy {}", outcome.hierarchy);
   if (!outcome.upsampler.empty()) pieces += fmt::format(" | upsampler {}", outcome.upsampler);
   fmt::print("pieces      {}\n", pieces);
+  for (const ScenarioStiffness& region : scenario.stiffness) {
+    fmt::print("stiffness   {}: factor {} on {} vertices ({})\n", region.name, region.factor,
+               region.vertices.size(), region.selection);
+  }
   fmt::print("iterations  {}\n", IterationsLine(outcome));
   fmt::print("energy      {:.9e}\n", r.energy);
   for (const auto& [name, value] : r.measures) fmt::print("{:<11} {:.9e}\n", name, value);

@@ -566,5 +566,27 @@ TEST_CASE("the summary's timings say when the phases overlap", "[experiments][cl
   CHECK_THAT(TimingsLine(overlapped), Contains("total 8.000 (phases overlap"));
 }
 
+TEST_CASE("harap deform names the scenario's stiffness regions in its summary",
+          "[experiments][cli][stiffness]") {
+  const fs::path dir = TempDir("stiffness");
+  const fs::path scenario = dir / "stiff.toml";
+  std::ofstream(scenario) << R"(mesh = { builtin = "cylinder", vertices = 800 }
+[[handle]]
+select.slab = { axis = "z", from = 0.0, to = 0.05 }
+[[handle]]
+select.slab = { axis = "z", from = 0.95, to = 1.0 }
+translate = [0.2, 0.0, 0.0]
+[[stiffness]]
+name = "middle"
+select.slab = { axis = "z", from = 0.4, to = 0.6 }
+factor = 10
+)";
+  const CommandResult run = RunHarap(fmt::format("deform {}", scenario.string()));
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.output, Contains("stiffness   middle: factor 10 on") && Contains("slab z"));
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace harap
