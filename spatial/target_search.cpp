@@ -247,6 +247,13 @@ ClosestPoint TargetSearch::ClosestInCloud(const Eigen::Vector3d& query) const {
 
 void TargetSearch::FindClosest(const Positions& points, std::vector<ClosestPoint>& out,
                                const Context& context) const {
+  // The trees' traversals assume finite coordinates.
+  if (!points.allFinite()) {
+    Index bad = 0;
+    while (points.row(bad).allFinite()) ++bad;
+    throw InputError(fmt::format("closest points: query point {} is not finite ({}, {}, {})", bad,
+                                 points(bad, 0), points(bad, 1), points(bad, 2)));
+  }
   out.resize(points.rows());
   context.Run([&] {
     tbb::parallel_for(tbb::blocked_range<Index>(0, points.rows(), 256),

@@ -28,6 +28,7 @@ class TargetSearch final : public ClosestPointSearch {
   static std::unique_ptr<TargetSearch> FromPoints(Positions points, Positions normals);
   ~TargetSearch() override;
 
+  /// Throws InputError naming the first query point that is not finite.
   void FindClosest(const Positions& points, std::vector<ClosestPoint>& out,
                    const Context& context) const override;
   bool has_normals() const override { return normals_.rows() > 0; }

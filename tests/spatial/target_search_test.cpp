@@ -153,6 +153,13 @@ TEST_CASE("bad targets are refused naming the problem", "[spatial]") {
     CHECK_THROWS_WITH(TargetSearch::FromMesh(TetBox(1, 1, 1)),
                       Catch::Contains("boundary triangles"));
   }
+  SECTION("a query at NaN") {
+    Positions queries = RandomPoints(5, 1.0, 3);
+    queries(2, 2) = std::nan("");
+    std::vector<ClosestPoint> found;
+    CHECK_THROWS_WITH(TargetSearch::FromMesh(Grid(2, 2))->FindClosest(queries, found, Context()),
+                      Catch::Contains("query point 2 is not finite"));
+  }
   SECTION("an infinite vertex") {
     Mesh grid = Grid(2, 2);
     grid.vertices(3, 0) = std::numeric_limits<double>::infinity();
