@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+#include <unordered_set>
 
 #include "api/component_factory.h"
 #include "api/deform.h"
@@ -41,6 +42,7 @@ Constraints ReadLandmarks(const std::filesystem::path& file) {
   if (!in) throw InputError(fmt::format("{}: cannot open the landmarks file", file.string()));
   Constraints landmarks;
   std::vector<Eigen::RowVector3d> points;
+  std::unordered_set<long long> seen;  // vertices with a landmark
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
     const size_t start = line.find_first_not_of(" \t\r");
@@ -57,11 +59,9 @@ Constraints ReadLandmarks(const std::filesystem::path& file) {
       throw InputError(fmt::format("{}:{}: the vertex must be >= 0 and the point finite, got '{}'",
                                    file.string(), number, line));
     }
-    for (Index seen : landmarks.indices) {
-      if (seen == vertex) {
-        throw InputError(
-            fmt::format("{}:{}: vertex {} has a landmark already", file.string(), number, vertex));
-      }
+    if (!seen.insert(vertex).second) {
+      throw InputError(
+          fmt::format("{}:{}: vertex {} has a landmark already", file.string(), number, vertex));
     }
     landmarks.indices.push_back(static_cast<Index>(vertex));
     points.push_back(point);

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "framework/error.h"
+#include "framework/vertex_normals.h"
 
 namespace harap {
 
@@ -125,24 +126,18 @@ std::unique_ptr<TargetSearch> TargetSearch::FromMesh(const Mesh& mesh) {
 void TargetSearch::BuildTriangleData() {
   const Index count = triangles_.rows();
   triangle_normals_.resize(count, 3);
-  normals_ = Positions::Zero(points_.rows(), 3);
+  normals_ = VertexNormals(points_, triangles_);
   // Edges as (smaller, larger) vertex pairs, to count how many triangles use each.
   std::vector<std::pair<Index, Index>> edges;
   edges.reserve(static_cast<size_t>(count) * 3);
   for (Index t = 0; t < count; ++t) {
     const Eigen::Vector3d a = points_.row(triangles_(t, 0)), b = points_.row(triangles_(t, 1)),
                           c = points_.row(triangles_(t, 2));
-    const Eigen::Vector3d area_normal = (b - a).cross(c - a);  // twice the area
-    triangle_normals_.row(t) = area_normal.normalized().transpose();
+    triangle_normals_.row(t) = (b - a).cross(c - a).normalized().transpose();
     for (int k = 0; k < 3; ++k) {
-      normals_.row(triangles_(t, k)) += area_normal.transpose();  // area-weighted vertex normals
       const Index i = triangles_(t, k), j = triangles_(t, (k + 1) % 3);
       edges.emplace_back(std::min(i, j), std::max(i, j));
     }
-  }
-  for (Index v = 0; v < normals_.rows(); ++v) {
-    const double norm = normals_.row(v).norm();
-    if (norm > 0.0) normals_.row(v) /= norm;
   }
   // An edge used by one triangle is on the boundary.
   std::sort(edges.begin(), edges.end());

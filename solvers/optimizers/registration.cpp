@@ -13,6 +13,7 @@
 
 #include "framework/error.h"
 #include "framework/stiffness.h"
+#include "framework/vertex_normals.h"
 #include "solvers/optimizers/coarse_constraints.h"
 #include "solvers/optimizers/level_cascade.h"
 
@@ -78,22 +79,6 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& node) {
       "weight of a landmark's pull, relative to the last stage's data weight", Range::Above(0.0));
   node.RejectUnknownKeys();
   return options;
-}
-
-Positions VertexNormals(const Positions& positions, const Elements& elements) {
-  Positions normals = Positions::Zero(positions.rows(), 3);
-  for (Index f = 0; f < elements.rows(); ++f) {
-    const Eigen::Vector3d a = positions.row(elements(f, 0));
-    const Eigen::Vector3d b = positions.row(elements(f, 1));
-    const Eigen::Vector3d c = positions.row(elements(f, 2));
-    const Eigen::Vector3d area_normal = (b - a).cross(c - a);  // twice the area, outwards
-    for (int k = 0; k < 3; ++k) normals.row(elements(f, k)) += area_normal.transpose();
-  }
-  for (Index v = 0; v < normals.rows(); ++v) {
-    const double norm = normals.row(v).norm();
-    if (norm > 0.0) normals.row(v) /= norm;
-  }
-  return normals;
 }
 
 namespace {
@@ -255,7 +240,6 @@ class CorrespondenceFinder {
     }
   }
 
- private:
   const ClosestPointSearch& target_;
   PointSearchFactory point_search_;  // empty: no symmetric part
   double max_distance_, min_cosine_;
@@ -328,7 +312,8 @@ class RegistrationPass final : public LevelCascade::Pass {
         factory_(factory),
         context_(context),
         diagonal_(BoundingBoxDiagonal(*problem.source)),
-        finder_(*problem.target, problem.make_point_search, options, diagonal_) {}
+        finder_(*problem.target, problem.make_point_search, options, diagonal_),
+        landmark_input_(SoftLandmarks(problem, options)) {}
 
   int updates() const { return updates_; }
   const Correspondences& last() const { return correspondences_; }
@@ -351,8 +336,8 @@ class RegistrationPass final : public LevelCascade::Pass {
     const Mesh& mesh = cascade_.LevelMesh(l);
     masses_ = VertexMasses(cascade_.hierarchical() ? &cascade_.hierarchy() : nullptr,
                            cascade_.mesh(), l, mesh.num_vertices());
-    landmarks_ = l == 0 ? LevelConstraints::Exact(SoftLandmarks(), false).soft
-                        : MapConstraints(cascade_.hierarchy(), l, SoftLandmarks()).soft;
+    landmarks_ = l == 0 ? LevelConstraints::Exact(landmark_input_, false).soft
+                        : MapConstraints(cascade_.hierarchy(), l, landmark_input_).soft;
     finder_.Find(state_.positions, mesh.elements, correspondences_, context_);
     Constrain(l, FirstStage(l));
   }
@@ -368,15 +353,17 @@ class RegistrationPass final : public LevelCascade::Pass {
                          const Context& context) override;
 
  private:
-  Constraints SoftLandmarks() const {
-    Constraints landmarks = problem_.landmarks;
-    // A landmark pulls like `landmark_weight` vertices of mean mass in the last stage.
+  // The landmarks as soft constraints of the input mesh: each pulls like `landmark_weight`
+  // vertices of mean mass in the last stage.
+  static Constraints SoftLandmarks(const RegistrationProblem& problem,
+                                   const RegistrationOptions& options) {
+    Constraints landmarks = problem.landmarks;
     const std::vector<double> input_masses =
-        VertexMasses(nullptr, *problem_.source, 0, problem_.source->num_vertices());
+        VertexMasses(nullptr, *problem.source, 0, problem.source->num_vertices());
     const double mean_mass = std::accumulate(input_masses.begin(), input_masses.end(), 0.0) /
                              static_cast<double>(input_masses.size());
     landmarks.weights.assign(landmarks.indices.size(),
-                             options_.landmark_weight * options_.data_weight_end * mean_mass);
+                             options.landmark_weight * options.data_weight_end * mean_mass);
     return landmarks;
   }
   // The level's soft targets: every vertex at its correspondence with λ_stage m_v, then the
@@ -433,11 +420,13 @@ class RegistrationPass final : public LevelCascade::Pass {
   const Context& context_;
   double diagonal_;
   CorrespondenceFinder finder_;
+  Constraints landmark_input_;  // the problem's landmarks, soft (SoftLandmarks)
   LevelState state_;
   std::vector<double> masses_;  // per level vertex (VertexMasses)
-  SoftTargets landmarks_;
+  SoftTargets landmarks_;       // landmark_input_ on the level being solved
   Correspondences correspondences_;
-  int level_ = 0;  // the level being solved (Prepare)
+  Positions previous_positions_;  // before the last update's solve (its motion)
+  int level_ = 0;                 // the level being solved (Prepare)
   // Per vertex: whether the current factorization gives it the full data weight.
   std::vector<char> weighted_;
   int updates_ = 0;
@@ -466,7 +455,7 @@ LevelSolveResult RegistrationPass::Solve(LevelSolver& solver, LevelState& state,
           solver.MoveSoftTargets(SoftTargetRows());
         }
       }
-      const Positions before = state.positions;
+      previous_positions_ = state.positions;
       const LevelSolveResult run = solver.Solve(state, step, context);
       step.start_from_rotations = false;  // later solves start from positions
       ++level_updates;
@@ -479,8 +468,8 @@ LevelSolveResult RegistrationPass::Solve(LevelSolver& solver, LevelState& state,
         total.stopped_by_callback = true;
         break;
       }
-      const double rms_motion =
-          std::sqrt((state.positions - before).squaredNorm() / std::max<Index>(1, before.rows()));
+      const double rms_motion = std::sqrt((state.positions - previous_positions_).squaredNorm() /
+                                          std::max<Index>(1, state.positions.rows()));
       if (rms_motion < motion_tolerance) {
         total.converged = stage + 1 == options_.stages;
         break;

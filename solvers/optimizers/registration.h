@@ -121,8 +121,4 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
                             const LevelSolver& level_solver, const ComponentFactory& factory,
                             const Context& context);
 
-/// Area-weighted unit vertex normals of the triangles `elements` at `positions` (zero for a
-/// vertex without a non-degenerate triangle).
-Positions VertexNormals(const Positions& positions, const Elements& elements);
-
 }  // namespace harap

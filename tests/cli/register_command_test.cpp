@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "framework/vertex_normals.h"
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
 #include "tests/support/temp_folder.h"
@@ -54,13 +55,7 @@ TEST_CASE("harap register recovers a deformation from its mesh and from its poin
 
   // The answer's vertices with normals as a point cloud.
   std::ofstream cloud(folder.dir / "answer.xyz");
-  Positions normals = Positions::Zero(answer.num_vertices(), 3);
-  for (Index f = 0; f < answer.num_elements(); ++f) {
-    const Eigen::Vector3d a = answer.vertices.row(answer.elements(f, 0));
-    const Eigen::Vector3d b = answer.vertices.row(answer.elements(f, 1));
-    const Eigen::Vector3d c = answer.vertices.row(answer.elements(f, 2));
-    for (int k = 0; k < 3; ++k) normals.row(answer.elements(f, k)) += (b - a).cross(c - a);
-  }
+  const Positions normals = VertexNormals(answer.vertices, answer.elements);
   for (Index v = 0; v < answer.num_vertices(); ++v) {
     cloud << fmt::format("{} {} {} {} {} {}\n", answer.vertices(v, 0), answer.vertices(v, 1),
                          answer.vertices(v, 2), normals(v, 0), normals(v, 1), normals(v, 2));
