@@ -7,6 +7,7 @@
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_repair.h"
+#include "solvers/optimizers/registration.h"
 
 namespace harap {
 
@@ -43,6 +44,8 @@ ComponentCatalog DescribeComponents(const Registries& registries) {
   const ConfigNode describing = ConfigNode::Describing();
   MeshRepairOptions::FromConfig(describing.Child("mesh"));
   catalog.mesh_options = describing.Child("mesh").Options();
+  RegistrationOptions::FromConfig(describing.Child("registration"));
+  catalog.registration_options = describing.Child("registration").Options();
   catalog.builtin_meshes = BuiltinMeshNames();
   return catalog;
 }

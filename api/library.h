@@ -30,6 +30,8 @@ struct ComponentCatalog {
   std::vector<ComponentDescription> components;   ///< Registry order: optimizers, energies, ...
   std::vector<OptionInfo> small_systems_options;  ///< The `[solver.small_systems]` table.
   std::vector<OptionInfo> mesh_options;           ///< The `[mesh]` table (MeshRepairOptions).
+  /// The `[registration]` table of `harap register` (RegistrationOptions).
+  std::vector<OptionInfo> registration_options;
   std::vector<std::string> builtin_meshes;
 };
 

@@ -12,6 +12,7 @@
 
 #include "api/builtins.h"
 #include "api/component_factory.h"
+#include "api/library.h"
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_repair.h"
@@ -170,12 +171,13 @@ void ListSmallSystems() {
   fmt::print("\n");
 }
 
-void ListMeshOptions() {
-  const ConfigNode describing = ConfigNode::Describing();
-  MeshRepairOptions::FromConfig(describing.Child("mesh"));
-  fmt::print("mesh (run config [mesh] table, applied before solving):\n");
-  for (const auto& option : describing.Child("mesh").Options()) {
-    fmt::print("      mesh.{} = {}\n          {}\n", option.key, option.default_value, option.help);
+// A run config table that is no registry's, with the options its parser reads.
+void ListTableOptions(const char* table, const char* title,
+                      const std::vector<OptionInfo>& options) {
+  fmt::print("{} ({}):\n", table, title);
+  for (const auto& option : options) {
+    fmt::print("      {}.{} = {}\n          {}\n", table, option.key, option.default_value,
+               option.help);
   }
   fmt::print("\n");
 }
@@ -209,7 +211,16 @@ int ListPieces(const std::string& requested) {
       {{"upsamplers", "upsampler"}, [&] { ListRegistry(registries.upsamplers); }},
       {{"level_solvers", "level_solver", "inner"},
        [&] { ListLevelSolvers(registries.level_solvers); }},
-      {{"mesh"}, ListMeshOptions},
+      {{"mesh"},
+       [&] {
+         ListTableOptions("mesh", "run config [mesh] table, applied before solving",
+                          DescribeComponents(registries).mesh_options);
+       }},
+      {{"registration"},
+       [&] {
+         ListTableOptions("registration", "run config [registration] table of harap register",
+                          DescribeComponents(registries).registration_options);
+       }},
       {{"builtins", "builtin", "meshes"}, ListBuiltinMeshes},
   };
   if (kind.empty()) {

@@ -763,6 +763,7 @@ py::dict Components() {
   result["components"] = components;
   result["small_systems"] = OptionList(catalog.small_systems_options);
   result["mesh"] = OptionList(catalog.mesh_options);
+  result["registration"] = OptionList(catalog.registration_options);
   result["builtin_meshes"] = catalog.builtin_meshes;
   return result;
 }

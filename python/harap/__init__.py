@@ -627,6 +627,7 @@ def components():
          "energy": {...}, "solver": {...}, "hierarchy": {...}, "upsampler": {...},
          "level solver": {...} (optimizer.inner; options in the optimizer table),
          "solver.small_systems": {option: {default, help}}, "mesh": {option: {default, help}},
+         "registration": {option: {default, help}},
          "builtin_meshes": [names]}
     """
     data = _harap.components()
@@ -636,5 +637,6 @@ def components():
                                              "options": _options(options)}
     result["solver.small_systems"] = _options(data["small_systems"])
     result["mesh"] = _options(data["mesh"])
+    result["registration"] = _options(data["registration"])
     result["builtin_meshes"] = list(data["builtin_meshes"])
     return result

@@ -27,12 +27,13 @@ double RegistrationOptions::DataWeight(int stage) const {
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& node) {
   RegistrationOptions options;
-  options.data_weight_start = node.Get(
-      "data_weight_start", options.data_weight_start,
-      "data weight per source vertex in the first stage (relative to ARAP's)", Range::Above(0.0));
+  options.data_weight_start =
+      node.Get("data_weight_start", options.data_weight_start,
+               "data weight in the first stage, per unit of vertex mass (area / diagonal^2)",
+               Range::Above(0.0));
   options.data_weight_end =
       node.Get("data_weight_end", options.data_weight_end,
-               "data weight per source vertex in the last stage", Range::Above(0.0));
+               "data weight in the last stage, per unit of vertex mass", Range::Above(0.0));
   options.stages = node.Get("stages", options.stages,
                             "stages of the data weight schedule (geometric from start to end)",
                             Range::AtLeast(1));

@@ -16,9 +16,10 @@ namespace harap {
 
 /// The options of a registration (the run config's `[registration]` table; docs/registration.md).
 struct RegistrationOptions {
-  /// The data weight λ per source vertex rises geometrically from `data_weight_start` to
-  /// `data_weight_end` over `stages` stages: a soft fit first (ARAP dominates, large motions stay
-  /// rigid), a close one at the end. Each stage factors the global step once.
+  /// The data weight λ, per unit of vertex mass (a vertex's area over the squared bounding-box
+  /// diagonal), rises geometrically from `data_weight_start` to `data_weight_end` over `stages`
+  /// stages: a soft fit first (ARAP dominates, large motions stay rigid), a close one at the end.
+  /// Each stage factors the global step at least once.
   double data_weight_start = 10.0;
   double data_weight_end = 1e4;
   int stages = 3;

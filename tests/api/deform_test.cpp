@@ -149,6 +149,7 @@ TEST_CASE("harap list names every registered piece", "[experiments]") {
   for (const auto& name : registries.optimizers.Names())
     CHECK_THAT(list.output, Catch::Contains(name));
   CHECK_THAT(list.output, Catch::Contains("optimizer.tolerance"));
+  CHECK_THAT(list.output, Catch::Contains("registration.max_distance = 0.1"));
 }
 
 TEST_CASE("every shared surface scenario loads and converges (small ones)", "[experiments]") {

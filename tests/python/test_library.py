@@ -128,6 +128,7 @@ def test_components_are_what_harap_list_prints():
     assert components["energy"]["smooth_arap"]["description"]
     assert "max_unknowns" in components["solver.small_systems"]
     assert "weld_duplicates" in components["mesh"]
+    assert components["registration"]["max_distance"]["default"] == 0.1
     assert "cylinder" in components["builtin_meshes"]
 
 
