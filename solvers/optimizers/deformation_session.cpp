@@ -152,19 +152,44 @@ void DeformationSession::ValidateTargets(const Positions& targets, size_t count,
   }
 }
 
+void DeformationSession::ValidateWeights(const std::vector<double>& weights, size_t count,
+                                         const char* what) const {
+  if (weights.empty()) return;
+  if (weights.size() != count) {
+    throw InputError(
+        fmt::format("{}: {} weights for {} handle vertices", what, weights.size(), count));
+  }
+  for (size_t k = 0; k < weights.size(); ++k) {
+    const double w = weights[k];
+    // +inf pins (Constraints::kHardWeight); a soft handle's weight is finite and > 0.
+    if (!(w > 0.0)) {
+      throw InputError(fmt::format(
+          "{}: weight {} is {}; a handle's weight must be > 0 (+inf: hard, finite: soft)", what, k,
+          w));
+    }
+  }
+}
+
 HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices) {
   ValidateIndices(indices, "SetHandles");
   const Positions& current = positions();
   Positions targets(indices.size(), 3);
   for (size_t k = 0; k < indices.size(); ++k) targets.row(k) = current.row(indices[k]);
-  return ApplyHandles(indices, std::move(targets));
+  return ApplyHandles(indices, std::move(targets), {});
 }
 
 HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices,
                                                 const Positions& targets) {
+  return SetHandles(indices, targets, {});
+}
+
+HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices,
+                                                const Positions& targets,
+                                                const std::vector<double>& weights) {
   ValidateIndices(indices, "SetHandles");
   ValidateTargets(targets, indices.size(), "SetHandles");
-  return ApplyHandles(indices, targets);
+  ValidateWeights(weights, indices.size(), "SetHandles");
+  return ApplyHandles(indices, targets, weights);
 }
 
 void DeformationSession::SetTargets(const Positions& targets) {
@@ -193,7 +218,9 @@ HandleEditResult DeformationSession::AddHandles(const std::vector<Index>& indice
   Positions all(handles.size(), 3);
   all.topRows(targets_.rows()) = targets_;
   all.bottomRows(targets.rows()) = targets;
-  return ApplyHandles(std::move(handles), std::move(all));
+  std::vector<double> weights = weights_;
+  if (!weights.empty()) weights.resize(handles.size(), Constraints::kHardWeight);
+  return ApplyHandles(std::move(handles), std::move(all), std::move(weights));
 }
 
 HandleEditResult DeformationSession::RemoveHandles(const std::vector<Index>& indices) {
@@ -211,13 +238,15 @@ HandleEditResult DeformationSession::RemoveHandles(const std::vector<Index>& ind
         "one (use SetHandles to replace them)");
   }
   std::vector<Index> handles;
+  std::vector<double> weights;
   Positions targets(handles_.size() - removed.size(), 3);
   for (size_t k = 0; k < handles_.size(); ++k) {
     if (removed.count(handles_[k])) continue;
     targets.row(static_cast<Index>(handles.size())) = targets_.row(k);
     handles.push_back(handles_[k]);
+    if (!weights_.empty()) weights.push_back(weights_[k]);
   }
-  return ApplyHandles(std::move(handles), std::move(targets));
+  return ApplyHandles(std::move(handles), std::move(targets), std::move(weights));
 }
 
 void DeformationSession::SetPositions(const Positions& positions) {
@@ -240,11 +269,19 @@ void DeformationSession::SetPositions(const Positions& positions) {
   }
 }
 
-HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Positions targets) {
+HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Positions targets,
+                                                  std::vector<double> weights) {
+  // Only a set with a soft handle keeps its weights: all hard is the empty list, as before.
+  if (std::all_of(weights.begin(), weights.end(),
+                  [](double w) { return w == Constraints::kHardWeight; })) {
+    weights.clear();
+  }
   std::vector<Index> old_handles = std::move(handles_);
   Positions old_targets = std::move(targets_);
+  std::vector<double> old_weights = std::move(weights_);
   handles_ = std::move(indices);
   targets_ = std::move(targets);
+  weights_ = std::move(weights);
   ++version_;
   try {
     return ConstrainLevels();
@@ -253,6 +290,7 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
     // stays usable with them.
     handles_ = std::move(old_handles);
     targets_ = std::move(old_targets);
+    weights_ = std::move(old_weights);
     if (!handles_.empty()) ConstrainLevels();
     throw;
   }
@@ -263,7 +301,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   HandleEditResult result;
   const ComponentFactory& factory = factory_;  // thread-safe: levels are constrained in parallel
   std::vector<HandleEditResult::Level> done(levels_.size());
-  const Constraints finest{handles_, targets_, {}};
+  const Constraints finest = constraints();
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
     LevelSolver& solver = cascade_.solver(l);
@@ -321,7 +359,15 @@ HandleEditResult DeformationSession::ConstrainLevels() {
 }
 
 void DeformationSession::UpdateTargets() {
-  cascade_.solver(0).MoveTargets(targets_);
+  LevelSolver& finest = cascade_.solver(0);
+  if (weights_.empty()) {
+    finest.MoveTargets(targets_);
+  } else {
+    // The same split as LevelConstraints::Exact: hard targets pinned, soft ones in the data term.
+    const Constraints all = constraints();
+    finest.MoveTargets(all.HardPart().targets);
+    finest.MoveSoftTargets(all.SoftPart().targets);
+  }
   // The coarse levels' targets are mapped when a solve uses the level (a preview uses only the
   // coarsest one): UpdateCoarseTargets().
   for (int l : solved_levels_) {
@@ -332,9 +378,11 @@ void DeformationSession::UpdateTargets() {
 void DeformationSession::UpdateCoarseTargets(int l) {
   Level& level = *levels_[l];
   if (l == 0 || !level.targets_stale) return;
-  // The constrained vertices are the same (same handles): only the mean targets move.
-  cascade_.solver(l).MoveTargets(
-      MapConstraints(cascade_.hierarchy(), l, Constraints{handles_, targets_, {}}).mean_target);
+  // The constrained vertices are the same (same handles and weights): only the mean targets and
+  // the soft clusters' weighted mean targets move.
+  const LevelConstraints mapped = MapConstraints(cascade_.hierarchy(), l, constraints());
+  cascade_.solver(l).MoveTargets(mapped.mean_target);
+  if (!mapped.soft.empty()) cascade_.solver(l).MoveSoftTargets(mapped.soft.targets);
   level.targets_stale = false;
 }
 
@@ -495,6 +543,10 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
     gathered_ = straight_ && s_.cascade_.solver(0).accepts_gathered_rotations();
   }
 
+  /// A straight preview whose finest level cannot take the gathered rotations (soft targets: the
+  /// gathered step does not assemble their data term): the rotations are written out first.
+  bool gather_refused() const { return straight_ && !gathered_; }
+
   // Set by the session's iteration callback: which kind of stop ended a solve.
   bool user_stop = false;
   bool out_of_time = false;
@@ -616,6 +668,11 @@ OptimizeResult DeformationSession::Run(const SessionSolveOptions& solve_options,
   const LevelState* final_state = nullptr;
   context.Run([&] { final_state = &cascade_.Run(top, frame, context, result, level_notes); });
   result.stopped_by_callback = frame.user_stop;
+  if (frame.gather_refused() && !weights_.empty()) {
+    level_notes.push_back(
+        "preview with soft handles: the coarsest rotations were written out to the finest level "
+        "before its global step (the gathered step has no soft targets)");
+  }
   FinishResult(*final_state, preview, solve_options.time_budget_seconds,
                frame.out_of_time ? frame.out_of_time_level : -1, level_notes, context, result);
   result.timings.solve = total.Seconds();

@@ -115,9 +115,17 @@ class DeformationSession {
   /// positions (the last solution, or the start positions), or `targets` (#indices×3, finite).
   HandleEditResult SetHandles(const std::vector<Index>& indices);
   HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets);
-  /// Moves the handles: `targets` has one row per handle, in the order of handles().
+  /// The same with a weight per handle vertex (Constraints::weights): +inf (kHardWeight) pins the
+  /// vertex, a finite w > 0 makes it a soft handle adding w ‖u − t‖² to the energy (every level:
+  /// MapConstraints). Empty: all hard. A level whose soft vertices or weights change factors its
+  /// matrix A + W anew (route kFull); one where only hard handles change refactors those rows.
+  HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets,
+                              const std::vector<double>& weights);
+  /// Moves the handles, hard and soft: `targets` has one row per handle, in the order of
+  /// handles(). Nothing is refactored (soft targets change only the right-hand side).
   void SetTargets(const Positions& targets);
   /// Adds handles (not handles yet) with their targets; refactors the changed rows of each level.
+  /// The added handles are hard.
   HandleEditResult AddHandles(const std::vector<Index>& indices, const Positions& targets);
   /// Removes handles (each must be one; at least one must stay).
   HandleEditResult RemoveHandles(const std::vector<Index>& indices);
@@ -150,6 +158,10 @@ class DeformationSession {
   const std::vector<int>& solved_levels() const { return solved_levels_; }
   const std::vector<Index>& handles() const { return handles_; }
   const Positions& targets() const { return targets_; }
+  /// One weight per handle (kHardWeight: hard), or empty: every handle is hard.
+  const std::vector<double>& weights() const { return weights_; }
+  /// The current handles as constraints (indices, targets, weights).
+  Constraints constraints() const { return Constraints{handles_, targets_, weights_}; }
   /// The current finest-level positions (the last solution, or the start).
   const Positions& positions() const;
   /// Timings of the construction: hierarchy and precompute (constrain and solve are 0).
@@ -164,8 +176,11 @@ class DeformationSession {
   class Frame;
   void ValidateIndices(const std::vector<Index>& indices, const char* what) const;
   void ValidateTargets(const Positions& targets, size_t count, const char* what) const;
+  void ValidateWeights(const std::vector<double>& weights, size_t count, const char* what) const;
   /// Applies a new handle set on every level (refactoring); restores the old one on a throw.
-  HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets);
+  /// `weights`: empty (all hard) or one per index.
+  HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets,
+                                std::vector<double> weights);
   HandleEditResult ConstrainLevels();
   /// Moves the finest level's targets after SetTargets() (same handles); the coarse levels'
   /// follow when a solve uses them (UpdateCoarseTargets).
@@ -209,9 +224,10 @@ class DeformationSession {
   double diagonal_ = 0.0;
   std::vector<Index> handles_;
   Positions targets_;
-  Positions start_positions_;  ///< finest positions without a solution (SetPositions)
-  long long version_ = 0;      ///< bumped by every change of handles, targets or positions
-  long long solves_ = 0;       ///< Solve() and Preview() calls so far
+  std::vector<double> weights_;  ///< empty (all hard) or one per handle, with a soft one
+  Positions start_positions_;    ///< finest positions without a solution (SetPositions)
+  long long version_ = 0;        ///< bumped by every change of handles, targets or positions
+  long long solves_ = 0;         ///< Solve() and Preview() calls so far
   /// Solve()'s per-level states, kept between solves (see Run()).
   std::vector<LevelState> work_, scratch_;
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's
