@@ -472,12 +472,20 @@ class PySession {
     if (scenario_.initial) owned_->session().SetPositions(*scenario_.initial);
   }
 
-  std::string SetHandles(py::handle indices, py::handle targets) {
+  // `weights` as harap.deform's (ToWeights: None, or one per handle vertex; the session checks
+  // the values and names a bad entry).
+  std::string SetHandles(py::handle indices, py::handle targets, py::handle weights) {
     const Use use(*this);
     const std::vector<Index> handles = ToIndices(indices, "indices");
     const std::optional<Positions> positions = ToOptionalPositions(targets, "targets");
+    const std::vector<double> handle_weights = ToWeights(weights, handles.size());
     return Edit([&] {
-      return positions ? session().SetHandles(handles, *positions) : session().SetHandles(handles);
+      if (handle_weights.empty()) {
+        return positions ? session().SetHandles(handles, *positions)
+                         : session().SetHandles(handles);
+      }
+      return positions ? session().SetHandles(handles, *positions, handle_weights)
+                       : session().SetHandles(handles, handle_weights);
     });
   }
 
@@ -537,6 +545,17 @@ class PySession {
   py::array_t<double> targets() {
     const Use use(*this);
     return FromPositions(session().targets());
+  }
+  // One per handle (inf: hard); all inf when every handle is hard.
+  py::array_t<double> weights() {
+    const Use use(*this);
+    const std::vector<double>& weights = session().weights();
+    py::array_t<double> array(static_cast<py::ssize_t>(session().handles().size()));
+    auto view = array.mutable_unchecked<1>();
+    for (py::ssize_t k = 0; k < array.shape(0); ++k) {
+      view(k) = weights.empty() ? Constraints::kHardWeight : weights[static_cast<size_t>(k)];
+    }
+    return array;
   }
   int num_levels() {
     const Use use(*this);
@@ -953,7 +972,8 @@ PYBIND11_MODULE(_harap, m) {
                     const std::string&>(),
            py::arg("V"), py::arg("F"), py::arg("settings"), py::arg("initial"), py::arg("planar"),
            py::arg("threads"), py::arg("frame_start"))
-      .def("set_handles", &PySession::SetHandles, py::arg("indices"), py::arg("targets"))
+      .def("set_handles", &PySession::SetHandles, py::arg("indices"), py::arg("targets"),
+           py::arg("weights"))
       .def("add_handles", &PySession::AddHandles, py::arg("indices"), py::arg("targets"))
       .def("remove_handles", &PySession::RemoveHandles, py::arg("indices"))
       .def("set_targets", &PySession::SetTargets, py::arg("targets"))
@@ -965,6 +985,7 @@ PYBIND11_MODULE(_harap, m) {
       .def("positions", &PySession::positions)
       .def("handles", &PySession::handles)
       .def("targets", &PySession::targets)
+      .def("weights", &PySession::weights)
       .def("num_levels", &PySession::num_levels)
       .def("info", &PySession::Info);
 }

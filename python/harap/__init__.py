@@ -280,19 +280,23 @@ class Session:
         self._view_source = (_np.array(V, dtype=_np.float64), _np.array(F), settings, planar,
                              int(threads))
 
-    def set_handles(self, indices, targets=None):
+    def set_handles(self, indices, targets=None, weights=None):
         """Makes `indices` (k,) the handles (unique, in range, at least one) with `targets`
         (k, 3), or, if None, their current positions (the last solution or the start). Factors
-        every level (the C phase). Returns the edit summary (see add_handles)."""
-        return _json.loads(self._session.set_handles(indices, targets))
+        every level (the C phase). Returns the edit summary (see add_handles).
+        weights: None (every handle pins its vertex), or (k,) weights > 0 as in harap.deform: a
+        finite w makes that handle soft (a pull w ||u - t||^2), inf keeps it hard. Soft handles
+        move with set_targets() like hard ones, without refactoring; other soft vertices or
+        weights factor every level anew (docs/session.md, "Soft handles")."""
+        return _json.loads(self._session.set_handles(indices, targets, weights))
 
     def set_targets(self, targets):
-        """Moves the handles: (k, 3), one row per handle in the order of `handles`. No
-        refactoring."""
+        """Moves the handles, hard and soft: (k, 3), one row per handle in the order of
+        `handles`. No refactoring."""
         self._session.set_targets(targets)
 
     def add_handles(self, indices, targets):
-        """Adds vertices that are not handles yet, with their (k, 3) targets; updates every
+        """Adds hard handles: vertices that are not handles yet, with their (k, 3) targets; updates every
         level's factorization on the rows that changed. Returns the edit summary: {"seconds",
         "levels": [{"level", "constrained_vertices", "changed_rows", "factored", "route"
         ("full", "numeric", "update", "partial", "none"), "seconds"}] (finest first),
@@ -348,6 +352,8 @@ class Session:
     handles = _session_property(
         "handles", "(k,) int64: the handle vertices, in the order targets use.")
     targets = _session_property("targets", "(k, 3) float64: the handles' targets.")
+    weights = _session_property(
+        "weights", "(k,) float64: the handles' weights (inf: hard, finite: soft).")
     num_levels = _session_property("num_levels", "The hierarchy's levels (1 for classic).")
     info = _session_property(
         "info", "What the session resolved: optimizer, energy, solver, hierarchy, upsampler, "

@@ -170,12 +170,14 @@ void DeformationSession::ValidateWeights(const std::vector<double>& weights, siz
   }
 }
 
-HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices) {
+HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices,
+                                                const std::vector<double>& weights) {
   ValidateIndices(indices, "SetHandles");
+  ValidateWeights(weights, indices.size(), "SetHandles");
   const Positions& current = positions();
   Positions targets(indices.size(), 3);
   for (size_t k = 0; k < indices.size(); ++k) targets.row(k) = current.row(indices[k]);
-  return ApplyHandles(indices, std::move(targets), {});
+  return ApplyHandles(indices, std::move(targets), weights);
 }
 
 HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indices,

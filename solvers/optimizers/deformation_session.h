@@ -113,9 +113,10 @@ class DeformationSession {
 
   /// Makes `indices` the handles (unique, in range, not empty), their targets their current
   /// positions (the last solution, or the start positions), or `targets` (#indices×3, finite).
-  HandleEditResult SetHandles(const std::vector<Index>& indices);
+  HandleEditResult SetHandles(const std::vector<Index>& indices,
+                              const std::vector<double>& weights = {});
   HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets);
-  /// The same with a weight per handle vertex (Constraints::weights): +inf (kHardWeight) pins the
+  /// With a weight per handle vertex (Constraints::weights): +inf (kHardWeight) pins the
   /// vertex, a finite w > 0 makes it a soft handle adding w ‖u − t‖² to the energy (every level:
   /// MapConstraints). Empty: all hard. A level whose soft vertices or weights change factors its
   /// matrix A + W anew (route kFull); one where only hard handles change refactors those rows.

@@ -434,3 +434,44 @@ def test_a_call_from_another_thread_during_a_solve_is_refused(long_session):
     assert len(outcome) == 1 and "in use by another thread" in outcome[0]
     long_session.set_targets(long_session.targets)
     assert long_session.solve(max_iterations=1).report["iterations"] == 1
+
+
+@pytest.mark.parametrize("optimizer", ["hierarchical", "classic"])
+def test_soft_handles_in_a_session(cylinder, optimizer):
+    """set_handles(weights=): the session solves what harap.deform solves with those weights;
+    set_targets moves soft targets without refactoring; bad weights raise and change nothing."""
+    V, F, handles, targets = cylinder
+    top = np.arange(len(handles)) >= np.count_nonzero(V[handles, 2] < 0.05)
+    weights = np.where(top, 10.0, np.inf)
+    s = harap.Session(V, F, optimizer=optimizer, options=OPTIONS)
+    edit = s.set_handles(handles, targets, weights=weights)
+    assert edit["constraints"]["constrained_vertices"] == np.count_nonzero(~top)
+    np.testing.assert_array_equal(s.weights, weights)
+    result = s.solve()
+    reference = harap.deform(V, F, handles, targets, optimizer=optimizer, options=OPTIONS,
+                             weights=weights)
+    assert relative(result.energy, reference.energy) < 1e-9
+    np.testing.assert_allclose(result.positions, reference.positions, rtol=0, atol=1e-8)
+    # The soft ones are pulled, not pinned.
+    assert np.linalg.norm(result.positions[handles[top]] - targets[top], axis=1).max() > 1e-4
+
+    moved = targets + np.where(top[:, None], [0.2, 0.1, 0.0], 0.0)
+    s.set_targets(moved)
+    assert np.isfinite(s.preview().positions).all()  # no raise in the middle of a drag
+    s.set_positions(V)
+    again = s.solve()
+    fresh = harap.Session(V, F, optimizer=optimizer, options=OPTIONS)
+    fresh.set_handles(handles, moved, weights=weights)
+    assert relative(again.energy, fresh.solve().energy) < 1e-9
+
+    for bad, message in [(np.full(len(handles), np.nan), "weight 0 is nan"),
+                         (np.where(top, 0.0, np.inf), "must be > 0"),
+                         (np.ones(3), "one per handle")]:
+        with pytest.raises(harap.InputError, match=message):
+            s.set_handles(handles, moved, weights=bad)
+    np.testing.assert_array_equal(s.weights, weights)
+    # Targets default to where the vertices are; all-hard weights are hard handles.
+    s.set_handles(handles[:5], weights=np.full(5, 2.0))
+    np.testing.assert_array_equal(s.targets, s.positions[handles[:5]])
+    s.set_handles(handles, moved, weights=np.full(len(handles), np.inf))
+    assert np.isinf(s.weights).all()
