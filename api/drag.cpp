@@ -130,7 +130,9 @@ DragOutcome RunDrag(const Registries& registries, const Scenario& scenario,
   DeformationSession& session = configured->session();
   if (options.progress) session.set_iteration_callback(options.progress);
   const Constraints first = FrameConstraints(scenario, 1.0 / options.frames);
-  const HandleEditResult constrained = session.SetHandles(first.indices, first.targets);
+  // Soft handles (a scenario handle's `weight`) stay soft in the session: SetTargets moves them.
+  const HandleEditResult constrained =
+      session.SetHandles(first.indices, first.targets, first.weights);
   outcome.constrain_seconds = constrained.seconds;
   outcome.notes = constrained.notes;
   SessionSolveOptions solve;

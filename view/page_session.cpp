@@ -54,6 +54,8 @@ struct PageSession::Group {
   Positions base;  ///< the group's targets when it was made; moves transform these
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  /// A scenario handle's `weight` (finite: a soft pull); groups added on the page are hard.
+  double weight = Constraints::kHardWeight;
 
   Positions Targets() const {
     Positions targets = base * rotation.transpose();
@@ -69,6 +71,7 @@ PageSession::PageSession(const Registries& registries, const ViewSource& source,
     group.name = handle.name;
     group.vertices = handle.vertices;
     group.base = handle.targets;
+    group.weight = handle.weight;
     groups_.push_back(std::move(group));
     ++next_group_number_;
   }
@@ -217,11 +220,13 @@ void PageSession::ApplyGroupsAsHandles() {
   DeformationSession& session = session_->session();
   std::set<Index> wanted;
   std::map<Index, Eigen::RowVector3d> target_of;
+  std::map<Index, double> weight_of;  // as the target: the first group's
   for (const Group& group : groups_) {
     const Positions targets = group.Targets();
     for (size_t i = 0; i < group.vertices.size(); ++i) {
       wanted.insert(group.vertices[i]);
       target_of.emplace(group.vertices[i], targets.row(static_cast<Eigen::Index>(i)));
+      weight_of.emplace(group.vertices[i], group.weight);
     }
   }
   if (wanted.empty()) throw InputError("at least one handle must stay");
@@ -235,7 +240,11 @@ void PageSession::ApplyGroupsAsHandles() {
   const Clock::time_point start = Clock::now();
   if (!session_has_handles_) {
     const std::vector<Index> indices(wanted.begin(), wanted.end());
-    edits.push_back(Json::parse(HandleEditJson(session.SetHandles(indices, targets_of(indices)))));
+    // The scenario's soft handles stay soft (handles added later on the page are hard).
+    std::vector<double> weights;
+    for (Index v : indices) weights.push_back(weight_of.at(v));
+    edits.push_back(
+        Json::parse(HandleEditJson(session.SetHandles(indices, targets_of(indices), weights))));
     session_has_handles_ = true;
   } else {
     const std::set<Index> current(session.handles().begin(), session.handles().end());
@@ -502,6 +511,9 @@ std::string PageSession::ScenarioToml() const {
         "0.0] }}\ntranslate = [{:.17g}, {:.17g}, {:.17g}]\n",
         axis.x(), axis.y(), axis.z(), angle_axis.angle() * 180.0 / M_PI, translation.x(),
         translation.y(), translation.z());
+    if (group.weight != Constraints::kHardWeight) {
+      toml += fmt::format("weight = {:.17g}\n", group.weight);
+    }
   }
   return toml;
 }

@@ -116,3 +116,48 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
             .output.find("valid are corrected") != std::string::npos);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("drag: soft handles (a handle's weight) stay soft in the session", "[experiments]") {
+  const Registries registries = MakeBuiltinRegistries();
+  const Scenario scenario = ParseScenario(R"(
+mesh = { builtin = "cylinder", vertices = 1500 }
+[[handle]]
+name = "bottom"
+select.slab = { axis = "z", from = 0.0, to = 0.03 }
+[[handle]]
+name = "top"
+select.slab = { axis = "z", from = 0.97, to = 1.0 }
+translate = [0.0, 0.3, -0.1]
+weight = 2.0
+)",
+                                          "inline", ".");
+  REQUIRE(scenario.MergedConstraints().has_soft());
+  for (const char* optimizer : {"classic", "hierarchical"}) {
+    DYNAMIC_SECTION(optimizer) {
+      ConfigNode config;
+      config.Set("optimizer.type", fmt::format("\"{}\"", optimizer));
+      config.Set("optimizer.tolerance", "1e-6");
+      DragOptions options;
+      options.threads = 2;
+      // One frame: the session's first solve is the one-shot run, soft handles and all.
+      options.frames = 1;
+      const DragOutcome session = RunDrag(registries, scenario, config, options);
+      options.from_scratch = true;
+      const DragOutcome scratch = RunDrag(registries, scenario, config, options);
+      const double session_energy = session.frames[0].energy;
+      const double scratch_energy = scratch.frames[0].energy;
+      CHECK(std::abs(session_energy - scratch_energy) <= 1e-9 * scratch_energy);
+      CHECK(session.frames[0].iterations == scratch.frames[0].iterations);
+      // Several frames, solved and previewed: the soft targets move every frame.
+      options.from_scratch = false;
+      options.frames = 3;
+      const DragOutcome frames = RunDrag(registries, scenario, config, options);
+      options.preview = true;
+      const DragOutcome previews = RunDrag(registries, scenario, config, options);
+      REQUIRE(frames.frames.size() == 3);
+      REQUIRE(previews.frames.size() == 3);
+      CHECK(frames.frames[2].energy < scratch_energy * 1.05);
+      CHECK(std::isfinite(previews.frames[2].energy));
+    }
+  }
+}

@@ -109,7 +109,8 @@ struct Page {
   std::vector<Outgoing> sent;
   std::unique_ptr<PageSession> page;
 
-  Page() {
+  /// `right_weight`: the right column's handle weight (finite: soft).
+  explicit Page(double right_weight = Constraints::kHardWeight) {
     Mesh mesh = Grid(20, 20);
     std::vector<Index> left, right;
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
@@ -124,6 +125,7 @@ struct Page {
       handle.targets.resize(static_cast<Eigen::Index>(vertices.size()), 3);
       for (size_t i = 0; i < vertices.size(); ++i)
         handle.targets.row(static_cast<Eigen::Index>(i)) = mesh.vertices.row(vertices[i]);
+      if (std::string(name) == "right") handle.weight = right_weight;
       source.scenario.handles.push_back(handle);
     }
     source.run_config = ConfigNode::Parse("[optimizer]\ntolerance = 1e-10\n", "test");
@@ -309,6 +311,33 @@ TEST_CASE("view sources: a mesh file alone has no handles; a scenario keeps its 
   const ViewSource source = LoadViewSource(scenario, ConfigNode::Parse("", "test"), 1);
   CHECK(source.scenario.handles.size() == 2);
   CHECK(source.mesh_toml == "mesh = { builtin = 'cylinder', vertices = 2000 }\n");
+}
+
+TEST_CASE("a page's session: a scenario's soft handle stays soft and is exported so", "[view]") {
+  const std::string move =
+      R"({"type":"move","group":1,"transform":[1,0,0,0.3, 0,1,0,0.2, 0,0,1,0],"solve":"full","id":1})";
+  Page hard, soft(5.0);
+  hard.page->HandleText(move);
+  soft.page->HandleText(move);
+  const Json hard_solved = hard.Last("solved");
+  const Json soft_solved = soft.Last("solved");
+  CHECK(soft_solved["converged"] == true);
+  // The pinned solution is one the soft problem may take, with no pull left: the soft
+  // handle's minimum lies below it.
+  CHECK(soft_solved["energy"].get<double>() > 0.0);
+  CHECK(soft_solved["energy"].get<double>() < hard_solved["energy"].get<double>() * (1 - 1e-6));
+  // A preview with the soft handle works too.
+  soft.page->HandleText(
+      R"({"type":"move","group":1,"transform":[1,0,0,0.2, 0,1,0,0.1, 0,0,1,0],"id":2})");
+  CHECK(soft.Last("solved")["mode"] == "preview");
+  CHECK(soft.Last("solved")["id"] == 2);
+  // The exported scenario keeps the weight; `harap deform` on it solves the same problem.
+  soft.page->HandleText(R"({"type":"scenario","id":3})");
+  const std::string toml = soft.Last("scenario")["toml"];
+  const Scenario exported = ParseScenario(toml, "exported", ".");
+  REQUIRE(exported.handles.size() == 2);
+  CHECK(exported.handles[0].weight == Constraints::kHardWeight);
+  CHECK(exported.handles[1].weight == 5.0);
 }
 
 }  // namespace
