@@ -265,6 +265,52 @@ std::vector<Index> MaskedSystem::SetConstrained(const std::vector<Index>& constr
   return changed;
 }
 
+bool MaskedSystem::SetMatrix(const SparseMatrix& a, std::vector<Index>& changed) {
+  const Index n = num_vertices();
+  if (a.rows() != n || a.cols() != n) return false;
+  // Each column of `a` walked beside M's (both sorted by row): where each entry goes, or a misfit.
+  const auto fits = [&](Index column, const auto& visit) {
+    Index k = unmasked_.outerIndexPtr()[column];
+    const Index end = unmasked_.outerIndexPtr()[column + 1];
+    for (SparseMatrix::InnerIterator it(a, column); it; ++it) {
+      for (; k < end && unmasked_.innerIndexPtr()[k] < it.row(); ++k) {
+        if (unmasked_.valuePtr()[k] != 0.0) return false;
+      }
+      if (k == end || unmasked_.innerIndexPtr()[k] != it.row()) return false;
+      // The components and isolated vertices (SystemComponents) follow the non-zero entries.
+      if ((it.value() == 0.0) != (unmasked_.valuePtr()[k] == 0.0)) return false;
+      visit(k++, it.value());
+    }
+    for (; k < end; ++k) {
+      if (unmasked_.valuePtr()[k] != 0.0) return false;
+    }
+    return true;
+  };
+  for (Index column = 0; column < n; ++column) {
+    if (!fits(column, [](Index, double) {})) return false;
+  }
+  std::vector<unsigned char> touched(n, 0);
+  for (Index column = 0; column < n; ++column) {
+    fits(column, [&](Index k, double value) {
+      if (unmasked_.valuePtr()[k] == value) return;
+      unmasked_.valuePtr()[k] = value;
+      touched[column] = 1;
+      touched[unmasked_.innerIndexPtr()[k]] = 1;
+    });
+  }
+  // M changes only where the changed entries are not masked: compare before and after.
+  for (Index v = 0; v < n; ++v) {
+    if (!touched[v]) continue;
+    const Index begin = masked_.outerIndexPtr()[v], end = masked_.outerIndexPtr()[v + 1];
+    const std::vector<double> before(masked_.valuePtr() + begin, masked_.valuePtr() + end);
+    MaskColumn(v);
+    if (!std::equal(before.begin(), before.end(), masked_.valuePtr() + begin)) {
+      changed.push_back(v);
+    }
+  }
+  return true;
+}
+
 void MaskedSystem::SetFixedPositions(const Positions& u) {
   HARAP_CHECK(u.rows() == num_vertices(), "{} positions for {} vertices", u.rows(), num_vertices());
   // Free rows: A_fc U_c, gathered column by column of the fixed vertices (A is symmetric).

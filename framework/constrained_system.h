@@ -157,6 +157,12 @@ class MaskedSystem final : public VertexSplitSystem {
   /// those that went from free to fixed or back.
   std::vector<Index> SetConstrained(const std::vector<Index>& constrained,
                                     const std::vector<Index>& anchored = {});
+  /// Replaces A by `a`, whose stored entries must lie on M's pattern and connect the same
+  /// vertices (e.g. A + W for other soft weights W: only the diagonal differs); the fixed
+  /// vertices stay. Returns false and changes nothing when `a` does not fit; otherwise appends to
+  /// `changed` the vertices whose rows and columns of system_matrix() changed, so a factorization
+  /// can be refactored on those rows (LinearSolver::Refactor).
+  bool SetMatrix(const SparseMatrix& a, std::vector<Index>& changed);
 
   Index num_vertices() const override { return components_.num_vertices(); }
   Index num_unknowns() const override { return num_vertices(); }

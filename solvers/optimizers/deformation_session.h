@@ -118,8 +118,9 @@ class DeformationSession {
   HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets);
   /// With a weight per handle vertex (Constraints::weights): +inf (kHardWeight) pins the
   /// vertex, a finite w > 0 makes it a soft handle adding w ‖u − t‖² to the energy (every level:
-  /// MapConstraints). Empty: all hard. A level whose soft vertices or weights change factors its
-  /// matrix A + W anew (route kFull); one where only hard handles change refactors those rows.
+  /// MapConstraints). Empty: all hard. Other soft vertices or weights change the diagonal of a
+  /// level's matrix A + W: those rows are refactored with the ones whose handles changed
+  /// (LinearSolver::Refactor), as for AddHandles().
   HandleEditResult SetHandles(const std::vector<Index>& indices, const Positions& targets,
                               const std::vector<double>& weights);
   /// Moves the handles, hard and soft: `targets` has one row per handle, in the order of

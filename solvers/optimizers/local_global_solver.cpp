@@ -174,8 +174,14 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
                                                     const ComponentFactory& factory,
                                                     const Context& context) {
   Stopwatch clock;
-  // Other soft weights change A + W itself, not only which rows are masked: start over.
-  if (matrix_changed) masked_ = nullptr;
+  // Other soft weights change A + W itself, on the diagonal of the soft vertices: those rows
+  // are refactored with the ones whose fixedness changes (a matrix that does not fit the
+  // masked system's pattern and components starts over).
+  std::vector<Index> changed_values;
+  if (matrix_changed && masked_ != nullptr &&
+      !masked_->SetMatrix(energy_->system_matrix(), changed_values)) {
+    masked_ = nullptr;
+  }
   context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
   const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
   ConstrainSummary summary;
@@ -192,7 +198,12 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
     reduced_x_.resize(system_->num_unknowns(), 3);
     summary.changed_rows = masked_->num_unknowns();
   } else {
-    const std::vector<Index> changed = masked_->SetConstrained(renumbered, anchored);
+    std::vector<Index> changed = masked_->SetConstrained(renumbered, anchored);
+    if (!changed_values.empty()) {
+      changed.insert(changed.end(), changed_values.begin(), changed_values.end());
+      std::sort(changed.begin(), changed.end());
+      changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    }
     summary.changed_rows = static_cast<Index>(changed.size());
     if (!needs_factorization_ && !changed.empty()) {
       // Until the refactorization succeeds the factor is out of date: a throw leaves it so.

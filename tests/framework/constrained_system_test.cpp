@@ -145,6 +145,35 @@ TEST_CASE("MaskedSystem solves the eliminated system with one pattern for every 
   }
 }
 
+TEST_CASE("MaskedSystem takes another diagonal in place and names the rows it changed",
+          "[framework]") {
+  const Mesh mesh = Tube(5, 6);  // 30 vertices
+  SpokesAndRimsEnergy energy({});
+  energy.Precompute(mesh, Context());
+  const SparseMatrix& a = energy.system_matrix();
+  const std::vector<Index> constrained = {0, 1, 2};
+  MaskedSystem masked(a);
+  masked.SetConstrained(constrained);
+  // A + W: a weight on two free vertices and on a fixed one (whose row is the identity's).
+  SparseMatrix weighted = a;
+  for (const Index v : {1, 7, 20}) weighted.coeffRef(v, v) += 3.0;
+  std::vector<Index> changed;
+  REQUIRE(masked.SetMatrix(weighted, changed));
+  CHECK(changed == std::vector<Index>{7, 20});
+  MaskedSystem fresh(weighted);
+  fresh.SetConstrained(constrained);
+  CHECK(Eigen::MatrixXd(masked.system_matrix()) == Eigen::MatrixXd(fresh.system_matrix()));
+  // A new coupling (another component structure) or a size mismatch does not fit: unchanged.
+  SparseMatrix coupled = weighted;
+  coupled.coeffRef(0, 29) = -1.0;
+  coupled.coeffRef(29, 0) = -1.0;
+  changed.clear();
+  CHECK_FALSE(masked.SetMatrix(coupled, changed));
+  CHECK_FALSE(masked.SetMatrix(SparseMatrix(3, 3), changed));
+  CHECK(changed.empty());
+  CHECK(Eigen::MatrixXd(masked.system_matrix()) == Eigen::MatrixXd(fresh.system_matrix()));
+}
+
 TEST_CASE("ConstrainedSystem builds A_ff compressed and sorted, A_fc in the fixed order",
           "[framework]") {
   // Constrained vertices out of order: A_fc's columns follow fixed_vertices(), not the index.

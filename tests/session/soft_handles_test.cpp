@@ -224,28 +224,76 @@ TEST_CASE("session: handle edits keep the soft weights", "[session][soft]") {
   const HandleEditResult removed = session.RemoveHandles(ring);
   CHECK(removed.constraints.constrained_vertices == kSegments);
   CHECK(session.weights() == soft.weights);
-  // Other weights for the same vertices: the matrix A + W changes, every level factors anew.
-  std::vector<double> heavier = soft.weights;
-  for (double& w : heavier) {
-    if (w != Constraints::kHardWeight) w = 50.0;
-  }
-  const HandleEditResult reweighted = session.SetHandles(soft.indices, soft.targets, heavier);
-  for (const auto& level : reweighted.levels) {
-    INFO("level " << level.level);
-    CHECK(level.factored);
-    CHECK(level.route == LinearSolver::RefactorRoute::kFull);
-  }
-  session.SetPositions(tube.mesh.vertices);
-  const OptimizeResult result = session.Solve();
-  auto fresh = Session(setup, tube.mesh);
-  fresh->session().SetHandles(soft.indices, soft.targets, heavier);
-  const OptimizeResult expected = fresh->session().Solve();
-  CHECK(Close(result.energy, expected.energy, 1e-10));
-  CHECK((result.positions - expected.positions).cwiseAbs().maxCoeff() < 1e-8);
   // All hard again: the same as a session that never had soft handles.
   session.SetHandles(soft.indices, soft.targets,
                      std::vector<double>(soft.indices.size(), Constraints::kHardWeight));
   CHECK(session.weights().empty());
+}
+
+TEST_CASE("session: other soft weights refactor only the rows they change", "[session][soft]") {
+  SmallBentTube tube;
+  const Constraints soft = SoftTop(tube.problem.constraints, 5.0);
+  // Heavier soft handles, and a second soft ring (the middle one) with its own weight.
+  Constraints heavier = soft;
+  for (double& w : heavier.weights) {
+    if (w != Constraints::kHardWeight) w = 50.0;
+  }
+  for (Index s = 0; s < kSegments; ++s) {
+    heavier.indices.push_back(15 * kSegments + s);
+    heavier.weights.push_back(2.0);
+  }
+  heavier.targets.conservativeResize(static_cast<Index>(heavier.indices.size()), 3);
+  for (Index s = 0; s < kSegments; ++s) {
+    heavier.targets.row(2 * kSegments + s) =
+        tube.mesh.vertices.row(15 * kSegments + s) + Eigen::RowVector3d(0.1, 0.0, 0.0);
+  }
+  // Every route of CHOLMOD's Refactor() (the default solver's), and the default one.
+  std::vector<std::string> solvers = {""};
+#ifdef HARAP_HAVE_CHOLMOD
+  for (const char* route : {"auto", "partial", "update", "numeric"}) {
+    solvers.push_back(std::string("[solver]\ntype = \"cholmod\"\nrefactor = \"") + route + "\"\n");
+  }
+#endif
+  for (const char* config : {kClassic, kHierarchical}) {
+    for (const std::string& solver : solvers) {
+      DYNAMIC_SECTION(config << solver) {
+        TestSetup setup(config + solver);
+        auto configured = Session(setup, tube.mesh);
+        DeformationSession& session = configured->session();
+        session.SetHandles(soft.indices, soft.targets, soft.weights);
+        session.Solve();
+        const HandleEditResult reweighted =
+            session.SetHandles(heavier.indices, heavier.targets, heavier.weights);
+        REQUIRE_FALSE(reweighted.levels.empty());
+        // The finest level: the diagonal of the 32 soft vertices, nothing else.
+        CHECK(reweighted.levels[0].level == 0);
+        CHECK(reweighted.levels[0].changed_rows == 2 * kSegments);
+        for (const auto& level : reweighted.levels) {
+          INFO("level " << level.level);
+          CHECK(level.factored);
+          CHECK(level.changed_rows > 0);
+          if (solver.find("partial") != std::string::npos) {
+            CHECK(level.route == LinearSolver::RefactorRoute::kPartial);
+          }
+          if (solver.find("update") != std::string::npos) {
+            CHECK(level.route == LinearSolver::RefactorRoute::kUpdate);
+          }
+        }
+        session.SetPositions(tube.mesh.vertices);
+        const OptimizeResult result = session.Solve();
+        auto fresh = Session(setup, tube.mesh);
+        fresh->session().SetHandles(heavier.indices, heavier.targets, heavier.weights);
+        const OptimizeResult expected = fresh->session().Solve();
+        REQUIRE(result.levels.size() == expected.levels.size());
+        for (size_t l = 0; l < result.levels.size(); ++l) {
+          INFO("level " << result.levels[l].level);
+          CHECK(result.levels[l].iterations == expected.levels[l].iterations);
+          CHECK(Close(result.levels[l].energy, expected.levels[l].energy, 1e-10));
+        }
+        CHECK((result.positions - expected.positions).cwiseAbs().maxCoeff() < 1e-8);
+      }
+    }
+  }
 }
 
 TEST_CASE("session: bad soft weights throw InputError naming the entry and change nothing",
