@@ -287,7 +287,8 @@ class Session:
         weights: None (every handle pins its vertex), or (k,) weights > 0 as in harap.deform: a
         finite w makes that handle soft (a pull w ||u - t||^2), inf keeps it hard. Soft handles
         move with set_targets() like hard ones, without refactoring; other soft vertices or
-        weights factor every level anew (docs/session.md, "Soft handles")."""
+        weights refactor the rows they change, as add_handles does (docs/session.md, "Soft
+        handles")."""
         return _json.loads(self._session.set_handles(indices, targets, weights))
 
     def set_targets(self, targets):
@@ -296,8 +297,8 @@ class Session:
         self._session.set_targets(targets)
 
     def add_handles(self, indices, targets):
-        """Adds hard handles: vertices that are not handles yet, with their (k, 3) targets; updates every
-        level's factorization on the rows that changed. Returns the edit summary: {"seconds",
+        """Adds hard handles: vertices that are not handles yet, with their (k, 3) targets;
+        updates every level's factorization on the rows that changed. Returns the edit summary: {"seconds",
         "levels": [{"level", "constrained_vertices", "changed_rows", "factored", "route"
         ("full", "numeric", "update", "partial", "none"), "seconds"}] (finest first),
         "constraints", "notes"}."""
