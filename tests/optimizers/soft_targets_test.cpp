@@ -2,7 +2,6 @@
 // Soft targets (Constraints::weights): the data term Σ w ‖u − t‖² added to A and B.
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <random>
 
 #include "framework/error.h"
 #include "solvers/optimizers/coarse_constraints.h"
@@ -109,32 +108,10 @@ TEST_CASE("soft targets alone hold a free piece: nothing is pinned", "[optimizer
 TEST_CASE("soft targets: hundreds of small handle groups, hard and soft mixed, hierarchical",
           "[optimizers][soft]") {
   BentTube tube(100, 40, 4.0, M_PI / 2, Eigen::Vector3d(0.0, 1.0, -1.5));
-  const Mesh& mesh = tube.mesh;
   // 300 groups of 3 neighbouring vertices on the tube's side, each pulled outwards a little.
   DeformationProblem problem = tube.problem;
-  Constraints& c = problem.constraints;
-  c.weights.assign(c.indices.size(), Constraints::kHardWeight);
-  std::mt19937 random(3);
-  std::vector<unsigned char> used(mesh.num_vertices(), 0);
-  for (Index v : c.indices) used[v] = 1;
-  int groups = 0;
-  std::vector<Eigen::RowVector3d> targets;
-  for (int k = 0; k < static_cast<int>(c.indices.size()); ++k) targets.push_back(c.targets.row(k));
-  while (groups < 300) {
-    const Index first = 40 + static_cast<Index>(random() % (mesh.num_vertices() - 120));
-    if (used[first] || used[first + 1] || used[first + 2]) continue;
-    Eigen::RowVector3d out = mesh.vertices.row(first);
-    out.z() = 0.0;
-    for (Index v = first; v < first + 3; ++v) {
-      used[v] = 1;
-      c.indices.push_back(v);
-      targets.push_back(mesh.vertices.row(v) + 0.05 * out);
-      c.weights.push_back(0.5 + (groups % 5));
-    }
-    ++groups;
-  }
-  c.targets.resize(static_cast<Index>(targets.size()), 3);
-  for (size_t k = 0; k < targets.size(); ++k) c.targets.row(static_cast<Index>(k)) = targets[k];
+  problem.constraints = WithSoftGroups(tube, 40, 300, 3);
+  const Constraints& c = problem.constraints;
 
   TestSetup setup(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n[hierarchy]\nmin_vertices = 200\n");

@@ -5,36 +5,10 @@
 #include <cmath>
 #include <string>
 
-#include "tests/support/test_factory.h"
-#include "tests/support/test_meshes.h"
+#include "tests/session/session_test_support.h"
 
 using namespace harap;
 using namespace harap::testing;
-
-namespace {
-
-// A bent tube of 30 × 16 = 480 vertices: fast, and enough for a three-level octree hierarchy.
-struct SmallBentTube : BentTube {
-  SmallBentTube() : BentTube(30, 16, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4)) {}
-};
-
-const char* const kClassic =
-    "[optimizer]\ntype = \"classic\"\ntolerance = 0\nmax_iterations = 25\n";
-const char* const kHierarchical =
-    "[optimizer]\ntype = \"hierarchical\"\ntolerance = 0\nmax_iterations = 20\n"
-    "[hierarchy]\nmin_vertices = 60\n";
-
-bool Close(double a, double b, double relative) {
-  return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b));
-}
-
-std::unique_ptr<ConfiguredSession> Session(
-    const TestSetup& setup, const Mesh& mesh,
-    SessionOptions::FrameStart start = SessionOptions::FrameStart::kCorrected) {
-  return MakeSession(setup.registries, mesh, setup.config, 2, start);
-}
-
-}  // namespace
 
 TEST_CASE("session: the first solve equals the one-shot optimizer", "[session]") {
   SmallBentTube tube;
@@ -77,13 +51,7 @@ TEST_CASE("session: after adding and removing handles a solve equals a fresh ses
     extra_targets.row(k) = tube.mesh.vertices.row(extra[k]) + Eigen::RowVector3d(0.3, 0.0, 0.0);
   }
   const Positions start = SmoothlyDeformed(tube.mesh.vertices, 0.05);
-  // Every route of CHOLMOD's Refactor() (the default solver's), and the default one.
-  std::vector<std::string> solvers = {""};
-#ifdef HARAP_HAVE_CHOLMOD
-  for (const char* route : {"auto", "partial", "update", "numeric"}) {
-    solvers.push_back(std::string("[solver]\ntype = \"cholmod\"\nrefactor = \"") + route + "\"\n");
-  }
-#endif
+  const std::vector<std::string> solvers = RefactorRouteSolvers();
   for (const char* config : {kClassic, kHierarchical}) {
     for (const std::string& solver : solvers) {
       DYNAMIC_SECTION(config << solver) {
@@ -115,14 +83,7 @@ TEST_CASE("session: after adding and removing handles a solve equals a fresh ses
         fresh_session->session().SetHandles(handles.indices, handles.targets);
         fresh_session->session().SetPositions(start);
         const OptimizeResult fresh = fresh_session->session().Solve();
-        REQUIRE(after_edits.levels.size() == fresh.levels.size());
-        for (size_t l = 0; l < fresh.levels.size(); ++l) {
-          INFO("level " << fresh.levels[l].level);
-          CHECK(after_edits.levels[l].iterations == fresh.levels[l].iterations);
-          CHECK(Close(after_edits.levels[l].energy, fresh.levels[l].energy, 1e-10));
-        }
-        CHECK(Close(after_edits.energy, fresh.energy, 1e-10));
-        CHECK((after_edits.positions - fresh.positions).cwiseAbs().maxCoeff() < 1e-8);
+        CheckSameSolve(after_edits, fresh, 1e-10);
       }
     }
   }

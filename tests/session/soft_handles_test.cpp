@@ -4,34 +4,18 @@
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <random>
 #include <string>
 
 #include "api/session.h"
 #include "framework/error.h"
-#include "tests/support/test_factory.h"
-#include "tests/support/test_meshes.h"
+#include "tests/session/session_test_support.h"
 
 using namespace harap;
 using namespace harap::testing;
 
 namespace {
 
-// A bent tube of 30 × 16 = 480 vertices (bottom ring and top ring handles).
-struct SmallBentTube : BentTube {
-  SmallBentTube() : BentTube(30, 16, 2.0, M_PI / 3, Eigen::Vector3d(0.0, 0.5, -0.4)) {}
-};
-constexpr Index kSegments = 16;
-
-const char* const kClassic =
-    "[optimizer]\ntype = \"classic\"\ntolerance = 0\nmax_iterations = 25\n";
-const char* const kHierarchical =
-    "[optimizer]\ntype = \"hierarchical\"\ntolerance = 0\nmax_iterations = 20\n"
-    "[hierarchy]\nmin_vertices = 60\n";
-
-bool Close(double a, double b, double relative) {
-  return std::abs(a - b) <= relative * std::max(std::abs(a), std::abs(b));
-}
+constexpr Index kSegments = 16;  // SmallBentTube's vertices per ring
 
 // The tube's constraints with the top ring soft (weight `weight`), the bottom ring hard.
 Constraints SoftTop(const Constraints& hard, double weight) {
@@ -43,8 +27,12 @@ Constraints SoftTop(const Constraints& hard, double weight) {
   return soft;
 }
 
-std::unique_ptr<ConfiguredSession> Session(const TestSetup& setup, const Mesh& mesh) {
-  return MakeSession(setup.registries, mesh, setup.config, 2);
+// A session on `mesh` with the handles `handles` (weights included) set.
+std::unique_ptr<ConfiguredSession> SessionWith(const TestSetup& setup, const Mesh& mesh,
+                                               const Constraints& handles) {
+  auto configured = Session(setup, mesh);
+  configured->session().SetHandles(handles.indices, handles.targets, handles.weights);
+  return configured;
 }
 
 // A session built directly, its context counting the factorizations of every level.
@@ -93,15 +81,8 @@ TEST_CASE("session: soft handles solve like the one-shot run", "[session][soft]"
       CHECK(edit.constraints.constrained_vertices == kSegments);  // the hard ring
       CHECK(session.weights() == c.weights);
       const OptimizeResult result = session.Solve();
-      REQUIRE(result.levels.size() == reference.levels.size());
       if (std::string(config) == kHierarchical) CHECK(result.levels.size() >= 3);
-      for (size_t l = 0; l < result.levels.size(); ++l) {
-        INFO("level " << result.levels[l].level);
-        CHECK(result.levels[l].iterations == reference.levels[l].iterations);
-        CHECK(Close(result.levels[l].energy, reference.levels[l].energy, 1e-9));
-      }
-      CHECK(Close(result.energy, reference.energy, 1e-9));
-      CHECK((result.positions - reference.positions).cwiseAbs().maxCoeff() < 1e-8);
+      CheckSameSolve(result, reference, 1e-9);
       // The soft ring is pulled, not pinned.
       CHECK(MaxDistance(result.positions, c) > 1e-6);
     }
@@ -162,16 +143,9 @@ TEST_CASE("session: SetTargets moves soft targets without refactoring", "[sessio
       const OptimizeResult result = session.Solve();
       CHECK(counting.factorizations == after_constrain);
 
-      auto fresh = Session(setup, tube.mesh);
-      fresh->session().SetHandles(soft.indices, moved, soft.weights);
+      auto fresh = SessionWith(setup, tube.mesh, Constraints{soft.indices, moved, soft.weights});
       const OptimizeResult expected = fresh->session().Solve();
-      REQUIRE(result.levels.size() == expected.levels.size());
-      for (size_t l = 0; l < result.levels.size(); ++l) {
-        INFO("level " << result.levels[l].level);
-        CHECK(result.levels[l].iterations == expected.levels[l].iterations);
-        CHECK(Close(result.levels[l].energy, expected.levels[l].energy, 1e-10));
-      }
-      CHECK((result.positions - expected.positions).cwiseAbs().maxCoeff() < 1e-8);
+      CheckSameSolve(result, expected, 1e-10);
     }
   }
 }
@@ -180,9 +154,8 @@ TEST_CASE("session: a preview with soft handles works and says how", "[session][
   SmallBentTube tube;
   const Constraints soft = SoftTop(tube.problem.constraints, 5.0);
   TestSetup setup(kHierarchical);
-  auto configured = Session(setup, tube.mesh);
+  auto configured = SessionWith(setup, tube.mesh, soft);
   DeformationSession& session = configured->session();
-  session.SetHandles(soft.indices, soft.targets, soft.weights);
   const OptimizeResult preview = session.Preview();
   CHECK(preview.positions.allFinite());
   bool noted = false;
@@ -211,9 +184,8 @@ TEST_CASE("session: handle edits keep the soft weights", "[session][soft]") {
   Positions ring_targets(kSegments, 3);
   for (Index s = 0; s < kSegments; ++s) ring_targets.row(s) = tube.mesh.vertices.row(ring[s]);
   TestSetup setup(kHierarchical);
-  auto configured = Session(setup, tube.mesh);
+  auto configured = SessionWith(setup, tube.mesh, soft);
   DeformationSession& session = configured->session();
-  session.SetHandles(soft.indices, soft.targets, soft.weights);
   session.Solve();
   // Added handles are hard; removing them gives the soft set back.
   const HandleEditResult added = session.AddHandles(ring, ring_targets);
@@ -247,20 +219,13 @@ TEST_CASE("session: other soft weights refactor only the rows they change", "[se
     heavier.targets.row(2 * kSegments + s) =
         tube.mesh.vertices.row(15 * kSegments + s) + Eigen::RowVector3d(0.1, 0.0, 0.0);
   }
-  // Every route of CHOLMOD's Refactor() (the default solver's), and the default one.
-  std::vector<std::string> solvers = {""};
-#ifdef HARAP_HAVE_CHOLMOD
-  for (const char* route : {"auto", "partial", "update", "numeric"}) {
-    solvers.push_back(std::string("[solver]\ntype = \"cholmod\"\nrefactor = \"") + route + "\"\n");
-  }
-#endif
+  const std::vector<std::string> solvers = RefactorRouteSolvers();
   for (const char* config : {kClassic, kHierarchical}) {
     for (const std::string& solver : solvers) {
       DYNAMIC_SECTION(config << solver) {
         TestSetup setup(config + solver);
-        auto configured = Session(setup, tube.mesh);
+        auto configured = SessionWith(setup, tube.mesh, soft);
         DeformationSession& session = configured->session();
-        session.SetHandles(soft.indices, soft.targets, soft.weights);
         session.Solve();
         const HandleEditResult reweighted =
             session.SetHandles(heavier.indices, heavier.targets, heavier.weights);
@@ -281,16 +246,9 @@ TEST_CASE("session: other soft weights refactor only the rows they change", "[se
         }
         session.SetPositions(tube.mesh.vertices);
         const OptimizeResult result = session.Solve();
-        auto fresh = Session(setup, tube.mesh);
-        fresh->session().SetHandles(heavier.indices, heavier.targets, heavier.weights);
+        auto fresh = SessionWith(setup, tube.mesh, heavier);
         const OptimizeResult expected = fresh->session().Solve();
-        REQUIRE(result.levels.size() == expected.levels.size());
-        for (size_t l = 0; l < result.levels.size(); ++l) {
-          INFO("level " << result.levels[l].level);
-          CHECK(result.levels[l].iterations == expected.levels[l].iterations);
-          CHECK(Close(result.levels[l].energy, expected.levels[l].energy, 1e-10));
-        }
-        CHECK((result.positions - expected.positions).cwiseAbs().maxCoeff() < 1e-8);
+        CheckSameSolve(result, expected, 1e-10);
       }
     }
   }
@@ -301,9 +259,8 @@ TEST_CASE("session: bad soft weights throw InputError naming the entry and chang
   SmallBentTube tube;
   const Constraints soft = SoftTop(tube.problem.constraints, 5.0);
   TestSetup setup(kClassic);
-  auto configured = Session(setup, tube.mesh);
+  auto configured = SessionWith(setup, tube.mesh, soft);
   DeformationSession& session = configured->session();
-  session.SetHandles(soft.indices, soft.targets, soft.weights);
   const OptimizeResult before = session.Solve();
   for (const double bad : {std::nan(""), 0.0, -1.0, -std::numeric_limits<double>::infinity()}) {
     std::vector<double> weights = soft.weights;
@@ -325,28 +282,7 @@ TEST_CASE("session: hundreds of small soft handle groups, hierarchical", "[sessi
   BentTube tube(100, 40, 4.0, M_PI / 2, Eigen::Vector3d(0.0, 1.0, -1.5));
   const Mesh& mesh = tube.mesh;
   // The ends hard; 300 groups of 3 neighbouring vertices on the side, each pulled outwards.
-  Constraints c = tube.problem.constraints;
-  c.weights.assign(c.indices.size(), Constraints::kHardWeight);
-  std::mt19937 random(5);
-  std::vector<unsigned char> used(mesh.num_vertices(), 0);
-  for (Index v : c.indices) used[v] = 1;
-  std::vector<Eigen::RowVector3d> targets;
-  for (Index k = 0; k < c.targets.rows(); ++k) targets.push_back(c.targets.row(k));
-  for (int groups = 0; groups < 300;) {
-    const Index first = 40 + static_cast<Index>(random() % (mesh.num_vertices() - 120));
-    if (used[first] || used[first + 1] || used[first + 2]) continue;
-    Eigen::RowVector3d out = mesh.vertices.row(first);
-    out.z() = 0.0;
-    for (Index v = first; v < first + 3; ++v) {
-      used[v] = 1;
-      c.indices.push_back(v);
-      targets.push_back(mesh.vertices.row(v) + 0.05 * out);
-      c.weights.push_back(0.5 + (groups % 5));
-    }
-    ++groups;
-  }
-  c.targets.resize(static_cast<Index>(targets.size()), 3);
-  for (size_t k = 0; k < targets.size(); ++k) c.targets.row(static_cast<Index>(k)) = targets[k];
+  const Constraints c = WithSoftGroups(tube, 40, 300, 5);
 
   TestSetup setup(
       "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-8\n[hierarchy]\nmin_vertices = 200\n");
@@ -371,8 +307,7 @@ TEST_CASE("session: hundreds of small soft handle groups, hierarchical", "[sessi
   const OptimizeResult warm = session.Solve();
   CHECK(warm.converged);
   CHECK(counting.factorizations == factored);
-  auto fresh = Session(setup, mesh);
-  fresh->session().SetHandles(c.indices, moved, c.weights);
+  auto fresh = SessionWith(setup, mesh, Constraints{c.indices, moved, c.weights});
   const OptimizeResult expected = fresh->session().Solve();
   // Both converged to the tolerance from different starts.
   CHECK(Close(warm.energy, expected.energy, 1e-4));

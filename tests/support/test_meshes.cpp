@@ -134,6 +134,34 @@ BentTube::BentTube(int rings, int segments, double height, double angle,
   }
 }
 
+Constraints WithSoftGroups(const BentTube& tube, int segments, int groups, unsigned seed) {
+  const Mesh& mesh = tube.mesh;
+  Constraints c = tube.problem.constraints;
+  c.weights.assign(c.indices.size(), Constraints::kHardWeight);
+  std::mt19937 random(seed);
+  std::vector<unsigned char> used(mesh.num_vertices(), 0);
+  for (Index v : c.indices) used[v] = 1;
+  std::vector<Eigen::RowVector3d> targets;
+  for (Index k = 0; k < c.targets.rows(); ++k) targets.push_back(c.targets.row(k));
+  for (int group = 0; group < groups;) {
+    const Index first =
+        segments + static_cast<Index>(random() % (mesh.num_vertices() - 3 * segments));
+    if (used[first] || used[first + 1] || used[first + 2]) continue;
+    Eigen::RowVector3d out = mesh.vertices.row(first);
+    out.z() = 0.0;
+    for (Index v = first; v < first + 3; ++v) {
+      used[v] = 1;
+      c.indices.push_back(v);
+      targets.push_back(mesh.vertices.row(v) + 0.05 * out);
+      c.weights.push_back(0.5 + (group % 5));
+    }
+    ++group;
+  }
+  c.targets.resize(static_cast<Index>(targets.size()), 3);
+  for (size_t k = 0; k < targets.size(); ++k) c.targets.row(static_cast<Index>(k)) = targets[k];
+  return c;
+}
+
 namespace {
 
 /// Fixes the vertices `select` picks, at `target(rest position)`.

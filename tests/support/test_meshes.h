@@ -41,6 +41,11 @@ struct BentTube {
   Mesh mesh;
   DeformationProblem problem;
 };
+/// `tube`'s hard handles plus `groups` soft groups of 3 consecutive vertices on its side (away
+/// from the end rings of `segments` vertices), each pulled outwards by 5% of its distance from
+/// the axis with weights 0.5, 1.5, ..., 4.5 in turn; where the groups go is drawn from `seed`.
+Constraints WithSoftGroups(const BentTube& tube, int segments, int groups, unsigned seed);
+
 /// A TetBox(nx, ny, nz) stretched to `height` along z, its bottom layer fixed and its top layer
 /// turned by `angle` about the box's vertical axis: a twisting problem for the per-element energy.
 struct TwistedTetBar {
