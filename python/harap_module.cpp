@@ -789,17 +789,29 @@ py::dict Components() {
 
 // The handle groups the page drags one by one: as given (`group_sizes` consecutive rows of
 // `vertices`, named `group_names`), or, with no sizes, each connected set of handle vertices
-// (edges of the mesh's elements) one group. Vertices ascending in each group, as a scenario's.
+// (edges of the mesh's elements) with one weight one group. Vertices ascending in each group, as
+// a scenario's. `weights`: empty (all hard) or one per vertex, the same in each given group.
 std::vector<ScenarioHandle> HandleGroups(const Mesh& mesh, const std::vector<Index>& vertices,
                                          const Positions& targets,
                                          const std::vector<int>& group_sizes,
-                                         const std::vector<std::string>& group_names) {
+                                         const std::vector<std::string>& group_names,
+                                         const std::vector<double>& weights) {
+  const auto weight = [&](size_t k) {
+    return weights.empty() ? Constraints::kHardWeight : weights[k];
+  };
   std::vector<int> group_of(vertices.size(), 0);
   int num_groups = 0;
   if (!group_sizes.empty()) {
     size_t row = 0;
     for (const int size : group_sizes) {
-      for (int i = 0; i < size && row < vertices.size(); ++i) group_of[row++] = num_groups;
+      for (int i = 0; i < size && row < vertices.size(); ++i) {
+        if (weight(row) != weight(row - i)) {
+          throw InputError(fmt::format(
+              "handle group {} mixes weights ({} and {}): a group the page drags has one weight",
+              num_groups + 1, weight(row - i), weight(row)));
+        }
+        group_of[row++] = num_groups;
+      }
       ++num_groups;
     }
     if (row != vertices.size()) throw InputError("the handle groups' sizes do not add up");
@@ -816,7 +828,7 @@ std::vector<ScenarioHandle> HandleGroups(const Mesh& mesh, const std::vector<Ind
       for (Eigen::Index a = 0; a < mesh.elements.cols(); ++a) {
         for (Eigen::Index b = a + 1; b < mesh.elements.cols(); ++b) {
           const Index ra = row_of[mesh.elements(e, a)], rb = row_of[mesh.elements(e, b)];
-          if (ra >= 0 && rb >= 0) parent[find(ra)] = find(rb);
+          if (ra >= 0 && rb >= 0 && weight(ra) == weight(rb)) parent[find(ra)] = find(rb);
         }
       }
     }
@@ -834,6 +846,7 @@ std::vector<ScenarioHandle> HandleGroups(const Mesh& mesh, const std::vector<Ind
     std::sort(rows[g].begin(), rows[g].end(),
               [&](size_t a, size_t b) { return vertices[a] < vertices[b]; });
     groups[g].name = g < group_names.size() ? group_names[g] : fmt::format("handle {}", g + 1);
+    if (!rows[g].empty()) groups[g].weight = weight(rows[g].front());
     groups[g].targets.resize(static_cast<Eigen::Index>(rows[g].size()), 3);
     for (size_t i = 0; i < rows[g].size(); ++i) {
       groups[g].vertices.push_back(vertices[rows[g][i]]);
@@ -849,7 +862,7 @@ std::vector<ScenarioHandle> HandleGroups(const Mesh& mesh, const std::vector<Ind
 // until stop(); each page that connects solves in a session of its own, as with `harap view`.
 class PyView {
  public:
-  PyView(py::handle V, py::handle F, py::handle handles, py::handle targets,
+  PyView(py::handle V, py::handle F, py::handle handles, py::handle targets, py::handle weights,
          const std::vector<int>& group_sizes, const std::vector<std::string>& group_names,
          const Settings& settings, std::optional<bool> planar, int threads, const std::string& host,
          int port, const std::string& assets, int display_vertices) {
@@ -863,10 +876,11 @@ class PyView {
     source_->run_config = ConfigFromSettings(settings);
     const std::vector<Index> vertices = ToIndices(handles, "handles");
     const Positions positions = ToPositions(targets, "targets");
-    source_->scenario =
-        ScenarioFromArrays(ToMesh(V, F), vertices, positions, std::nullopt, planar, "arrays V, F");
-    source_->scenario.handles =
-        HandleGroups(source_->scenario.mesh, vertices, positions, group_sizes, group_names);
+    const std::vector<double> handle_weights = ToWeights(weights, vertices.size());
+    source_->scenario = ScenarioFromArrays(ToMesh(V, F), vertices, positions, std::nullopt, planar,
+                                           "arrays V, F", handle_weights);
+    source_->scenario.handles = HandleGroups(source_->scenario.mesh, vertices, positions,
+                                             group_sizes, group_names, handle_weights);
     // The exported scenario needs a mesh file: arrays have none.
     source_->mesh_toml =
         "# The mesh came from Python arrays: write it with harap.write_mesh and name the file\n"
@@ -957,10 +971,10 @@ PYBIND11_MODULE(_harap, m) {
         py::arg("planar"), py::arg("threads"));
   m.def("components", &Components);
   py::class_<PyView>(m, "View")
-      .def(py::init<py::handle, py::handle, py::handle, py::handle, const std::vector<int>&,
-                    const std::vector<std::string>&, const Settings&, std::optional<bool>, int,
-                    const std::string&, int, const std::string&, int>(),
-           py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"),
+      .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle,
+                    const std::vector<int>&, const std::vector<std::string>&, const Settings&,
+                    std::optional<bool>, int, const std::string&, int, const std::string&, int>(),
+           py::arg("V"), py::arg("F"), py::arg("handles"), py::arg("targets"), py::arg("weights"),
            py::arg("group_sizes"), py::arg("group_names"), py::arg("settings"), py::arg("planar"),
            py::arg("threads"), py::arg("host"), py::arg("port"), py::arg("assets"),
            py::arg("display_vertices"))

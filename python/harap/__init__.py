@@ -368,8 +368,8 @@ class Session:
         returns a running harap.View (see harap.view). The page solves in a session of its own:
         dragging there does not change this one."""
         V, F, settings, planar, threads = self._view_source
-        return _start_view(V, F, self.handles, self.targets, None, None, settings, planar,
-                           threads, port, host, open, display_vertices, assets)
+        return _start_view(V, F, self.handles, self.targets, self.weights, None, None, settings,
+                           planar, threads, port, host, open, display_vertices, assets)
 
     def __repr__(self):
         info = self.info
@@ -444,16 +444,16 @@ def _rest_positions(V, indices):
     return V[indices.astype(_np.int64)]
 
 
-def _start_view(V, F, handles, targets, group_sizes, group_names, settings, planar, threads,
-                port, host, open_browser, display_vertices, assets):
+def _start_view(V, F, handles, targets, weights, group_sizes, group_names, settings, planar,
+                threads, port, host, open_browser, display_vertices, assets):
     if isinstance(port, bool) or not isinstance(port, _numbers.Integral):
         raise ConfigError(f"port must be an integer (0: any free port), got {port!r}")
     if isinstance(display_vertices, bool) or not isinstance(display_vertices, _numbers.Integral):
         raise ConfigError(f"display_vertices must be an integer, got {display_vertices!r}")
     if not isinstance(host, str):
         raise ConfigError(f"host must be a string, got {host!r}")
-    server = _harap.View(V, F, handles, targets, group_sizes or [], group_names or [], settings,
-                         planar, int(threads), host, int(port), _assets_folder(assets),
+    server = _harap.View(V, F, handles, targets, weights, group_sizes or [], group_names or [],
+                         settings, planar, int(threads), host, int(port), _assets_folder(assets),
                          int(display_vertices))
     page = View(server, host)
     if host not in ("127.0.0.1", "::1"):
@@ -469,7 +469,7 @@ def _start_view(V, F, handles, targets, group_sizes, group_names, settings, plan
 def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=None,
          solver=None, hierarchy=None, upsampler=None, options=None, tolerance=None,
          max_iterations=None, planar=None, threads=0, port=8080, host="127.0.0.1", open=False,
-         display_vertices=200000, assets=None):
+         display_vertices=200000, assets=None, weights=None):
     """Serves the page of `harap view` (docs/view.md) for a mesh: drag its handles in a browser
     while harap solves. Returns a running harap.View (url, stop(), wait(); a context manager).
 
@@ -478,7 +478,11 @@ def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=N
     handles, (k, 3) or a list of (k_i, 3) (None: where the vertices are). port 0 picks a free
     port; host 127.0.0.1 (default) accepts this machine only; open=True opens a browser. The
     page draws at most display_vertices vertices (a larger surface is decimated for the display,
-    never for the solve). The other keywords are harap.deform's.
+    never for the solve). weights: None (every handle pins), or one weight per handle vertex
+    (in the order of handles; for a list of groups, of the groups concatenated) as in
+    harap.deform: a finite weight makes the vertex a soft handle; each group the page drags has
+    one weight (connected handle vertices with other weights become groups of their own). The
+    other keywords are harap.deform's.
     """
     settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler,
                              tolerance, max_iterations)
@@ -501,8 +505,8 @@ def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=N
                                    for t in targets])
     elif targets is None:
         targets = _rest_positions(V_array, handles)
-    return _start_view(V, F, handles, targets, group_sizes, group_names, settings, planar,
-                       threads, port, host, open, display_vertices, assets)
+    return _start_view(V, F, handles, targets, weights, group_sizes, group_names, settings,
+                       planar, threads, port, host, open, display_vertices, assets)
 
 
 def read_mesh(path):

@@ -46,6 +46,27 @@ def test_session_view_and_handle_groups(cylinder):
         assert fetch(groups.url)[0] == 200
 
 
+def test_view_with_soft_handles(cylinder):
+    """Soft handles (weights) reach the page's session: one weight per dragged group."""
+    V, F, handles, targets = cylinder
+    weights = np.where(V[handles, 2] > 2, 5.0, np.inf)
+    session = harap.Session(V, F, options={"optimizer.tolerance": 1e-6})
+    session.set_handles(handles, targets, weights=weights)
+    with session.view(port=0) as page:
+        assert fetch(page.url)[0] == 200
+    bottom, top = handles[V[handles, 2] < 2], handles[V[handles, 2] > 2]
+    with harap.view(V, F, [bottom, top], weights=np.r_[np.full(len(bottom), np.inf),
+                                                       np.full(len(top), 5.0)], port=0) as page:
+        assert fetch(page.url)[0] == 200
+    mixed = np.r_[np.full(len(bottom), np.inf), np.full(len(top) - 1, 5.0), 2.0]
+    with pytest.raises(harap.InputError, match="handle group 2 mixes weights"):
+        harap.view(V, F, [bottom, top], weights=mixed, port=0)
+    with pytest.raises(harap.InputError, match="weight of handle vertex"):
+        harap.view(V, F, handles, weights=np.full(len(handles), -1.0), port=0)
+    with pytest.raises(harap.InputError, match="one per handle"):
+        harap.view(V, F, handles, weights=np.ones(2), port=0)
+
+
 def test_view_bad_arguments(cylinder):
     V, F, handles, targets = cylinder
     with pytest.raises(harap.InputError, match="port must be in 0..65535"):
