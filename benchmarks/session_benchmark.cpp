@@ -14,6 +14,12 @@
 //                                    every level factored from scratch, the baseline); counters
 //                                    add_ms, remove_ms, and level0_add_ms / coarse_add_ms (the
 //                                    finest level's and the coarse levels' share of the add)
+//   SessionReweight_<refactor>/armadillo-bend
+//                                    the same ball held by soft handles beside the scenario's
+//                                    hard ones, their weight set to 10 and 50 in turn: every
+//                                    level's A + W changes on the ball's rows (SetHandles with
+//                                    weights; refactor = full: every level factored from
+//                                    scratch, the baseline); counters reweight_ms, level0_ms
 //
 //   ./build/harap_benchmarks --benchmark_filter='Session|Solve3_auto_amd/armadillo'
 // Skipped (not registered) when ../shared is absent; the data is loaded on first use.
@@ -105,6 +111,39 @@ void Edit(benchmark::State& state, const std::string& refactor) {
   state.counters["ball"] = static_cast<double>(ball.size());
 }
 
+void Reweight(benchmark::State& state, const std::string& refactor) {
+  auto configured = MakeSolvedSession(refactor);
+  DeformationSession& session = configured->session();
+  const std::vector<Index> ball = EditBall(configured->mesh(), session.handles(), 0.01);
+  Constraints handles = session.constraints();
+  const size_t hard = handles.indices.size();
+  handles.weights.assign(hard, Constraints::kHardWeight);
+  handles.indices.insert(handles.indices.end(), ball.begin(), ball.end());
+  handles.weights.resize(handles.indices.size(), 10.0);
+  handles.targets.conservativeResize(static_cast<Index>(handles.indices.size()), 3);
+  for (size_t k = 0; k < ball.size(); ++k) {
+    handles.targets.row(static_cast<Index>(hard + k)) = session.positions().row(ball[k]);
+  }
+  session.SetHandles(handles.indices, handles.targets, handles.weights);
+  double reweight = 0.0, level0 = 0.0;
+  double weight = 10.0;
+  for (auto _ : state) {
+    weight = weight == 10.0 ? 50.0 : 10.0;
+    std::fill(handles.weights.begin() + static_cast<std::ptrdiff_t>(hard), handles.weights.end(),
+              weight);
+    const HandleEditResult edit =
+        session.SetHandles(handles.indices, handles.targets, handles.weights);
+    reweight += edit.seconds;
+    for (const auto& level : edit.levels) {
+      if (level.level == 0) level0 += level.seconds;
+    }
+  }
+  const double iterations = static_cast<double>(state.iterations());
+  state.counters["reweight_ms"] = 1e3 * reweight / iterations;
+  state.counters["level0_ms"] = 1e3 * level0 / iterations;
+  state.counters["ball"] = static_cast<double>(ball.size());
+}
+
 [[maybe_unused]] const bool registered = [] {
   if (!std::filesystem::exists(ArmadilloBendScenario())) return false;
   const auto add = [](const std::string& name, auto... args) {
@@ -114,6 +153,8 @@ void Edit(benchmark::State& state, const std::string& refactor) {
   add("SessionPreview", Frame, true);
   add("SessionEdit_auto", Edit, std::string("auto"));
   add("SessionEdit_full", Edit, std::string("full"));
+  add("SessionReweight_auto", Reweight, std::string("auto"));
+  add("SessionReweight_full", Reweight, std::string("full"));
   return true;
 }();
 
