@@ -36,7 +36,11 @@ inline CLI::App* AddRegisterCommand(CLI::App& app, RegisterCommandArguments& a) 
       "register",
       "deform a source mesh onto a target mesh or point cloud with ARAP as the regularizer "
       "(non-rigid ICP, coarse to fine; docs/registration.md)");
-  command->add_option("source", a.source, "the mesh to deform (a triangle surface)")->required();
+  command
+      ->add_option("source", a.source,
+                   "the mesh to deform: a triangle surface, or a tetrahedral volume (its boundary "
+                   "meets the target)")
+      ->required();
   command
       ->add_option("target", a.target,
                    "the target: a mesh file, or a point cloud (.xyz/.pts/.txt with x y z [nx ny "
@@ -69,14 +73,12 @@ inline CLI::App* AddRegisterCommand(CLI::App& app, RegisterCommandArguments& a) 
 inline int RunRegisterCommand(const RegisterCommandArguments& a) {
   // Wrong output names fail now, not after the registration.
   if (!a.report.empty()) CheckWritable(a.report, "--report");
-  if (!a.out.empty()) {
-    CheckMeshOutputFormat(a.out, ElementKind::kTriangle);
-    CheckWritable(a.out, "--out");
-  }
+  if (!a.out.empty()) CheckWritable(a.out, "--out");
   const ConfigNode config = a.BuildConfig();
   ProgressDisplay progress(stderr, ProgressOptions::For(stderr, a.quiet));
   progress.Phase("reading the source and the target");
   const Mesh source = ReadMesh(a.source);
+  if (!a.out.empty()) CheckMeshOutputFormat(a.out, source.kind());
   const RegistrationTarget target = ReadRegistrationTarget(a.target);
   std::optional<Mesh> answer;
   if (!a.answer.empty()) {
@@ -132,9 +134,11 @@ inline int RunRegisterCommand(const RegisterCommandArguments& a) {
     fmt::print(
         "  kept {} of {} correspondences (rejected: {} too far, {} normal angle, {} boundary); "
         "residual RMS {:.3g} ({:.3g}% of the diagonal), max {:.3g}; ARAP energy {:.6g}\n",
-        r.correspondences.kept, source.num_vertices(), r.correspondences.too_far,
-        r.correspondences.normal_angle, r.correspondences.boundary, r.residual_rms,
-        100.0 * r.residual_rms / diagonal, r.residual_max, r.arap_energy);
+        r.correspondences.kept,
+        r.correspondences.kept + r.correspondences.too_far + r.correspondences.normal_angle +
+            r.correspondences.boundary,
+        r.correspondences.too_far, r.correspondences.normal_angle, r.correspondences.boundary,
+        r.residual_rms, 100.0 * r.residual_rms / diagonal, r.residual_max, r.arap_energy);
     if (comparison) {
       const AnswerErrors& e = comparison->errors;
       fmt::print(

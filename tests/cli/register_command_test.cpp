@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // `harap register SOURCE TARGET`: the command end to end on a generated mesh, and its refusals.
 #include <catch2/catch.hpp>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -162,6 +163,41 @@ TEST_CASE("harap register refuses bad input or says what happened", "[cli][regis
     const Mesh out = ReadMesh(folder.dir / "far.ply");
     CHECK((out.vertices - ReadMesh(rest).vertices).cwiseAbs().maxCoeff() < 1e-6);
   }
+}
+
+TEST_CASE("harap register deforms a tetrahedral source by its boundary", "[cli][registration]") {
+  const TempFolder folder("register-tets");
+  const std::string scenario =
+      folder.Write("bend.toml", std::string("mesh = { tetrahedralize = { builtin = \"cylinder\", "
+                                            "vertices = 1500 } }\n") +
+                                    (std::strchr(kBendScenario, '\n') + 1));
+  const fs::path rest = folder.dir / "rest.mesh", answer = folder.dir / "answer.mesh";
+  const auto deformed = RunHarap(
+      fmt::format("deform {} --out {} --out-rest {} -q", scenario, answer.string(), rest.string()));
+  INFO(deformed.output);
+  REQUIRE(deformed.status == 0);
+  // The target is the answer's boundary surface; the interior follows through the tetrahedra.
+  const fs::path target = folder.dir / "answer.ply", out = folder.dir / "registered.mesh";
+  REQUIRE(RunHarap(fmt::format("deform {} --out {} -q", scenario, target.string())).status == 0);
+  const fs::path report_file = folder.dir / "report.json";
+  const auto run = RunHarap(
+      fmt::format("register {} {} --answer {} --out {} --report {} --threads 2", rest.string(),
+                  target.string(), answer.string(), out.string(), report_file.string()));
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+  std::ifstream report_stream(report_file);
+  const auto report = nlohmann::json::parse(report_stream);
+  CHECK(report["energy_type"] == "elements");
+  CHECK(report["source"].contains("tetrahedra"));
+  const Mesh source = ReadMesh(rest);
+  const Mesh registered = ReadMesh(out);
+  REQUIRE(registered.kind() == ElementKind::kTetrahedron);
+  REQUIRE(registered.num_vertices() == source.num_vertices());
+  // Only boundary vertices had correspondences: fewer kept than vertices.
+  CHECK(report["correspondences"]["kept"].get<Index>() < source.num_vertices());
+  const double diagonal = BoundingBoxDiagonal(source);
+  const double rest_error = MeanDistance(source.vertices, ReadMesh(answer).vertices) / diagonal;
+  CHECK(report["answer"]["mean_error_relative"].get<double>() < 0.5 * rest_error);
 }
 
 TEST_CASE("harap known-answer makes a case that harap register --answer scores",
