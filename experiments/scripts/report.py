@@ -788,18 +788,26 @@ def registration_summary(runs, compare, baseline):
     return lines
 
 
+def runs_table_head(columns, alignments):
+    """The "## Runs" heading and a Markdown table head; alignments: "---" or "---:" per column."""
+    return ["## Runs\n", "| " + " | ".join(columns) + " |", "|" + "|".join(alignments) + "|"]
+
+
+def unfinished_row(run, columns):
+    """A table row for a run that did not finish: its scenario, label, status and error."""
+    error = run["run"].get("error", "not run yet")
+    return (f"| {run['_plan']['scenario']} | | {markdown_escape(run_name(run))} | "
+            f"{run['run']['status']}: {markdown_escape(error)} " + "|" * (columns - 3))
+
+
 def registration_table(runs):
-    out = ["## Runs\n"]
     columns = ["case", "V", "run", "target", "updates", "iterations", "mean error %",
                "max error %", "residual RMS %", "ARAP energy", "T (s)"]
-    out.append("| " + " | ".join(columns) + " |")
-    out.append("|" + "|".join(["---", "---:", "---", "---:"] + ["---:"] * 7) + "|")
+    out = runs_table_head(columns, ["---", "---:", "---", "---:"] + ["---:"] * 7)
     for run in runs:
         plan_entry = run["_plan"]
         if not ok(run):
-            error = run["run"].get("error", "not run yet")
-            out.append(f"| {plan_entry['scenario']} | | {markdown_escape(run_name(run))} | "
-                       f"{run['run']['status']}: {markdown_escape(error)} ||||||||")
+            out.append(unfinished_row(run, len(columns)))
             continue
         errors = answer_errors(run)
         target = run["target"]
@@ -820,17 +828,13 @@ def registration_table(runs):
 
 
 def deformation_table(runs):
-    out = ["## Runs\n"]
     columns = ["scenario", "V", "run", "H", "P", "C", "S", "T", "E", "M (MiB)",
                "iterations per level", "conv."]
-    out.append("| " + " | ".join(columns) + " |")
-    out.append("|" + "|".join(["---", "---:", "---"] + ["---:"] * 7 + ["---", "---"]) + "|")
+    out = runs_table_head(columns, ["---", "---:", "---"] + ["---:"] * 7 + ["---", "---"])
     for run in runs:
         plan_entry = run["_plan"]
         if not ok(run):
-            error = run["run"].get("error", "not run yet")
-            out.append(f"| {plan_entry['scenario']} | | {markdown_escape(run_name(run))} | "
-                       f"{run['run']['status']}: {markdown_escape(error)} |||||||||")
+            out.append(unfinished_row(run, len(columns)))
             continue
         t = run["timings"]
         levels = ", ".join(str(level["iterations"]) for level in run.get("levels", []))
