@@ -92,14 +92,6 @@ RegistrationDriver ResolveDriver(const Registries& registries, const ConfigNode&
   return driver;
 }
 
-void ValidateRegisterConfig(const ConfigNode& root) {
-  for (const char* table :
-       {"optimizer", "energy", "solver", "hierarchy", "upsampler", "registration"}) {
-    root.Child(table);
-  }
-  root.RejectUnknownKeys();
-}
-
 std::unique_ptr<ClosestPointSearch> BuildSearch(const RegistrationTarget& target) {
   if (target.mesh && target.mesh->kind() == ElementKind::kTetrahedron) {
     // A volume's surface is its boundary.
@@ -115,7 +107,7 @@ std::unique_ptr<ClosestPointSearch> BuildSearch(const RegistrationTarget& target
 }  // namespace
 
 void CheckRegisterConfig(const Registries& registries, const ConfigNode& config) {
-  ValidateRegisterConfig(config);
+  ValidateRunConfig(config, {"registration"});
   RegistrationOptions::FromConfig(config.Child("registration"));
   const RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
   const RegistryComponentFactory factory(registries, config);
@@ -125,7 +117,7 @@ void CheckRegisterConfig(const Registries& registries, const ConfigNode& config)
 RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
                             const RegistrationTarget& target, const ConfigNode& config,
                             const RegisterOptions& options) {
-  ValidateRegisterConfig(config);
+  ValidateRunConfig(config, {"registration"});
   RegisterOutcome outcome;
   outcome.options = RegistrationOptions::FromConfig(config.Child("registration"));
   RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
