@@ -194,10 +194,11 @@ ResolvedRunConfig::ResolvedRunConfig(const Registries& registries, const ConfigN
   optimizer->CheckComponents(factory);
 }
 
-void ValidateRunConfig(const ConfigNode& root) {
-  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler", "mesh"}) {
+void ValidateRunConfig(const ConfigNode& root, std::initializer_list<const char*> command_tables) {
+  for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
     root.Child(table);
   }
+  for (const char* table : command_tables) root.Child(table);
   root.RejectUnknownKeys();
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <string>
@@ -130,7 +131,10 @@ std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const Con
 /// The options of the `[solver.small_systems]` table (drives `harap list`).
 std::vector<OptionInfo> DescribeSmallSystemsOptions();
 
-/// Rejects unknown top-level tables/keys of a run config, listing the valid ones.
-void ValidateRunConfig(const ConfigNode& root);
+/// Rejects unknown top-level tables/keys of a run config, listing the valid ones: the pieces'
+/// tables (optimizer, energy, solver, hierarchy, upsampler) and the command's own, `mesh` for
+/// `harap deform` (`registration` for `harap register`).
+void ValidateRunConfig(const ConfigNode& root,
+                       std::initializer_list<const char*> command_tables = {"mesh"});
 
 }  // namespace harap

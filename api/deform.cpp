@@ -255,10 +255,16 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
   if (!scenario.stiffness.empty()) {
     json regions = json::array();
     for (const auto& region : scenario.stiffness) {
-      regions.push_back({{"name", region.name},
-                         {"vertices", region.vertices.size()},
-                         {"factor", region.factor},
-                         {"selection", region.selection}});
+      json entry = {{"name", region.name},
+                    {"vertices", region.vertices.size()},
+                    {"selection", region.selection}};
+      if (region.attribute.empty()) {
+        entry["factor"] = region.factor;
+      } else {
+        entry["attribute"] = region.attribute;
+        entry["per"] = region.element_factors.empty() ? "vertex" : "element";
+      }
+      regions.push_back(entry);
     }
     report["stiffness"] = regions;
   }

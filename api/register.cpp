@@ -92,14 +92,6 @@ RegistrationDriver ResolveDriver(const Registries& registries, const ConfigNode&
   return driver;
 }
 
-void ValidateRegisterConfig(const ConfigNode& root) {
-  for (const char* table :
-       {"optimizer", "energy", "solver", "hierarchy", "upsampler", "registration"}) {
-    root.Child(table);
-  }
-  root.RejectUnknownKeys();
-}
-
 std::unique_ptr<ClosestPointSearch> BuildSearch(const RegistrationTarget& target) {
   if (target.mesh && target.mesh->kind() == ElementKind::kTetrahedron) {
     // A volume's surface is its boundary.
@@ -114,10 +106,18 @@ std::unique_ptr<ClosestPointSearch> BuildSearch(const RegistrationTarget& target
 
 }  // namespace
 
+void CheckRegisterConfig(const Registries& registries, const ConfigNode& config) {
+  ValidateRunConfig(config, {"registration"});
+  RegistrationOptions::FromConfig(config.Child("registration"));
+  const RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
+  const RegistryComponentFactory factory(registries, config);
+  driver.level_solver->CheckCompatible(*factory.MakeEnergy(), /*handle_edits=*/false);
+}
+
 RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
                             const RegistrationTarget& target, const ConfigNode& config,
                             const RegisterOptions& options) {
-  ValidateRegisterConfig(config);
+  ValidateRunConfig(config, {"registration"});
   RegisterOutcome outcome;
   outcome.options = RegistrationOptions::FromConfig(config.Child("registration"));
   RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
@@ -157,8 +157,34 @@ RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
   return outcome;
 }
 
+AnswerErrors CompareWithAnswer(const Positions& registered, const Positions& answer,
+                               double diagonal, const std::string& what) {
+  if (registered.rows() != answer.rows()) {
+    throw InputError(fmt::format("{}: the answer has {} vertices, the registered mesh {}", what,
+                                 answer.rows(), registered.rows()));
+  }
+  AnswerErrors errors;
+  errors.diagonal = diagonal;
+  double sum = 0.0, squares = 0.0;
+  for (Index v = 0; v < answer.rows(); ++v) {
+    const double e = (registered.row(v) - answer.row(v)).norm();
+    sum += e;
+    squares += e * e;
+    if (e > errors.max || errors.worst_vertex < 0) {
+      errors.max = e;
+      errors.worst_vertex = v;
+    }
+  }
+  if (answer.rows() > 0) {
+    errors.mean = sum / static_cast<double>(answer.rows());
+    errors.rms = std::sqrt(squares / static_cast<double>(answer.rows()));
+  }
+  return errors;
+}
+
 std::string RegisterReportJson(const std::string& source_name, const Mesh& source,
-                               const RegistrationTarget& target, const RegisterOutcome& outcome) {
+                               const RegistrationTarget& target, const RegisterOutcome& outcome,
+                               const AnswerComparison* answer) {
   using nlohmann::json;
   const RegistrationResult& result = outcome.result;
   const OptimizeResult& run = result.run;
@@ -187,7 +213,8 @@ std::string RegisterReportJson(const std::string& source_name, const Mesh& sourc
                  {"source",
                   {{"file", source_name},
                    {"vertices", source.num_vertices()},
-                   {"triangles", source.num_elements()},
+                   {source.kind() == ElementKind::kTetrahedron ? "tetrahedra" : "triangles",
+                    source.num_elements()},
                    {"bounding_box_diagonal", diagonal}}},
                  {"target",
                   {{"file", target.name},
@@ -241,6 +268,17 @@ std::string RegisterReportJson(const std::string& source_name, const Mesh& sourc
                  {"notes", run.notes},
                  {"peak_memory_bytes", PeakMemoryBytes()},
                  {"config", outcome.resolved_config}};
+  if (answer != nullptr) {
+    const AnswerErrors& e = answer->errors;
+    report["answer"] = {{"file", answer->file},
+                        {"mean_error", e.mean},
+                        {"max_error", e.max},
+                        {"rms_error", e.rms},
+                        {"mean_error_relative", e.mean / e.diagonal},
+                        {"max_error_relative", e.max / e.diagonal},
+                        {"rms_error_relative", e.rms / e.diagonal},
+                        {"worst_vertex", e.worst_vertex}};
+  }
   return report.dump(2);
 }
 

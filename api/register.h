@@ -66,8 +66,32 @@ RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
                             const RegistrationTarget& target, const ConfigNode& config,
                             const RegisterOptions& options);
 
+/// How far registered positions are from the answer, per vertex |u_v − U_v|, absolute and
+/// relative to the rest mesh's bounding-box diagonal.
+struct AnswerErrors {
+  double mean = 0.0, max = 0.0, rms = 0.0;
+  double diagonal = 0.0;
+  Index worst_vertex = -1;
+};
+
+/// Throws InputError when the row counts differ (`what` names the answer in the message).
+AnswerErrors CompareWithAnswer(const Positions& registered, const Positions& answer,
+                               double diagonal, const std::string& what);
+
+/// A known answer the registration is compared with (`harap register --answer`).
+struct AnswerComparison {
+  std::string file;
+  AnswerErrors errors;
+};
+
+/// Checks a `harap register` run config (the tables RunRegister reads) against the registries
+/// without a mesh: unknown tables, keys and names are a ConfigError. For experiment configs.
+void CheckRegisterConfig(const Registries& registries, const ConfigNode& config);
+
 /// The JSON report of a registration (docs/registration.md lists the keys).
+/// `answer`: adds the report's `answer` object (errors against a known answer).
 std::string RegisterReportJson(const std::string& source_name, const Mesh& source,
-                               const RegistrationTarget& target, const RegisterOutcome& outcome);
+                               const RegistrationTarget& target, const RegisterOutcome& outcome,
+                               const AnswerComparison* answer = nullptr);
 
 }  // namespace harap

@@ -78,8 +78,12 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
   if (!outcome.upsampler.empty()) pieces += fmt::format(" | upsampler {}", outcome.upsampler);
   fmt::print("pieces      {}\n", pieces);
   for (const ScenarioStiffness& region : scenario.stiffness) {
-    fmt::print("stiffness   {}: factor {} on {} vertices ({})\n", region.name, region.factor,
-               region.vertices.size(), region.selection);
+    if (region.attribute.empty()) {
+      fmt::print("stiffness   {}: factor {} on {} vertices ({})\n", region.name, region.factor,
+                 region.vertices.size(), region.selection);
+    } else {
+      fmt::print("stiffness   {}: {}\n", region.name, region.selection);
+    }
   }
   fmt::print("iterations  {}\n", IterationsLine(outcome));
   fmt::print("energy      {:.9e}\n", r.energy);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The `harap` command line: `harap deform SCENARIO.toml ...`, `harap list`, `harap hierarchy`,
-// `harap register SOURCE TARGET`, `harap run CONFIG.toml` (experiment sweeps) and
-// `harap report DIR`.
+// `harap register SOURCE TARGET`, `harap known-answer SCENARIO`, `harap run CONFIG.toml`
+// (experiment sweeps) and `harap report DIR`.
 #include <fmt/format.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -21,6 +21,7 @@
 #include "cli/drag_command.h"
 #include "cli/handles_command.h"
 #include "cli/interrupt.h"
+#include "cli/known_answer_command.h"
 #include "cli/output_checks.h"
 #include "cli/piece_flags.h"
 #include "cli/progress.h"
@@ -390,6 +391,8 @@ int main(int argc, char** argv) {
   auto* view = AddViewCommand(app, view_args);
   RegisterCommandArguments register_args;
   auto* register_command = AddRegisterCommand(app, register_args);
+  KnownAnswerCommandArguments known_answer_args;
+  auto* known_answer = AddKnownAnswerCommand(app, known_answer_args);
 
   try {
     app.parse(argc, argv);
@@ -410,6 +413,7 @@ int main(int argc, char** argv) {
     if (*drag) return RunDragCommand(drag_args);
     if (*view) return RunViewCommand(view_args);
     if (*register_command) return RunRegisterCommand(register_args);
+    if (*known_answer) return KnownAnswerCommand(known_answer_args);
     return Deform(args);
   } catch (const harap::Error& error) {
     fmt::print(stderr, "harap: error: {}\n", error.what());

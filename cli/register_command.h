@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "api/builtins.h"
@@ -25,7 +26,7 @@ namespace harap {
 
 struct RegisterCommandArguments : PieceFlags {
   std::string source, target;
-  std::string out, report, landmarks;
+  std::string out, report, landmarks, answer;
   int threads = 0;
   bool quiet = false;
 };
@@ -35,7 +36,11 @@ inline CLI::App* AddRegisterCommand(CLI::App& app, RegisterCommandArguments& a) 
       "register",
       "deform a source mesh onto a target mesh or point cloud with ARAP as the regularizer "
       "(non-rigid ICP, coarse to fine; docs/registration.md)");
-  command->add_option("source", a.source, "the mesh to deform (a triangle surface)")->required();
+  command
+      ->add_option("source", a.source,
+                   "the mesh to deform: a triangle surface, or a tetrahedral volume (its boundary "
+                   "meets the target)")
+      ->required();
   command
       ->add_option("target", a.target,
                    "the target: a mesh file, or a point cloud (.xyz/.pts/.txt with x y z [nx ny "
@@ -47,6 +52,9 @@ inline CLI::App* AddRegisterCommand(CLI::App& app, RegisterCommandArguments& a) 
   command->add_option("--report", a.report, "write a JSON report");
   command->add_option("--landmarks", a.landmarks,
                       "file of landmarks, one `vertex x y z` per line (soft targets)");
+  command->add_option("--answer", a.answer,
+                      "a mesh with the source's vertices where they should end (e.g. from harap "
+                      "known-answer): the report and summary give each vertex's error");
   command->add_option("--config", a.config_file,
                       "TOML file with the run config tables and [registration]");
   command->add_option("--optimizer", a.optimizer,
@@ -65,15 +73,21 @@ inline CLI::App* AddRegisterCommand(CLI::App& app, RegisterCommandArguments& a) 
 inline int RunRegisterCommand(const RegisterCommandArguments& a) {
   // Wrong output names fail now, not after the registration.
   if (!a.report.empty()) CheckWritable(a.report, "--report");
-  if (!a.out.empty()) {
-    CheckMeshOutputFormat(a.out, ElementKind::kTriangle);
-    CheckWritable(a.out, "--out");
-  }
+  if (!a.out.empty()) CheckWritable(a.out, "--out");
   const ConfigNode config = a.BuildConfig();
   ProgressDisplay progress(stderr, ProgressOptions::For(stderr, a.quiet));
   progress.Phase("reading the source and the target");
   const Mesh source = ReadMesh(a.source);
+  if (!a.out.empty()) CheckMeshOutputFormat(a.out, source.kind());
   const RegistrationTarget target = ReadRegistrationTarget(a.target);
+  std::optional<Mesh> answer;
+  if (!a.answer.empty()) {
+    answer = ReadMesh(a.answer);
+    if (answer->num_vertices() != source.num_vertices()) {
+      throw InputError(fmt::format("--answer {}: {} vertices, the source {} has {}", a.answer,
+                                   answer->num_vertices(), a.source, source.num_vertices()));
+    }
+  }
   RegisterOptions options;
   options.threads = a.threads;
   if (!a.landmarks.empty()) options.landmarks = ReadLandmarks(a.landmarks);
@@ -86,9 +100,17 @@ inline int RunRegisterCommand(const RegisterCommandArguments& a) {
   RegisterOutcome outcome = RunRegister(MakeBuiltinRegistries(), source, target, config, options);
   outcome.interrupted = InterruptGuard::Requested();
   progress.Phase("writing the results");
+  std::optional<AnswerComparison> comparison;
+  if (answer) {
+    comparison =
+        AnswerComparison{a.answer, CompareWithAnswer(outcome.result.run.positions, answer->vertices,
+                                                     BoundingBoxDiagonal(source), a.answer)};
+  }
   if (!a.report.empty()) {
     std::ofstream file(a.report);
-    file << RegisterReportJson(a.source, source, target, outcome) << "\n";
+    file << RegisterReportJson(a.source, source, target, outcome,
+                               comparison ? &*comparison : nullptr)
+         << "\n";
     if (!file) throw InputError(fmt::format("{}: cannot write the report", a.report));
   }
   if (!a.out.empty()) {
@@ -112,9 +134,19 @@ inline int RunRegisterCommand(const RegisterCommandArguments& a) {
     fmt::print(
         "  kept {} of {} correspondences (rejected: {} too far, {} normal angle, {} boundary); "
         "residual RMS {:.3g} ({:.3g}% of the diagonal), max {:.3g}; ARAP energy {:.6g}\n",
-        r.correspondences.kept, source.num_vertices(), r.correspondences.too_far,
-        r.correspondences.normal_angle, r.correspondences.boundary, r.residual_rms,
-        100.0 * r.residual_rms / diagonal, r.residual_max, r.arap_energy);
+        r.correspondences.kept,
+        r.correspondences.kept + r.correspondences.too_far + r.correspondences.normal_angle +
+            r.correspondences.boundary,
+        r.correspondences.too_far, r.correspondences.normal_angle, r.correspondences.boundary,
+        r.residual_rms, 100.0 * r.residual_rms / diagonal, r.residual_max, r.arap_energy);
+    if (comparison) {
+      const AnswerErrors& e = comparison->errors;
+      fmt::print(
+          "  against the answer: mean error {:.3g}% of the diagonal, max {:.3g}% (vertex "
+          "{}), RMS {:.3g}%\n",
+          100.0 * e.mean / e.diagonal, 100.0 * e.max / e.diagonal, e.worst_vertex,
+          100.0 * e.rms / e.diagonal);
+    }
     if (r.correspondences.kept == 0) {
       fmt::print(
           "  no correspondence within registration.max_distance ({} of the diagonal): the "

@@ -45,4 +45,8 @@ struct VertexAdjacency {
   static VertexAdjacency Build(Index num_vertices, const Elements& elements, bool include_self);
 };
 
+/// The boundary triangles of a tetrahedral mesh (faces of exactly one tetrahedron), oriented
+/// outwards for positively oriented tetrahedra, in the order of their tetrahedra.
+Elements BoundaryTriangles(const Elements& tetrahedra);
+
 }  // namespace harap

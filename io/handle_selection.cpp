@@ -18,10 +18,13 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <numeric>
 
 #include "framework/error.h"
 #include "io/file_reading.h"
+#include "io/ply_reader.h"
 #include "io/text_scanning.h"
 
 namespace harap::io_internal {
@@ -425,7 +428,66 @@ void AddHandles(const std::optional<BenchmarkHandlesSpec>& benchmark,
   }
 }
 
-void AddStiffness(const std::vector<StiffnessSpec>& specs, Scenario& scenario) {
+namespace {
+
+// The per-vertex or per-element factors of an `attribute` region.
+void ReadStiffnessAttribute(const StiffnessSpec& spec, const MeshSpec& mesh_spec,
+                            const Scenario& scenario, ScenarioStiffness& region) {
+  const std::string& where = spec.attribute_where;
+  const std::string extension = DetectFormat(mesh_spec.file).extension;
+  if (mesh_spec.kind != MeshSpec::Kind::kFile || extension != "ply" || mesh_spec.refine > 0) {
+    throw ConfigError(fmt::format(
+        "{}: {}: attribute = \"{}\" reads a vertex or face property of the mesh's PLY file, so "
+        "the scenario's mesh must be a PLY file used as it is (no refine, no tetrahedralize)",
+        where, spec.region.label, spec.attribute));
+  }
+  const PlyMeshProperty property =
+      ReadNamedFile(mesh_spec.file, where, "stiffness attribute", [&](const auto& path) {
+        return ParsePlyMeshProperty(ReadFileMaybeXz(path), path.string(), spec.attribute);
+      });
+  const bool per_vertex = property.element == "vertex";
+  const Index expected = per_vertex ? scenario.mesh.num_vertices() : scenario.mesh.num_elements();
+  HARAP_CHECK(static_cast<Index>(property.values.size()) == expected,
+              "PLY property '{}' has {} values for {} items", spec.attribute,
+              property.values.size(), expected);
+  double low = std::numeric_limits<double>::infinity(), high = 0.0;
+  for (size_t k = 0; k < property.values.size(); ++k) {
+    const double value = property.values[k];
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      throw InputError(fmt::format(
+          "{}: {}: {}: the {} property '{}' is {} at {} {} (0-based); a stiffness factor is a "
+          "finite number > 0",
+          where, spec.region.label, mesh_spec.file.string(), property.element, spec.attribute,
+          value, per_vertex ? "vertex" : "triangle", k));
+    }
+    low = std::min(low, value);
+    high = std::max(high, value);
+  }
+  region.attribute = spec.attribute;
+  region.factor = high;
+  (per_vertex ? region.vertex_factors : region.element_factors) = property.values;
+  region.selection = fmt::format("{} property '{}' of {}, factors {} to {}", property.element,
+                                 spec.attribute, mesh_spec.file.filename().string(), low, high);
+  if (per_vertex) {
+    region.vertices.resize(static_cast<size_t>(scenario.mesh.num_vertices()));
+    std::iota(region.vertices.begin(), region.vertices.end(), Index{0});
+  } else {
+    std::vector<bool> used(static_cast<size_t>(scenario.mesh.num_vertices()), false);
+    for (Index e = 0; e < scenario.mesh.num_elements(); ++e) {
+      for (int c = 0; c < scenario.mesh.simplex_size(); ++c) {
+        used[static_cast<size_t>(scenario.mesh.elements(e, c))] = true;
+      }
+    }
+    for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
+      if (used[static_cast<size_t>(v)]) region.vertices.push_back(v);
+    }
+  }
+}
+
+}  // namespace
+
+void AddStiffness(const std::vector<StiffnessSpec>& specs, const MeshSpec& mesh_spec,
+                  Scenario& scenario) {
   const Mesh& mesh = scenario.mesh;
   const std::vector<bool> referenced = ReferencedVertices(mesh);
   const Eigen::Vector3d extent = scenario.box_max - scenario.box_min;
@@ -433,9 +495,13 @@ void AddStiffness(const std::vector<StiffnessSpec>& specs, Scenario& scenario) {
   for (const StiffnessSpec& spec : specs) {
     ScenarioStiffness region;
     region.name = spec.region.name;
-    region.factor = spec.factor;
-    region.vertices = Select(spec.region, mesh, referenced, scenario.box_min, extent, diagonal);
-    region.selection = DescribeSelection(spec.region, scenario.box_min, scenario.box_max);
+    if (!spec.attribute.empty()) {
+      ReadStiffnessAttribute(spec, mesh_spec, scenario, region);
+    } else {
+      region.factor = spec.factor;
+      region.vertices = Select(spec.region, mesh, referenced, scenario.box_min, extent, diagonal);
+      region.selection = DescribeSelection(spec.region, scenario.box_min, scenario.box_max);
+    }
     scenario.stiffness.push_back(std::move(region));
   }
 }

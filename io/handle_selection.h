@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "io/mesh_sourcing.h"
 #include "io/scenario.h"
 
 namespace harap::io_internal {
@@ -55,8 +56,11 @@ struct HandleSpec {
 /// One [[stiffness]] as written: a region selected like a handle's vertices (`region.name`,
 /// `region.label`, the selection and its units) and its factor.
 struct StiffnessSpec {
-  HandleSpec region;
+  HandleSpec region;  ///< the name and label; the selection unless `attribute` is set
   double factor = 1.0;
+  /// `attribute = "NAME"`: the factors are the mesh file's PLY vertex or face property NAME.
+  std::string attribute;
+  std::string attribute_where;
 };
 
 /// `selection = "x.sel"` with `deformation = "x.def"`: the deformation benchmark of Botsch &
@@ -77,8 +81,11 @@ void AddHandles(const std::optional<BenchmarkHandlesSpec>& benchmark,
 
 /// Appends the stiffness regions of `specs` to `scenario` (after AddHandles: its selection box
 /// is set). Selections that match nothing are ConfigErrors naming the region and where it is
-/// written.
-void AddStiffness(const std::vector<StiffnessSpec>& specs, Scenario& scenario);
+/// written. An `attribute` is read from the file `mesh` names: a ConfigError unless the mesh is a
+/// PLY file used as it is (no refine, no tetrahedralize); an InputError naming the file, the
+/// element and the index for a missing property or a value that is not a finite number > 0.
+void AddStiffness(const std::vector<StiffnessSpec>& specs, const MeshSpec& mesh,
+                  Scenario& scenario);
 
 /// "(x, y, z)" with 6 significant digits.
 std::string Vec(const Eigen::Vector3d& v);

@@ -8,6 +8,7 @@
 #include "io/ply_reader.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <bit>
@@ -396,9 +397,16 @@ void CheckPlyCounts(const PlyHeader& header, std::string_view body, const std::s
 
 // Reads item `item` of `element` into `raw`: a vertex's coordinates, a face's polygon; every
 // other property is skipped. `polygon` is a workspace.
+// `capture`: one more scalar property to read, appended to `captured` per item of its element.
+struct PlyCapture {
+  const PlyElement* element = nullptr;
+  int slot = -1;
+  std::vector<double>* values = nullptr;
+};
+
 void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElement& element,
                  int64_t item, RawMesh& raw, std::vector<int64_t>& polygon, const std::string& what,
-                 std::vector<double>* normals = nullptr) {
+                 std::vector<double>* normals = nullptr, const PlyCapture& capture = {}) {
   const bool is_vertex = &element == layout.vertex_element;
   const bool is_face = &element == layout.face_element;
   const auto truncated = [&] {
@@ -417,8 +425,16 @@ void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElemen
         slot = layout.coordinate_slot[d] == static_cast<int>(p) ? d : slot;
         if (read_normals && layout.normal_slot[d] == static_cast<int>(p)) slot = 3 + d;
       }
-      const bool ok = is_vertex && slot >= 0 ? reader.ReadDouble(property.type, xyz[slot])
-                                             : reader.Skip(property.type);
+      bool ok = false;
+      if (is_vertex && slot >= 0) {
+        ok = reader.ReadDouble(property.type, xyz[slot]);
+      } else if (&element == capture.element && static_cast<int>(p) == capture.slot) {
+        double value = 0.0;
+        ok = reader.ReadDouble(property.type, value);
+        capture.values->push_back(value);
+      } else {
+        ok = reader.Skip(property.type);
+      }
       if (!ok) truncated();
       continue;
     }
@@ -465,11 +481,12 @@ void ReadPlyItem(PlyBodyReader& reader, const PlyLayout& layout, const PlyElemen
 
 }  // namespace
 
-Mesh ParsePly(std::string_view data, const std::string& what) {
-  const PlyHeader header = ParsePlyHeader(data, what);
-  const PlyLayout layout = LocatePlyData(header, what);
-  CheckPlyCounts(header, data.substr(header.data_offset), what);
+namespace {
 
+// ParsePly's reading, with `capture` read on the way; `raw` as read.
+RawMesh ReadPlyMesh(std::string_view data, const std::string& what, const PlyHeader& header,
+                    const PlyLayout& layout, const PlyCapture& capture = {}) {
+  CheckPlyCounts(header, data.substr(header.data_offset), what);
   RawMesh raw;
   raw.origin_kind = "face";
   raw.xyz.reserve(static_cast<size_t>(layout.vertex_element->count) * 3);
@@ -482,13 +499,64 @@ Mesh ParsePly(std::string_view data, const std::string& what) {
   for (const PlyElement& element : header.elements) {
     if (element.properties.empty()) continue;  // nothing stored per item
     for (int64_t item = 0; item < element.count; ++item) {
-      ReadPlyItem(reader, layout, element, item, raw, polygon, what);
+      ReadPlyItem(reader, layout, element, item, raw, polygon, what, nullptr, capture);
     }
     vertices_done = vertices_done || &element == layout.vertex_element;
     // Later elements hold nothing we use.
     if (&element == layout.face_element && vertices_done) break;
   }
-  return BuildMesh(raw, what);
+  return raw;
+}
+
+}  // namespace
+
+Mesh ParsePly(std::string_view data, const std::string& what) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const PlyLayout layout = LocatePlyData(header, what);
+  return BuildMesh(ReadPlyMesh(data, what, header, layout), what);
+}
+
+PlyMeshProperty ParsePlyMeshProperty(std::string_view data, const std::string& what,
+                                     const std::string& name) {
+  const PlyHeader header = ParsePlyHeader(data, what);
+  const PlyLayout layout = LocatePlyData(header, what);
+  PlyCapture capture;
+  std::vector<std::string> scalars;
+  for (const PlyElement* element : {layout.vertex_element, layout.face_element}) {
+    for (size_t p = 0; p < element->properties.size(); ++p) {
+      const PlyProperty& property = element->properties[p];
+      if (property.is_list) continue;
+      scalars.push_back(fmt::format("{} {}", element->name, property.name));
+      if (property.name != name) continue;
+      if (capture.element != nullptr) {
+        Fail(what, fmt::format("both the vertices and the faces have a property '{}': rename "
+                               "one of them",
+                               name));
+      }
+      capture.element = element;
+      capture.slot = static_cast<int>(p);
+    }
+  }
+  if (capture.element == nullptr) {
+    Fail(what, fmt::format("no vertex or face property '{}'; the scalar properties are: {}", name,
+                           scalars.empty() ? std::string("none")
+                                           : fmt::format("{}", fmt::join(scalars, ", "))));
+  }
+  std::vector<double> values;
+  capture.values = &values;
+  const RawMesh raw = ReadPlyMesh(data, what, header, layout, capture);
+  PlyMeshProperty property;
+  property.element = capture.element->name;
+  if (capture.element == layout.vertex_element) {
+    property.values = std::move(values);
+    return property;
+  }
+  // One value per triangle of the fans ParsePly makes.
+  property.values.reserve(raw.origin.size());
+  for (const int64_t face : raw.origin) {
+    property.values.push_back(values[static_cast<size_t>(face)]);
+  }
+  return property;
 }
 
 PointCloud ParsePlyPoints(std::string_view data, const std::string& what) {

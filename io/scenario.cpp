@@ -98,9 +98,19 @@ std::vector<double> Scenario::ElementStiffness() const {
   if (stiffness.empty()) return {};
   std::vector<double> at_vertex(mesh.num_vertices(), 1.0);
   for (const ScenarioStiffness& region : stiffness) {
-    for (const Index v : region.vertices) at_vertex[v] *= region.factor;
+    if (!region.element_factors.empty()) continue;  // applied per element below
+    for (size_t k = 0; k < region.vertices.size(); ++k) {
+      at_vertex[region.vertices[k]] *=
+          region.vertex_factors.empty() ? region.factor : region.vertex_factors[k];
+    }
   }
-  return harap::ElementStiffness(mesh, at_vertex);
+  std::vector<double> at_element = harap::ElementStiffness(mesh, at_vertex);
+  for (const ScenarioStiffness& region : stiffness) {
+    for (size_t e = 0; e < region.element_factors.size(); ++e) {
+      at_element[e] *= region.element_factors[e];
+    }
+  }
+  return at_element;
 }
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> SelectionBox(const Mesh& mesh) {
@@ -149,7 +159,7 @@ Scenario ParseScenario(std::string_view toml_text, const std::string& source_nam
   Scenario scenario;
   io_internal::SourceMesh(description.mesh, limits, scenario);
   io_internal::AddHandles(description.benchmark, description.handles, scenario);
-  io_internal::AddStiffness(description.stiffness, scenario);
+  io_internal::AddStiffness(description.stiffness, description.mesh, scenario);
   DecidePlanar(scenario, description.planar, description.planar_where);
   return scenario;
 }

@@ -131,7 +131,22 @@ class ScenarioTextReader {
       region.label = fmt::format("stiffness '{}'", region.name);
     }
     const TomlReader toml = toml_.In(region.label);
-    toml.CheckKeys(table, {"name", "select", "units", "factor"}, "a [[stiffness]]");
+    toml.CheckKeys(table, {"name", "select", "units", "factor", "attribute"}, "a [[stiffness]]");
+    if (const toml::node* attribute = table.get("attribute")) {
+      if (!attribute->is_string() || attribute->as_string()->get().empty()) {
+        toml.Fail(*attribute, "'attribute' must name a vertex or face property of the mesh file");
+      }
+      for (const char* key : {"select", "units", "factor"}) {
+        if (const toml::node* other = table.get(key)) {
+          toml.Fail(*other, fmt::format("'{}' does not go with 'attribute' (the property's values "
+                                        "are the factors, per vertex or per face)",
+                                        key));
+        }
+      }
+      spec.attribute = attribute->as_string()->get();
+      spec.attribute_where = toml_.Where(*attribute);
+      return spec;
+    }
     region.units = ParseUnits(toml, table, default_units);
     const toml::node* factor = table.get("factor");
     if (!factor) {

@@ -38,38 +38,4 @@ TetrahedronOrientation OrientTetrahedra(Mesh& mesh) {
   return result;
 }
 
-Elements BoundaryTriangles(const Elements& tetrahedra) {
-  // Outward faces of a positive tetrahedron (a, b, c, d): the faces opposite d, c, b and a.
-  constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  const Index num_faces = 4 * static_cast<Index>(tetrahedra.rows());
-  std::vector<std::array<Index, 3>> sorted(static_cast<size_t>(num_faces));
-  std::vector<Index> order(static_cast<size_t>(num_faces));
-  for (Index t = 0; t < tetrahedra.rows(); ++t) {
-    for (int f = 0; f < 4; ++f) {
-      std::array<Index, 3> key = {tetrahedra(t, kFaces[f][0]), tetrahedra(t, kFaces[f][1]),
-                                  tetrahedra(t, kFaces[f][2])};
-      std::sort(key.begin(), key.end());
-      sorted[4 * t + f] = key;
-      order[4 * t + f] = 4 * t + f;
-    }
-  }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](Index x, Index y) { return sorted[x] < sorted[y]; });
-  std::vector<Index> boundary;
-  for (size_t k = 0; k < order.size();) {
-    size_t end = k + 1;
-    while (end < order.size() && sorted[order[end]] == sorted[order[k]]) ++end;
-    if (end == k + 1) boundary.push_back(order[k]);
-    k = end;
-  }
-  std::sort(boundary.begin(), boundary.end());
-  Elements triangles(static_cast<Index>(boundary.size()), 3);
-  for (size_t k = 0; k < boundary.size(); ++k) {
-    const Index t = boundary[k] / 4;
-    const int f = static_cast<int>(boundary[k] % 4);
-    for (int a = 0; a < 3; ++a) triangles(static_cast<Index>(k), a) = tetrahedra(t, kFaces[f][a]);
-  }
-  return triangles;
-}
-
 }  // namespace harap

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "framework/mesh.h"
+#include "framework/mesh_topology.h"  // BoundaryTriangles
 
 namespace harap {
 
@@ -30,9 +31,5 @@ struct TetrahedronOrientation {
 /// a regular tetrahedron the ratio is 0.71), have no orientation and no finite cotangent
 /// weights; they are listed in `degenerate` and left unchanged. Triangle meshes: no-op.
 TetrahedronOrientation OrientTetrahedra(Mesh& mesh);
-
-/// The boundary triangles of a tetrahedral mesh (faces of exactly one tetrahedron), oriented
-/// outwards for positively oriented tetrahedra, in the order of their tetrahedra.
-Elements BoundaryTriangles(const Elements& tetrahedra);
 
 }  // namespace harap

@@ -28,6 +28,8 @@
 
 #include "api/builtins.h"
 #include "api/component_factory.h"
+#include "api/known_answer.h"
+#include "api/register.h"
 #include "framework/config.h"
 #include "framework/error.h"
 #include "framework/toml_reading.h"
@@ -39,7 +41,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kRunTables[] = {"optimizer", "energy", "solver", "hierarchy", "upsampler"};
+constexpr const char* kDeformTables[] = {"optimizer", "energy", "solver", "hierarchy", "upsampler"};
+
+KnownAnswerOptions KnownAnswerOptionsOf(const KnownAnswerSettings& settings,
+                                        const std::string& target) {
+  KnownAnswerOptions options;
+  options.target = ParseKnownAnswerTarget(target);
+  options.points_per_vertex = settings.points_per_vertex;
+  options.damage.removed = settings.removed;
+  options.damage.outliers = settings.outliers;
+  options.seed = static_cast<std::uint64_t>(settings.seed);
+  return options;
+}
 
 class ExperimentParser {
  public:
@@ -304,6 +317,82 @@ class ExperimentParser {
     }
   }
 
+  // The run tables a run config may set: `harap deform`'s, and `[registration]` for
+  // registration experiments.
+  std::vector<std::string> RunTables() const {
+    std::vector<std::string> tables(std::begin(kDeformTables), std::end(kDeformTables));
+    if (experiment_.known_answers.enabled) tables.emplace_back("registration");
+    return tables;
+  }
+
+  // [known_answers]: the experiment registers rest meshes to targets made from its scenarios'
+  // solutions (api/known_answer.h).
+  void ParseKnownAnswers(const toml::table& root) {
+    const toml::node* node = root.get("known_answers");
+    if (!node) {
+      if (const toml::node* registration = root.get("registration")) {
+        Fail(*registration,
+             "[registration] applies to registration experiments: add a [known_answers] table");
+      }
+      return;
+    }
+    const toml::table* table = node->as_table();
+    if (!table) Fail(*node, "[known_answers] must be a table");
+    toml_.CheckKeys(*table, {"targets", "points_per_vertex", "removed", "outliers", "seed"},
+                    "[known_answers]");
+    KnownAnswerSettings& settings = experiment_.known_answers;
+    settings.enabled = true;
+    if (table->contains("targets")) {
+      settings.targets = toml_.Strings(*table, "targets");
+      if (settings.targets.empty()) Fail(*table->get("targets"), "'targets' names no target");
+      for (const std::string& target : settings.targets) {
+        try {
+          ParseKnownAnswerTarget(target);
+        } catch (const ConfigError& error) {
+          Fail(*table->get("targets"), error.what());
+        }
+      }
+    }
+    auto number = [&](std::string_view key, double& value) {
+      if (const toml::node* entry = table->get(key)) value = toml_.Number(*entry, key);
+    };
+    number("points_per_vertex", settings.points_per_vertex);
+    number("removed", settings.removed);
+    number("outliers", settings.outliers);
+    if (const toml::node* seed = table->get("seed")) {
+      if (!seed->is_integer() || seed->as_integer()->get() < 0) {
+        Fail(*seed, "'seed' must be an integer >= 0");
+      }
+      settings.seed = seed->as_integer()->get();
+    }
+    try {
+      KnownAnswerOptionsOf(settings, settings.targets.front()).Validate();
+    } catch (const ConfigError& error) {
+      Fail(*node, fmt::format("[known_answers]: {}", error.what()));
+    }
+  }
+
+  // One registration case per scenario and target, named SCENARIO-TARGET.
+  void ExpandKnownAnswers() {
+    std::vector<ExperimentScenario> scenarios = std::move(experiment_.scenarios);
+    std::vector<std::string> identities = std::move(identities_);
+    experiment_.scenarios.clear();
+    identities_.clear();
+    used_names_.clear();
+    const KnownAnswerSettings& settings = experiment_.known_answers;
+    for (size_t s = 0; s < scenarios.size(); ++s) {
+      for (const std::string& target : settings.targets) {
+        ExperimentScenario known = scenarios[s];
+        known.name = fmt::format("{}-{}", scenarios[s].name, target);
+        known.known_answer_target = target;
+        AddScenario(std::move(known),
+                    fmt::format("{}:known-answer:{}:{}:{}:{}:{}", identities[s], target,
+                                settings.points_per_vertex, settings.removed, settings.outliers,
+                                settings.seed));
+      }
+    }
+  }
+
   // Leaves of `table` as (dotted key, node), in the order written in the file (toml++ iterates
   // tables in key order).
   static void Flatten(const toml::table& table, const std::string& prefix,
@@ -346,19 +435,22 @@ class ExperimentParser {
   // Checks that a dotted run-config key names one of the five run tables.
   void CheckRunKey(const std::string& key, const toml::node& where) const {
     const std::string table = key.substr(0, key.find('.'));
+    const std::vector<std::string> tables = RunTables();
     if (key.find('.') == std::string::npos ||
-        std::find(std::begin(kRunTables), std::end(kRunTables), table) == std::end(kRunTables)) {
+        std::find(tables.begin(), tables.end(), table) == tables.end()) {
       Fail(where, fmt::format("'{}' is not a run option; use TABLE.KEY with TABLE one of {}", key,
-                              fmt::join(kRunTables, ", ")));
+                              fmt::join(tables, ", ")));
     }
   }
 
   Experiment Parse(std::string_view text) {
     const toml::table root = toml_.Parse(text);
-    toml_.CheckKeys(root,
-                    {"experiment", "scenarios", "run", "grid", "variant", "report", "slurm",
-                     "optimizer", "energy", "solver", "hierarchy", "upsampler"},
-                    "the top level");
+    toml_.CheckKeys(
+        root,
+        {"experiment", "scenarios", "run", "grid", "variant", "report", "slurm", "optimizer",
+         "energy", "solver", "hierarchy", "upsampler", "known_answers", "registration"},
+        "the top level");
+    ParseKnownAnswers(root);
     experiment_.source_text = std::string(text);
     ParseDescription(root);
 
@@ -376,6 +468,7 @@ class ExperimentParser {
     ParseFolders(*scenarios);
     ParseGeneratedScenarios(*scenarios);
     if (experiment_.scenarios.empty()) Fail("[scenarios] names no scenario");
+    if (experiment_.known_answers.enabled) ExpandKnownAnswers();
 
     if (const toml::table* run = root["run"].as_table()) ParseRunSettings(*run);
     if (const toml::table* slurm = root["slurm"].as_table()) ParseSlurmSettings(*slurm);
@@ -468,7 +561,7 @@ class ExperimentParser {
   // The base run tables ([optimizer], [energy], ...) as TOML text, which every run starts from.
   std::string BaseTablesText(const toml::table& root) const {
     toml::table base_tables;
-    for (const char* table : kRunTables) {
+    for (const std::string& table : RunTables()) {
       if (const toml::node* node = root.get(table)) {
         if (!node->is_table()) Fail(*node, fmt::format("'{}' must be a table", table));
         base_tables.insert(table, *node->as_table());
@@ -691,9 +784,13 @@ class ExperimentParser {
     // Line numbers in the messages would refer to the generated run config, not to the file.
     const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
-      ValidateRunConfig(config);
-      const RegistryComponentFactory factory(registries, config);
-      MakeOptimizer(registries, config)->CheckComponents(factory);
+      if (experiment_.known_answers.enabled) {
+        CheckRegisterConfig(registries, config);
+      } else {
+        ValidateRunConfig(config);
+        const RegistryComponentFactory factory(registries, config);
+        MakeOptimizer(registries, config)->CheckComponents(factory);
+      }
     } catch (const Error& error) {
       throw ConfigError(fmt::format("{}: run '{}' is invalid: {}", source_,
                                     run.label.empty() ? "base config" : run.label, error.what()));

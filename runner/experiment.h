@@ -34,7 +34,21 @@ struct ExperimentScenario {
   HandleTemplate handles;              ///< template scenarios: how to place the handles
   bool generated = false;              ///< the scenario is made by GenerateScenarioForFile
   ScenarioGeneratorOptions generator;  ///< generated scenarios: kind, refinement, handle size
+  /// Registration experiments (`[known_answers]`): the target made from this scenario's answer
+  /// ("mesh", "points", "damaged"; api/known_answer.h); empty for deformation runs.
+  std::string known_answer_target;
   bool templated() const { return file.empty(); }
+};
+
+/// `[known_answers]`: the experiment registers instead of deforming. Every scenario, solved by
+/// `harap deform`, is the answer of one registration case per target (`harap known-answer`).
+struct KnownAnswerSettings {
+  bool enabled = false;
+  std::vector<std::string> targets = {"mesh", "points", "damaged"};
+  double points_per_vertex = 2.0;
+  double removed = 0.10;
+  double outliers = 0.01;
+  long long seed = 1;
 };
 
 /// One run of the sweep: a scenario with one combination of variant and grid values.
@@ -80,6 +94,9 @@ struct Experiment {
   std::vector<ExperimentRun> runs;
   ExperimentRunSettings settings;
   ExperimentSlurmSettings slurm;
+  KnownAnswerSettings known_answers;
+  /// The `harap` subcommand every run executes: "register" with `[known_answers]`, else "deform".
+  const char* command() const { return known_answers.enabled ? "register" : "deform"; }
   /// Things that are allowed but probably not meant, for `harap run` to print before it starts
   /// (e.g. runs that compare different energies).
   std::vector<std::string> warnings;

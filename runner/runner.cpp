@@ -37,6 +37,7 @@
 #include <sstream>
 #include <thread>
 
+#include "api/known_answer.h"
 #include "framework/error.h"
 #include "io/scenario.h"
 #include "runner/process.h"
@@ -89,8 +90,8 @@ const std::vector<std::string> kReportColumns = {
     "hierarchy",        "upsampler",   "vertices",         "faces",
     "energy",           "iterations",  "total_iterations", "converged",
     "level_iterations", "t_hierarchy", "t_precompute",     "t_constrain",
-    "t_solve",          "t_total",     "peak_memory_mb",   "threads",
-    "wall_seconds",     "error"};
+    "t_solve",          "t_total",     "peak_memory_mb",   "answer_mean_error",
+    "answer_max_error", "threads",     "wall_seconds",     "error"};
 
 std::string CsvField(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;
@@ -147,20 +148,24 @@ std::string CsvRow(const json& report, const std::vector<std::string>& grid_keys
     }
   }
   const json memory = get(report, "peak_memory_bytes");
+  // A registration's report (`harap register`) names some of these differently.
+  const bool registration = get(report, "command") == "register";
+  const json mesh = registration ? get(report, "source") : get(report, "mesh");
+  const json answer = get(report, "answer");
   fields.insert(
       fields.end(),
       {Number(run["status"]),
-       Number(get(report, "optimizer")),
+       Number(get(report, registration ? "mode" : "optimizer")),
        Number(get(report, "energy_type")),
        Number(get(report, "solver")),
        Number(get(report, "hierarchy")),
        Number(get(report, "upsampler")),
-       report.contains("mesh") ? Number(report["mesh"]["vertices"]) : "",
-       report.contains("mesh") ? Number(report["mesh"]["faces"]) : "",
-       Number(get(report, "energy")),
+       mesh.is_null() ? "" : Number(mesh["vertices"]),
+       mesh.is_null() ? "" : Number(mesh[registration ? "triangles" : "faces"]),
+       Number(get(report, registration ? "arap_energy" : "energy")),
        Number(get(report, "iterations")),
-       Number(get(report, "total_iterations")),
-       Number(get(report, "converged")),
+       Number(get(report, registration ? "iterations" : "total_iterations")),
+       Number(registration ? json(get(report, "status") == "converged") : get(report, "converged")),
        level_iterations,
        timings.is_null() ? "" : Number(timings["hierarchy"], "{:.4f}"),
        timings.is_null() ? "" : Number(timings["precompute"], "{:.4f}"),
@@ -168,10 +173,24 @@ std::string CsvRow(const json& report, const std::vector<std::string>& grid_keys
        timings.is_null() ? "" : Number(timings["solve"], "{:.4f}"),
        timings.is_null() ? "" : Number(timings["total"], "{:.4f}"),
        memory.is_null() ? "" : fmt::format("{:.1f}", memory.get<double>() / (1024.0 * 1024.0)),
+       answer.is_null() ? "" : Number(answer["mean_error_relative"]),
+       answer.is_null() ? "" : Number(answer["max_error_relative"]),
        Number(get(run, "threads")),
        Number(get(run, "wall_seconds"), "{:.3f}"),
        Number(get(run, "error"))});
   return CsvLine(fields);
+}
+
+// A finished run in one line: its energy and time; a registration's errors against the answer.
+std::string RunDetail(const json& report) {
+  const double seconds = report["timings"]["total"].get<double>();
+  if (report.value("command", "") != "register") {
+    return fmt::format("E = {:.6g}, {:.2f} s", report["energy"].get<double>(), seconds);
+  }
+  if (!report.contains("answer")) return fmt::format("{:.2f} s", seconds);
+  return fmt::format("error mean {:.3g}%, max {:.3g}% of the diagonal, {:.2f} s",
+                     100.0 * report["answer"]["mean_error_relative"].get<double>(),
+                     100.0 * report["answer"]["max_error_relative"].get<double>(), seconds);
 }
 
 std::string CsvText(const std::vector<std::string>& grid_keys,
@@ -283,7 +302,9 @@ class Sweep {
   }
 
   SweepSummary Run() {
-    for (const char* sub : {"runs", "scenarios", "meshes"}) fs::create_directories(dir_ / sub);
+    for (const char* sub : {"runs", "scenarios", "meshes", "cases"}) {
+      fs::create_directories(dir_ / sub);
+    }
     WriteExperimentPlan(experiment_, dir_, tag_);
 
     RemoveStaleTemporaries();
@@ -331,9 +352,7 @@ class Sweep {
           WriteCsv();
         }
         const std::string detail =
-            status == "ok" ? fmt::format("E = {:.6g}, {:.2f} s", report["energy"].get<double>(),
-                                         report["timings"]["total"].get<double>())
-                           : report["run"]["error"].get<std::string>();
+            status == "ok" ? RunDetail(report) : report["run"]["error"].get<std::string>();
         if (observer) observer->RunFinished(RunName(run), status, detail);
       }
     };
@@ -355,11 +374,13 @@ class Sweep {
   }
 
   // Temporary files of sweeps that were killed (SIGKILL, power loss) before they could rename
-  // or remove them: ".NAME.PID@HOST.*" in runs/, meshes/, scenarios/ and the folder itself,
+  // or remove them: ".NAME.PID@HOST.*" in runs/, meshes/, scenarios/, cases/ (folders) and the
+  // folder itself,
   // written on this host by a process that is no longer running. Files of live processes and of
   // other hosts (whose PIDs cannot be checked from here) stay.
   void RemoveStaleTemporaries() const {
-    for (const fs::path& folder : {dir_, dir_ / "runs", dir_ / "meshes", dir_ / "scenarios"}) {
+    for (const fs::path& folder :
+         {dir_, dir_ / "runs", dir_ / "meshes", dir_ / "scenarios", dir_ / "cases"}) {
       std::error_code error;
       for (const auto& entry : fs::directory_iterator(folder, error)) {
         const std::string name = entry.path().filename().string();
@@ -381,7 +402,7 @@ class Sweep {
         }
         if (pid <= 0 || host != host_ || pid == getpid()) continue;
         if (kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) continue;  // alive
-        fs::remove(entry.path(), error);
+        fs::remove_all(entry.path(), error);
       }
     }
   }
@@ -431,6 +452,86 @@ class Sweep {
     return error;
   }
 
+  // The files of a registration run's known-answer case (api/known_answer.h), made on first
+  // use by `harap known-answer` into a temporary folder renamed when complete, so that a killed
+  // child or a shard on another host never leaves a partial case under the final name. Throws
+  // InputError with the child's message when it fails.
+  KnownAnswerFiles KnownAnswerCase(const ExperimentScenario& scenario) {
+    const fs::path folder = dir_ / "cases" / scenario.name;
+    const KnownAnswerFiles files = KnownAnswerFiles::In(folder);
+    std::lock_guard lock(case_mutex_);
+    if (fs::exists(files.answer)) return files;
+    const fs::path temporary = dir_ / "cases" / fmt::format(".{}.{}", scenario.name, tag_);
+    const fs::path log = dir_ / "cases" / (scenario.name + ".log");
+    const KnownAnswerSettings& settings = experiment_.known_answers;
+    const std::vector<std::string> arguments = {options_.executable.string(),
+                                                "known-answer",
+                                                ScenarioFile(scenario).string(),
+                                                "--target",
+                                                scenario.known_answer_target,
+                                                "--out-dir",
+                                                temporary.string(),
+                                                "--points-per-vertex",
+                                                fmt::format("{}", settings.points_per_vertex),
+                                                "--removed",
+                                                fmt::format("{}", settings.removed),
+                                                "--outliers",
+                                                fmt::format("{}", settings.outliers),
+                                                "--seed",
+                                                std::to_string(settings.seed),
+                                                "--threads",
+                                                std::to_string(threads_),
+                                                "--quiet"};
+    const ProcessResult child = RunProcess(arguments, ChildProcessOptions(log));
+    std::error_code ignore;
+    if (!child.started) {
+      throw InputError(fmt::format("cannot start {}", options_.executable.string()));
+    }
+    if (child.exit_code != 0 || child.timed_out || child.signal) {
+      fs::remove_all(temporary, ignore);
+      throw InputError(
+          fmt::format("making the known-answer case failed: {}", ChildError(child, log)));
+    }
+    fs::remove(log, ignore);
+    // Another host may have made the same (deterministic) case meanwhile: keep the first.
+    fs::rename(temporary, folder, ignore);
+    fs::remove_all(temporary, ignore);
+    if (!fs::exists(files.answer)) {
+      throw InputError(fmt::format("{}: the known-answer case was not written", folder.string()));
+    }
+    return files;
+  }
+
+  // How every child runs: its output in `log`, the run timeout, killed with this process, and
+  // OpenBLAS/OpenMP held to the run's threads unless the user set them.
+  ProcessOptions ChildProcessOptions(const fs::path& log) const {
+    ProcessOptions process;
+    process.output_file = log;
+    process.timeout = experiment_.settings.timeout;
+    process.die_with_parent = true;
+    process.default_environment = {fmt::format("OPENBLAS_NUM_THREADS={}", threads_),
+                                   fmt::format("OMP_NUM_THREADS={}", threads_)};
+    return process;
+  }
+
+  // The command line of a run's child: `harap deform SCENARIO` or, in registration
+  // experiments, `harap register SOURCE TARGET --answer ANSWER`, with the run's config.
+  std::vector<std::string> RunArguments(const ExperimentScenario& scenario,
+                                        const fs::path& config_file, const fs::path& report_file) {
+    std::vector<std::string> arguments = {options_.executable.string(), experiment_.command()};
+    if (!scenario.known_answer_target.empty()) {
+      const KnownAnswerFiles files = KnownAnswerCase(scenario);
+      arguments.insert(arguments.end(), {files.source.string(), files.target.string(), "--answer",
+                                         files.answer.string()});
+    } else {
+      arguments.insert(arguments.end(), {ScenarioFile(scenario).string(), "--trace"});
+    }
+    arguments.insert(arguments.end(),
+                     {"--config", config_file.string(), "--report", report_file.string(),
+                      "--threads", std::to_string(threads_), "--quiet"});
+    return arguments;
+  }
+
   json Execute(const ExperimentRun& run) {
     const ExperimentScenario& scenario = experiment_.scenarios[run.scenario];
     const fs::path runs = dir_ / "runs";
@@ -451,18 +552,7 @@ class Sweep {
     const auto start = Clock::now();
     try {
       WriteFileAtomically(config_file, run.config_toml);
-      const fs::path scenario_file = ScenarioFile(scenario);
-      std::vector<std::string> arguments = {options_.executable.string(),
-                                            "deform",
-                                            scenario_file.string(),
-                                            "--config",
-                                            config_file.string(),
-                                            "--report",
-                                            temporary_report.string(),
-                                            "--trace",
-                                            "--threads",
-                                            std::to_string(threads_),
-                                            "--quiet"};
+      std::vector<std::string> arguments = RunArguments(scenario, config_file, temporary_report);
       const fs::path mesh_file = dir_ / "meshes" / (run.id + ".ply");
       // The child writes the mesh under a temporary name; renamed when the run succeeded, so a
       // killed run leaves no partial mesh under the final name.
@@ -473,12 +563,16 @@ class Sweep {
           dir_ / "meshes" / fmt::format(".{}.{}.rest.ply", run.id, tag_);
       const fs::path handles_temporary =
           dir_ / "meshes" / fmt::format(".{}.{}.handles.json", run.id, tag_);
-      const bool write_rest = experiment_.settings.save_mesh && !fs::exists(rest_file);
+      // A registration's rest mesh is its case's source.ply; it has no handles.
+      const bool registration = !scenario.known_answer_target.empty();
+      const bool write_rest =
+          experiment_.settings.save_mesh && !registration && !fs::exists(rest_file);
       if (experiment_.settings.save_mesh) {
         arguments.insert(arguments.end(), {"--out", mesh_temporary.string()});
         info["mesh"] = "meshes/" + mesh_file.filename().string();
-        info["rest_mesh"] = "meshes/" + rest_file.filename().string();
-        info["handles"] = "meshes/" + handles_file.filename().string();
+        info["rest_mesh"] = registration ? "cases/" + scenario.name + "/source.ply"
+                                         : "meshes/" + rest_file.filename().string();
+        if (!registration) info["handles"] = "meshes/" + handles_file.filename().string();
       }
       if (write_rest) {
         arguments.insert(arguments.end(), {"--out-rest", rest_temporary.string(), "--out-handles",
@@ -486,13 +580,7 @@ class Sweep {
       }
       info["command"] = fmt::format("{}", fmt::join(arguments, " "));
 
-      ProcessOptions process;
-      process.output_file = log_file;
-      process.timeout = experiment_.settings.timeout;
-      process.die_with_parent = true;
-      process.default_environment = {fmt::format("OPENBLAS_NUM_THREADS={}", threads_),
-                                     fmt::format("OMP_NUM_THREADS={}", threads_)};
-      const ProcessResult child = RunProcess(arguments, process);
+      const ProcessResult child = RunProcess(arguments, ChildProcessOptions(log_file));
       if (!child.started) {
         throw InputError(fmt::format("cannot start {}", options_.executable.string()));
       }
@@ -535,7 +623,7 @@ class Sweep {
   std::string host_;  ///< this host's name as it appears in temporary names
   std::string tag_;   ///< PID@HOST of this process, in its temporary names
   int threads_ = 1;
-  std::mutex rows_mutex_, scenario_mutex_;
+  std::mutex rows_mutex_, scenario_mutex_, case_mutex_;
   std::map<int, std::string> rows_;
 };
 

@@ -746,6 +746,113 @@ def render_pictures(directory, runs, selection, per_scenario, use_vtk):
 # ------------------------------------------------------------------------------------------
 # Text
 
+# ------------------------------------------------------------------------------------------
+# Registration experiments ([known_answers]: `harap register ... --answer`)
+
+def is_registration(run):
+    return run.get("command") == "register"
+
+
+def answer_errors(run):
+    """(mean, max) vertex error against the known answer, in % of the diagonal, or None."""
+    answer = run.get("answer")
+    if not answer:
+        return None
+    return 100.0 * answer["mean_error_relative"], 100.0 * answer["max_error_relative"]
+
+
+def registration_summary(runs, compare, baseline):
+    """Per compared value: time against `baseline` and the answer errors of both."""
+    lines = []
+    by_value = OrderedDict()
+    for run, base in pairs_against_baseline(runs, compare, baseline):
+        by_value.setdefault(compare_value(run, compare), []).append((run, base))
+    for value, group in by_value.items():
+        n = len(group)
+        t_ratio = [r["timings"]["total"] / b["timings"]["total"] for r, b in group
+                   if b["timings"]["total"] > 0]
+        faster = sum(1 for r, b in group if r["timings"]["total"] < b["timings"]["total"])
+        errors = [(answer_errors(r), answer_errors(b)) for r, b in group]
+        errors = [(e, f) for e, f in errors if e and f]
+        text = (f"**{value}** vs **{baseline}** ({n} {'case' if n == 1 else 'cases'}): faster in "
+                f"{faster}/{n}")
+        if t_ratio:
+            text += (f", median total-time ratio {statistics.median(t_ratio):.3g} "
+                     f"(range {min(t_ratio):.3g}–{max(t_ratio):.3g})")
+        if errors:
+            lower = sum(1 for e, f in errors if e[0] < f[0])
+            text += (f"; lower mean error in {lower}/{len(errors)}; median mean error "
+                     f"{statistics.median(e[0] for e, _ in errors):.3g}% vs "
+                     f"{statistics.median(f[0] for _, f in errors):.3g}% of the diagonal")
+        lines.append(text + ".")
+    return lines
+
+
+def runs_table_head(columns, alignments):
+    """The "## Runs" heading and a Markdown table head; alignments: "---" or "---:" per column."""
+    return ["## Runs\n", "| " + " | ".join(columns) + " |", "|" + "|".join(alignments) + "|"]
+
+
+def unfinished_row(run, columns):
+    """A table row for a run that did not finish: its scenario, label, status and error."""
+    error = run["run"].get("error", "not run yet")
+    return (f"| {run['_plan']['scenario']} | | {markdown_escape(run_name(run))} | "
+            f"{run['run']['status']}: {markdown_escape(error)} " + "|" * (columns - 3))
+
+
+def registration_table(runs):
+    columns = ["case", "V", "run", "target", "updates", "iterations", "mean error %",
+               "max error %", "residual RMS %", "ARAP energy", "T (s)"]
+    out = runs_table_head(columns, ["---", "---:", "---", "---:"] + ["---:"] * 7)
+    for run in runs:
+        plan_entry = run["_plan"]
+        if not ok(run):
+            out.append(unfinished_row(run, len(columns)))
+            continue
+        errors = answer_errors(run)
+        target = run["target"]
+        out.append(
+            f"| {plan_entry['scenario']} | {run['source']['vertices']:,} | "
+            f"{markdown_escape(run_name(run))} | {target['points']:,} {target['kind']} | "
+            f"{run['correspondence_updates']} | {run['iterations']} | "
+            f"{fmt_number(errors[0], 3) if errors else '–'} | "
+            f"{fmt_number(errors[1], 3) if errors else '–'} | "
+            f"{fmt_number(100.0 * run['residual']['rms_relative'], 3)} | "
+            f"{fmt_number(run['arap_energy'], 5)} | {fmt_seconds(run['timings']['total'])} |")
+    out.append("\nErrors |u − U| against the known answer and the residual (distance to the "
+               "target) in % of the rest mesh's bounding-box diagonal; updates: correspondence "
+               "updates over all levels; T: total seconds (the target's search tree included). "
+               "The cases (source, target, answer) are in `cases/`, per-run JSON reports in "
+               "`runs/`, all rows in `results.csv`.\n")
+    return out
+
+
+def deformation_table(runs):
+    columns = ["scenario", "V", "run", "H", "P", "C", "S", "T", "E", "M (MiB)",
+               "iterations per level", "conv."]
+    out = runs_table_head(columns, ["---", "---:", "---"] + ["---:"] * 7 + ["---", "---"])
+    for run in runs:
+        plan_entry = run["_plan"]
+        if not ok(run):
+            out.append(unfinished_row(run, len(columns)))
+            continue
+        t = run["timings"]
+        levels = ", ".join(str(level["iterations"]) for level in run.get("levels", []))
+        out.append(
+            f"| {plan_entry['scenario']} | {run['mesh']['vertices']:,} | "
+            f"{markdown_escape(run_name(run))} | "
+            f"{fmt_seconds(t['hierarchy']) if len(run.get('levels', [])) > 1 else '–'} | "
+            f"{fmt_seconds(t['precompute'])} | {fmt_seconds(t['constrain'])} | "
+            f"{fmt_seconds(t['solve'])} | {fmt_seconds(t['total'])} | "
+            f"{fmt_number(run['energy'], 5)} | {run['peak_memory_bytes'] / 2**20:.0f} | "
+            f"{levels} | {'yes' if run['converged'] else 'no'} |")
+    out.append("\nH hierarchy, P precompute, C constrain (factorization), S solve, T total, in "
+               "seconds; E final energy (rotations re-fitted); M peak memory of the run's process. "
+               "Per-run JSON reports (with the energy trace) are in `runs/`, all rows in "
+               "`results.csv`.\n")
+    return out
+
+
 def measured_summary(runs, compare, baseline):
     lines = []
     pairs = pairs_against_baseline(runs, compare, baseline)
@@ -870,8 +977,16 @@ def main():
     out.append(f"Machine: {machine_note(runs)} Generated "
                f"{datetime.datetime.now().strftime('%Y-%m-%d %H:%M')}.\n")
 
+    registration = any(is_registration(r) for r in runs)
+    if registration:
+        # The energy figures and the handle pictures do not apply to registrations: the table
+        # and the comparison with the baseline say it all.
+        figures = []
+        render = False
+
     # Claim vs measured.
-    measured = measured_summary(runs, compare, baseline) if compare else []
+    summarize = registration_summary if registration else measured_summary
+    measured = summarize(runs, compare, baseline) if compare else []
     out.append("## Paper vs. measured\n")
     out.append("| the paper claims | we measured |\n| --- | --- |")
     claim = report.get("claim", "(no claim given in the config)")
@@ -881,35 +996,14 @@ def main():
         out.append(f"Notes: {report['notes']}\n")
 
     # Main table.
-    out.append("## Runs\n")
-    columns = ["scenario", "V", "run", "H", "P", "C", "S", "T", "E", "M (MiB)",
-               "iterations per level", "conv."]
-    out.append("| " + " | ".join(columns) + " |")
-    out.append("|" + "|".join(["---", "---:", "---"] + ["---:"] * 7 + ["---", "---"]) + "|")
-    for run in runs:
-        plan_entry = run["_plan"]
-        if not ok(run):
-            error = run["run"].get("error", "not run yet")
-            out.append(f"| {plan_entry['scenario']} | | {markdown_escape(run_name(run))} | "
-                       f"{run['run']['status']}: {markdown_escape(error)} |||||||||")
-            continue
-        t = run["timings"]
-        levels = ", ".join(str(level["iterations"]) for level in run.get("levels", []))
-        out.append(
-            f"| {plan_entry['scenario']} | {run['mesh']['vertices']:,} | "
-            f"{markdown_escape(run_name(run))} | "
-            f"{fmt_seconds(t['hierarchy']) if len(run.get('levels', [])) > 1 else '–'} | "
-            f"{fmt_seconds(t['precompute'])} | {fmt_seconds(t['constrain'])} | "
-            f"{fmt_seconds(t['solve'])} | {fmt_seconds(t['total'])} | "
-            f"{fmt_number(run['energy'], 5)} | {run['peak_memory_bytes'] / 2**20:.0f} | "
-            f"{levels} | {'yes' if run['converged'] else 'no'} |")
-    out.append("\nH hierarchy, P precompute, C constrain (factorization), S solve, T total, in "
-               "seconds; E final energy (rotations re-fitted); M peak memory of the run's process. "
-               "Per-run JSON reports (with the energy trace) are in `runs/`, all rows in "
-               "`results.csv`.\n")
+    if registration:
+        out.extend(registration_table(runs))
+    else:
+        out.extend(deformation_table(runs))
 
     # Figures.
-    out.append("## Figures\n")
+    if figures:
+        out.append("## Figures\n")
     for number, figure in enumerate(figures, 1):
         progress(f"figure {number}/{len(figures)}: {figure}")
         if figure == "phases":

@@ -191,7 +191,8 @@ def register(V, F, target, *, target_faces=None, target_normals=None, landmarks=
              landmark_targets=None, hierarchical=True, energy=None, solver=None, hierarchy=None,
              upsampler=None, options=None, callback=None, threads=0, stiffness=None):
     """Deforms the mesh (V, F) onto a target with ARAP as the regularizer (non-rigid ICP, coarse
-    to fine), as `harap register` does (docs/registration.md).
+    to fine), as `harap register` does (docs/registration.md). F: (m, 3) triangles, or (m, 4)
+    tetrahedra (the volume's boundary meets the target, the interior follows).
 
     target: (p, 3) points: a point cloud, or with target_faces (q, 3) the vertices of a target
     mesh. target_normals: (p, 3) normals of a point cloud (optional; used to reject

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "framework/error.h"
+#include "framework/mesh_topology.h"
 #include "framework/stiffness.h"
 #include "framework/vertex_normals.h"
 #include "solvers/optimizers/coarse_constraints.h"
@@ -88,9 +89,9 @@ void CheckProblem(const RegistrationProblem& problem) {
   HARAP_CHECK(problem.source != nullptr && problem.target != nullptr,
               "a registration needs a source mesh and a target");
   const Mesh& source = *problem.source;
-  if (source.kind() != ElementKind::kTriangle || source.planar) {
+  if (source.planar) {
     throw InputError(
-        "registration deforms a triangle surface mesh; the source has tetrahedra or is planar");
+        "registration deforms a surface or a volume in space; the source is a planar mesh");
   }
   if (problem.target->num_points() == 0) throw InputError("the registration target is empty");
   const Constraints& landmarks = problem.landmarks;
@@ -107,6 +108,31 @@ void CheckProblem(const RegistrationProblem& problem) {
     }
   }
 }
+
+// The surface of one level's mesh, which meets the target: a triangle mesh's triangles, a
+// tetrahedral mesh's boundary triangles. Interior vertices of a volume get no correspondence; the
+// ARAP energy of the tetrahedra carries them along.
+struct LevelSurface {
+  Elements triangles;
+  std::vector<char> on_surface;  // per vertex; empty: every vertex is on the surface
+  Index num_surface_vertices = 0;
+
+  LevelSurface() = default;
+  explicit LevelSurface(const Mesh& mesh) {
+    if (mesh.kind() != ElementKind::kTetrahedron) {
+      triangles = mesh.elements;
+      num_surface_vertices = mesh.num_vertices();
+      return;
+    }
+    triangles = BoundaryTriangles(mesh.elements);
+    on_surface.assign(static_cast<size_t>(mesh.num_vertices()), 0);
+    for (Index t = 0; t < triangles.rows(); ++t) {
+      for (int k = 0; k < 3; ++k) on_surface[static_cast<size_t>(triangles(t, k))] = 1;
+    }
+    num_surface_vertices = std::count(on_surface.begin(), on_surface.end(), 1);
+  }
+  bool Contains(Index v) const { return on_surface.empty() || on_surface[v]; }
+};
 
 // The correspondences of one level's vertices: where each is pulled and whether it was kept.
 struct Correspondences {
@@ -134,21 +160,21 @@ class CorrespondenceFinder {
         reject_boundary_(options.reject_boundary),
         point_to_plane_(options.point_to_plane) {}
 
-  void Find(const Positions& positions, const Elements& triangles, Correspondences& out,
+  void Find(const Positions& positions, const LevelSurface& surface, Correspondences& out,
             const Context& context) {
     Stopwatch clock;
-    FindForward(positions, triangles, out, context);
+    FindForward(positions, surface, out, context);
     seconds_ += clock.Seconds();
   }
   // Seconds spent finding correspondences since the last call.
   double TakeSeconds() { return std::exchange(seconds_, 0.0); }
 
  private:
-  void FindForward(const Positions& positions, const Elements& triangles, Correspondences& out,
+  void FindForward(const Positions& positions, const LevelSurface& surface, Correspondences& out,
                    const Context& context) {
     target_.FindClosest(positions, closest_, context);
     const Positions normals =
-        check_normals_ ? VertexNormals(positions, triangles) : Positions(0, 3);
+        check_normals_ ? VertexNormals(positions, surface.triangles) : Positions(0, 3);
     out.targets.resize(positions.rows(), 3);
     out.distance.resize(positions.rows());
     out.kept.resize(positions.rows());
@@ -159,7 +185,9 @@ class CorrespondenceFinder {
       const ClosestPoint& c = closest_[v];
       out.distance[v] = c.distance;
       bool kept = true;
-      if (c.distance > max_distance_) {
+      if (!surface.Contains(v)) {
+        kept = false;  // inside a volume: no correspondence, not a rejection
+      } else if (c.distance > max_distance_) {
         ++out.counts.too_far;
         kept = false;
       } else if (reject_boundary_ && c.feature == ClosestFeature::kBoundary) {
@@ -188,7 +216,7 @@ class CorrespondenceFinder {
         out.targets.row(v) = positions.row(v);  // the proximal pull: stay where you are
       }
     }
-    if (point_search_) AddBackward(positions, normals, out, context);
+    if (point_search_) AddBackward(positions, surface, normals, out, context);
   }
 
   // The symmetric part: each target point pulls the source vertex nearest to it (with the same
@@ -196,14 +224,27 @@ class CorrespondenceFinder {
   // their mean, i.e. by both terms λ‖u − c‖² + λ‖u − mean‖² (up to a constant), or to their mean
   // alone where its own correspondence was rejected. Target parts that no vertex reaches as its
   // closest point (a stretched limb, the far side of a bend) pull so too.
-  void AddBackward(const Positions& positions, const Positions& normals, Correspondences& out,
-                   const Context& context) {
-    const std::unique_ptr<ClosestPointSearch> source = point_search_(positions);
+  void AddBackward(const Positions& positions, const LevelSurface& surface,
+                   const Positions& normals, Correspondences& out, const Context& context) {
+    // A volume's target points pull its surface vertices only.
+    std::vector<Index> searched;
+    Positions surface_positions;
+    if (!surface.on_surface.empty()) {
+      for (Index v = 0; v < positions.rows(); ++v) {
+        if (surface.Contains(v)) searched.push_back(v);
+      }
+      surface_positions.resize(static_cast<Index>(searched.size()), 3);
+      for (size_t k = 0; k < searched.size(); ++k) {
+        surface_positions.row(static_cast<Index>(k)) = positions.row(searched[k]);
+      }
+    }
+    const std::unique_ptr<ClosestPointSearch> source =
+        point_search_(searched.empty() ? positions : surface_positions);
     // Every k-th target point, so that a vertex gets about kSymmetricPointsPerVertex of them at
     // most: a coarse level's few vertices need no more to find their share of the target.
-    const Index stride =
-        std::max<Index>(1, target_.num_points() /
-                               (kSymmetricPointsPerVertex * std::max<Index>(1, positions.rows())));
+    const Index stride = std::max<Index>(
+        1, target_.num_points() /
+               (kSymmetricPointsPerVertex * std::max<Index>(1, surface.num_surface_vertices)));
     if (stride != sample_stride_) {
       sample_stride_ = stride;
       const Index count = (target_.num_points() + stride - 1) / stride;
@@ -223,7 +264,7 @@ class CorrespondenceFinder {
     counts_.assign(positions.rows(), 0);
     for (Index p = 0; p < target_points.rows(); ++p) {
       const ClosestPoint& c = nearest_vertex_[p];
-      const Index v = c.element;
+      const Index v = searched.empty() ? c.element : searched[static_cast<size_t>(c.element)];
       if (c.distance > max_distance_) continue;
       if (check_normals_ && target_normals.rows() > 0 && normals.row(v).squaredNorm() > 0.0 &&
           normals.row(v).dot(target_normals.row(p)) < min_cosine_) {
@@ -269,22 +310,23 @@ void AddSolves(const SolveStatistics& part, SolveStatistics& total) {
 }
 
 // The data term's mass of each vertex of level `level`: the barycentric area (a third of the
-// area of the triangles around it) of the input vertices it stands for, over the squared
+// area of the (surface) triangles around it) of the input vertices it stands for, over the squared
 // bounding-box diagonal. The ARAP energies scale as an integral over the surface of squared
 // strains (cotangent weights), so with these masses the data term is an integral too and the
 // balance of the two does not depend on the mesh's resolution; on a coarse level each vertex
 // pulls with its cluster's summed mass, so the coarse problem approximates the fine one. A
 // vertex without area gets the smallest positive mass (its weight must be > 0).
-std::vector<double> VertexMasses(const MeshHierarchy* hierarchy, const Mesh& input, int level,
-                                 Index level_vertices) {
+std::vector<double> VertexMasses(const MeshHierarchy* hierarchy, const Mesh& input,
+                                 const LevelSurface& surface, int level, Index level_vertices) {
   const double diagonal = BoundingBoxDiagonal(input);
   std::vector<double> input_mass(input.num_vertices(), 0.0);
-  for (Index f = 0; f < input.num_elements(); ++f) {
-    const Eigen::Vector3d a = input.vertices.row(input.elements(f, 0));
-    const Eigen::Vector3d b = input.vertices.row(input.elements(f, 1));
-    const Eigen::Vector3d c = input.vertices.row(input.elements(f, 2));
+  const Elements& triangles = surface.triangles;
+  for (Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = input.vertices.row(triangles(f, 0));
+    const Eigen::Vector3d b = input.vertices.row(triangles(f, 1));
+    const Eigen::Vector3d c = input.vertices.row(triangles(f, 2));
     const double third = (b - a).cross(c - a).norm() / 6.0 / (diagonal * diagonal);
-    for (int k = 0; k < 3; ++k) input_mass[input.elements(f, k)] += third;
+    for (int k = 0; k < 3; ++k) input_mass[triangles(f, k)] += third;
   }
   std::vector<double> masses(level_vertices, 0.0);
   for (Index v = 0; v < input.num_vertices(); ++v) {
@@ -314,7 +356,8 @@ class RegistrationPass final : public LevelCascade::Pass {
         context_(context),
         diagonal_(BoundingBoxDiagonal(*problem.source)),
         finder_(*problem.target, problem.make_point_search, options, diagonal_),
-        landmark_input_(SoftLandmarks(problem, options)) {}
+        input_surface_(*problem.source),
+        landmark_input_(SoftLandmarks(problem, options, input_surface_)) {}
 
   int updates() const { return updates_; }
   const Correspondences& last() const { return correspondences_; }
@@ -335,11 +378,12 @@ class RegistrationPass final : public LevelCascade::Pass {
     // rotations here.
     level_ = l;
     const Mesh& mesh = cascade_.LevelMesh(l);
+    surface_ = l == 0 ? input_surface_ : LevelSurface(mesh);
     masses_ = VertexMasses(cascade_.hierarchical() ? &cascade_.hierarchy() : nullptr,
-                           cascade_.mesh(), l, mesh.num_vertices());
+                           cascade_.mesh(), input_surface_, l, mesh.num_vertices());
     landmarks_ = l == 0 ? LevelConstraints::Exact(landmark_input_, false).soft
                         : MapConstraints(cascade_.hierarchy(), l, landmark_input_).soft;
-    finder_.Find(state_.positions, mesh.elements, correspondences_, context_);
+    finder_.Find(state_.positions, surface_, correspondences_, context_);
     Constrain(l, FirstStage(l));
   }
   LevelSolveRequest Request(int /*l*/, bool from_rotations, bool /*finishing*/) override {
@@ -357,10 +401,11 @@ class RegistrationPass final : public LevelCascade::Pass {
   // The landmarks as soft constraints of the input mesh: each pulls like `landmark_weight`
   // vertices of mean mass in the last stage.
   static Constraints SoftLandmarks(const RegistrationProblem& problem,
-                                   const RegistrationOptions& options) {
+                                   const RegistrationOptions& options,
+                                   const LevelSurface& surface) {
     Constraints landmarks = problem.landmarks;
     const std::vector<double> input_masses =
-        VertexMasses(nullptr, *problem.source, 0, problem.source->num_vertices());
+        VertexMasses(nullptr, *problem.source, surface, 0, problem.source->num_vertices());
     const double mean_mass = std::accumulate(input_masses.begin(), input_masses.end(), 0.0) /
                              static_cast<double>(input_masses.size());
     landmarks.weights.assign(landmarks.indices.size(),
@@ -421,6 +466,8 @@ class RegistrationPass final : public LevelCascade::Pass {
   const Context& context_;
   double diagonal_;
   CorrespondenceFinder finder_;
+  LevelSurface input_surface_;  // of the input mesh
+  LevelSurface surface_;        // of the level being solved
   Constraints landmark_input_;  // the problem's landmarks, soft (SoftLandmarks)
   LevelState state_;
   std::vector<double> masses_;  // per level vertex (VertexMasses)
@@ -438,17 +485,16 @@ LevelSolveResult RegistrationPass::Solve(LevelSolver& solver, LevelState& state,
   LevelSolveResult total;
   LevelSolveRequest step = request;
   int level_updates = 0, refactorizations = 0;
-  const Elements& triangles = cascade_.LevelMesh(level_).elements;
   const double motion_tolerance = options_.tolerance * diagonal_;
   for (int stage = FirstStage(level_); stage < options_.stages && !total.stopped_by_callback;
        ++stage) {
     if (stage > FirstStage(level_)) {
-      finder_.Find(state.positions, triangles, correspondences_, context);
+      finder_.Find(state.positions, surface_, correspondences_, context);
       Constrain(level_, stage);
     }
     for (int update = 0; update < options_.max_updates; ++update) {
       if (update > 0) {
-        finder_.Find(state.positions, triangles, correspondences_, context);
+        finder_.Find(state.positions, surface_, correspondences_, context);
         if (KeptSetChanged()) {
           Constrain(level_, stage);
           ++refactorizations;
@@ -478,14 +524,14 @@ LevelSolveResult RegistrationPass::Solve(LevelSolver& solver, LevelState& state,
     }
   }
   // The correspondences of the result, for the report.
-  finder_.Find(state.positions, triangles, correspondences_, context);
+  finder_.Find(state.positions, surface_, correspondences_, context);
   updates_ += level_updates;
   const Index kept = std::max<Index>(1, correspondences_.counts.kept);
   total.measures["correspondence_updates"] = level_updates;
   total.measures["refactorizations"] = refactorizations;
   total.measures["correspondence_seconds"] = finder_.TakeSeconds();
   total.measures["kept_fraction"] = static_cast<double>(correspondences_.counts.kept) /
-                                    std::max<Index>(1, state.positions.rows());
+                                    std::max<Index>(1, surface_.num_surface_vertices);
   total.measures["residual_rms"] = std::sqrt(correspondences_.kept_squared_sum / kept);
   return total;
 }

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 // `harap register SOURCE TARGET`: the command end to end on a generated mesh, and its refusals.
 #include <catch2/catch.hpp>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "api/register.h"
 #include "framework/vertex_normals.h"
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
@@ -140,6 +142,14 @@ TEST_CASE("harap register refuses bad input or says what happened", "[cli][regis
     CHECK(run.status == 1);
     CHECK_THAT(run.output, Contains("admm_pd") && Contains("hierarchical"));
   }
+  SECTION("an answer with other vertices, before any work") {
+    const std::string other =
+        folder.Write("other.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const auto run = RunHarap(fmt::format("register {} {} --answer {}", rest, answer, other));
+    CHECK(run.status == 1);
+    CHECK_THAT(run.output, Contains("--answer") && Contains("3 vertices"));
+    CHECK_THAT(run.output, !Contains("correspondence updates"));
+  }
   SECTION("a target far away: no correspondences, the source stays, the report says so") {
     const std::string far = folder.Write("far.xyz", "100 100 100\n101 100 100\n100 101 100\n");
     const std::string report = (folder.dir / "far.json").string();
@@ -152,6 +162,89 @@ TEST_CASE("harap register refuses bad input or says what happened", "[cli][regis
     CHECK(nlohmann::json::parse(report_file)["status"] == "no_correspondences");
     const Mesh out = ReadMesh(folder.dir / "far.ply");
     CHECK((out.vertices - ReadMesh(rest).vertices).cwiseAbs().maxCoeff() < 1e-6);
+  }
+}
+
+TEST_CASE("harap register deforms a tetrahedral source by its boundary", "[cli][registration]") {
+  const TempFolder folder("register-tets");
+  const std::string scenario =
+      folder.Write("bend.toml", std::string("mesh = { tetrahedralize = { builtin = \"cylinder\", "
+                                            "vertices = 1500 } }\n") +
+                                    (std::strchr(kBendScenario, '\n') + 1));
+  const fs::path rest = folder.dir / "rest.mesh", answer = folder.dir / "answer.mesh";
+  const auto deformed = RunHarap(
+      fmt::format("deform {} --out {} --out-rest {} -q", scenario, answer.string(), rest.string()));
+  INFO(deformed.output);
+  REQUIRE(deformed.status == 0);
+  // The target is the answer's boundary surface; the interior follows through the tetrahedra.
+  const fs::path target = folder.dir / "answer.ply", out = folder.dir / "registered.mesh";
+  REQUIRE(RunHarap(fmt::format("deform {} --out {} -q", scenario, target.string())).status == 0);
+  const fs::path report_file = folder.dir / "report.json";
+  const auto run = RunHarap(
+      fmt::format("register {} {} --answer {} --out {} --report {} --threads 2", rest.string(),
+                  target.string(), answer.string(), out.string(), report_file.string()));
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+  std::ifstream report_stream(report_file);
+  const auto report = nlohmann::json::parse(report_stream);
+  CHECK(report["energy_type"] == "elements");
+  CHECK(report["source"].contains("tetrahedra"));
+  const Mesh source = ReadMesh(rest);
+  const Mesh registered = ReadMesh(out);
+  REQUIRE(registered.kind() == ElementKind::kTetrahedron);
+  REQUIRE(registered.num_vertices() == source.num_vertices());
+  // Only boundary vertices had correspondences: fewer kept than vertices.
+  CHECK(report["correspondences"]["kept"].get<Index>() < source.num_vertices());
+  const double diagonal = BoundingBoxDiagonal(source);
+  const double rest_error = MeanDistance(source.vertices, ReadMesh(answer).vertices) / diagonal;
+  CHECK(report["answer"]["mean_error_relative"].get<double>() < 0.5 * rest_error);
+}
+
+TEST_CASE("harap known-answer makes a case that harap register --answer scores",
+          "[cli][registration]") {
+  const TempFolder folder("known-answer");
+  const std::string scenario = folder.Write("bend.toml", kBendScenario);
+  const fs::path out = folder.dir / "case";
+  const auto made = RunHarap(fmt::format(
+      "known-answer {} --target damaged --out-dir {} --threads 2", scenario, out.string()));
+  INFO(made.output);
+  REQUIRE(made.status == 0);
+  CHECK_THAT(made.output, Contains("harap register") && Contains("--answer"));
+  const Mesh source = ReadMesh(out / "source.ply");
+  const Mesh answer = ReadMesh(out / "answer.ply");
+  REQUIRE(answer.num_vertices() == source.num_vertices());
+  // The target is the damaged sample: 2 points per vertex less a 10% hole, plus 1% outliers,
+  // read as a point cloud with normals.
+  const RegistrationTarget target = ReadRegistrationTarget(out / "target.ply");
+  REQUIRE_FALSE(target.mesh.has_value());
+  const Index sampled = 2 * source.num_vertices();
+  const Index kept = sampled - sampled / 10;
+  CHECK(target.points.rows() == kept + kept / 100);
+  CHECK(target.normals.rows() == target.points.rows());
+
+  const fs::path report_file = folder.dir / "report.json";
+  const auto run = RunHarap(fmt::format(
+      "register {} {} --answer {} --report {} --threads 2", (out / "source.ply").string(),
+      (out / "target.ply").string(), (out / "answer.ply").string(), report_file.string()));
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.output, Contains("against the answer: mean error"));
+  std::ifstream report_stream(report_file);
+  const auto report = nlohmann::json::parse(report_stream);
+  const auto& scored = report["answer"];
+  const double diagonal = BoundingBoxDiagonal(source);
+  const double rest_error = MeanDistance(source.vertices, answer.vertices) / diagonal;
+  // The report's numbers are the errors of the registered mesh, and registering reduced them.
+  CHECK(scored["mean_error_relative"].get<double>() ==
+        Approx(scored["mean_error"].get<double>() / diagonal));
+  CHECK(scored["max_error"].get<double>() >= scored["mean_error"].get<double>());
+  CHECK(scored["mean_error_relative"].get<double>() < 0.5 * rest_error);
+
+  SECTION("an unknown target kind lists the valid ones") {
+    const auto bad = RunHarap(fmt::format("known-answer {} --target cloud --out-dir {}", scenario,
+                                          (folder.dir / "bad").string()));
+    CHECK(bad.status == 1);
+    CHECK_THAT(bad.output, Contains("cloud") && Contains("mesh, points, damaged"));
   }
 }
 

@@ -272,7 +272,6 @@ TEST_CASE("scenario weight: soft handles carry their weight into the constraints
     }
   }
 }
-
 }  // namespace
 }  // namespace harap
 
@@ -324,6 +323,75 @@ TEST_CASE("scenario [[stiffness]]: bad regions name the region and the place",
   CHECK_THAT(
       with("name = \"x\"\nselect.slab = { axis = \"z\", from = 0.5, to = 0.6 }\nfactor = 2\n"),
       Contains("stiffness 'x'"));
+}
+
+// The grid above as ASCII PLY with a vertex property `k` and a face property `kf`; the last two
+// triangles are one quad (fan-triangulated into two triangles that share its value).
+constexpr const char* kGridPlyWithFactors =
+    "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
+    "property float z\nproperty float k\nelement face 3\nproperty list uchar int "
+    "vertex_indices\nproperty double kf\nend_header\n"
+    "10 -1 0 1\n12 -1 0 2\n14 -1 0 4\n10 0 0 1\n12 0 0 2\n14 0 0 8\n"
+    "3 0 1 4 0.5\n3 0 4 3 3\n4 1 2 5 4 10\n";
+
+TEST_CASE("scenario [[stiffness]]: factors from the mesh's PLY vertex or face property",
+          "[io][scenario][stiffness]") {
+  testing::ScratchDir dir;
+  dir.Write("grid.ply", kGridPlyWithFactors);
+  const auto load = [&](const std::string& regions) {
+    return LoadScenario(dir.Write(
+        "s.toml", "mesh = \"grid.ply\"\n[[handle]]\nselect.indices = [0, 3]\n" + regions));
+  };
+  SECTION("per vertex: each element the mean of its corners', times a selected region's") {
+    const Scenario scenario = load(
+        "[[stiffness]]\nname = \"painted\"\nattribute = \"k\"\n"
+        "[[stiffness]]\nselect.indices = [0]\nfactor = 3\n");
+    REQUIRE(scenario.stiffness.size() == 2);
+    CHECK(scenario.stiffness[0].attribute == "k");
+    CHECK_THAT(scenario.stiffness[0].selection,
+               Contains("vertex property 'k'") && Contains("factors 1 to 8"));
+    // Vertex factors 1·3, 2, 4, 1, 2, 8 on the triangles (0 1 4) (0 4 3) (1 2 5) (1 5 4).
+    const std::vector<double> stiffness = scenario.ElementStiffness();
+    REQUIRE(stiffness.size() == 4);
+    CHECK(stiffness[0] == Approx(7.0 / 3.0));
+    CHECK(stiffness[1] == Approx(6.0 / 3.0));
+    CHECK(stiffness[2] == Approx(14.0 / 3.0));
+    CHECK(stiffness[3] == Approx(12.0 / 3.0));
+  }
+  SECTION("per face: a polygon's value on each of its triangles") {
+    const Scenario scenario = load("[[stiffness]]\nattribute = \"kf\"\n");
+    CHECK(scenario.ElementStiffness() == std::vector<double>{0.5, 3.0, 10.0, 10.0});
+  }
+  SECTION("errors name the property, the file and the place") {
+    const auto message = [&](const std::string& regions) {
+      return MessageOf(
+          dir.Write("s.toml", "mesh = \"grid.ply\"\n[[handle]]\nselect.indices = [0]\n" + regions));
+    };
+    CHECK_THAT(message("[[stiffness]]\nattribute = \"stiff\"\n"),
+               Contains("s.toml:5:13") && Contains("no vertex or face property 'stiff'") &&
+                   Contains("vertex k") && Contains("face kf"));
+    CHECK_THAT(message("[[stiffness]]\nattribute = \"k\"\nfactor = 2\n"),
+               Contains("'factor' does not go with 'attribute'"));
+    dir.Write("zero.ply",
+              std::string(kGridPlyWithFactors)
+                  .replace(std::string(kGridPlyWithFactors).find("14 0 0 8"), 8, "14 0 0 0"));
+    CHECK_THAT(MessageOf(dir.Write("z.toml",
+                                   "mesh = \"zero.ply\"\n[[handle]]\n"
+                                   "select.indices = [0]\n[[stiffness]]\n"
+                                   "attribute = \"k\"\n")),
+               Contains("zero.ply") && Contains("is 0 at vertex 5"));
+    dir.Write("grid.obj", kGridObj);
+    CHECK_THAT(MessageOf(dir.Write("o.toml",
+                                   "mesh = \"grid.obj\"\n[[handle]]\n"
+                                   "select.indices = [0]\n[[stiffness]]\n"
+                                   "attribute = \"k\"\n")),
+               Contains("must be a PLY file"));
+    CHECK_THAT(MessageOf(dir.Write("r.toml",
+                                   "mesh = \"grid.ply\"\nrefine = 1\n[[handle]]\n"
+                                   "select.indices = [0]\n[[stiffness]]\n"
+                                   "attribute = \"k\"\n")),
+               Contains("no refine"));
+  }
 }
 
 }  // namespace

@@ -146,10 +146,11 @@ TEST_CASE("registration refuses bad input before solving", "[optimizers][registr
     problem.target = &empty;
     CHECK_THROWS_WITH(setup.Run(problem, {}), Catch::Contains("target is empty"));
   }
-  SECTION("a tetrahedral source") {
-    TwistedTetBar bar(2, 2, 3, 1.0, 0.3);
-    problem.source = &bar.mesh;
-    CHECK_THROWS_WITH(setup.Run(problem, {}), Catch::Contains("triangle surface"));
+  SECTION("a planar source") {
+    Mesh planar = tube.mesh;
+    planar.planar = true;
+    problem.source = &planar;
+    CHECK_THROWS_WITH(setup.Run(problem, {}), Catch::Contains("planar"));
   }
 }
 

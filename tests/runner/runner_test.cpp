@@ -207,6 +207,76 @@ TEST_CASE("Experiment: config errors name the problem before any run", "[experim
   CHECK_THROWS_AS(ParseShard("-1/3"), ConfigError);
 }
 
+TEST_CASE("A registration experiment: known-answer cases, registered, scored, reported",
+          "[experiments][runner][registration]") {
+  Workspace workspace("registration");
+  const std::string config = R"([experiment]
+name = "known"
+[scenarios]
+files = ["cylinder.toml"]
+[known_answers]
+targets = ["mesh", "points"]
+[registration]
+max_updates = 10
+[[variant]]
+name = "hierarchical"
+optimizer.type = "hierarchical"
+hierarchy.min_vertices = 100
+[[variant]]
+name = "flat"
+optimizer.type = "classic"
+[report]
+baseline = "flat"
+)";
+  const Experiment experiment = workspace.Load(config);
+  REQUIRE(experiment.scenarios.size() == 2);
+  CHECK(experiment.scenarios[0].name == "cylinder-mesh");
+  CHECK(experiment.scenarios[1].known_answer_target == "points");
+  REQUIRE(experiment.runs.size() == 4);
+  const SweepSummary summary = workspace.Run(experiment, "out");
+  CHECK(summary.failed == 0);
+  const fs::path out = workspace.dir / "out";
+  // One case per scenario and target, made once and shared by both variants.
+  for (const char* name : {"cylinder-mesh", "cylinder-points"}) {
+    for (const char* file : {"source.ply", "target.ply", "answer.ply"}) {
+      CHECK(fs::exists(out / "cases" / name / file));
+    }
+  }
+  for (const ExperimentRun& run : experiment.runs) {
+    const auto report = nlohmann::json::parse(ReadText(out / "runs" / (run.id + ".json")));
+    INFO(run.label);
+    CHECK(report["command"] == "register");
+    CHECK(report["mode"] == (run.variant == "flat" ? "flat" : "hierarchical"));
+    CHECK(report["answer"]["mean_error_relative"].get<double>() > 0.0);
+    CHECK(report["registration"]["max_updates"] == 10);
+  }
+  const std::string csv = ReadText(out / "results.csv");
+  CHECK(csv.find("answer_mean_error") != std::string::npos);
+  if (std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") == 0) {
+    REQUIRE(std::system(fmt::format("{} report {} --no-render >/dev/null",
+                                    ::harap::testing::HarapExecutable(), out.string())
+                            .c_str()) == 0);
+    const std::string report = ReadText(out / "report.md");
+    CHECK(report.find("**hierarchical** vs **flat** (2 cases)") != std::string::npos);
+    CHECK(report.find("| cylinder-points | 591 | flat | 1,182 points |") != std::string::npos);
+  }
+
+  SECTION("config errors name the problem before any run") {
+    CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n"
+                                     "[registration]\nstages = 2\n"),
+                      Catch::Contains("[known_answers]"));
+    CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n"
+                                     "[known_answers]\ntargets = [\"cloud\"]\n"),
+                      Catch::Contains("cloud") && Catch::Contains("mesh, points, damaged"));
+    CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n"
+                                     "[known_answers]\nremoved = 1.5\n"),
+                      Catch::Contains("removed"));
+    CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n"
+                                     "[known_answers]\n[grid]\nregistration.stagez = [2]\n"),
+                      Catch::Contains("stagez") && Catch::Contains("stages"));
+  }
+}
+
 TEST_CASE("Experiment: a folder of meshes with a handle template", "[experiments][runner]") {
   HARAP_REQUIRE_SHARED(meshes, "meshes/cactus.obj.xz");
   Workspace workspace("template");
