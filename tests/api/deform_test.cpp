@@ -12,6 +12,7 @@
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
 #include "tests/support/shared_data.h"
+#include "tests/support/test_files.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
@@ -21,17 +22,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kScenario = R"(
-mesh = { builtin = "cylinder", vertices = 3000 }
-[[handle]]
-name = "bottom"
-select.slab = { axis = "z", from = 0.0, to = 0.03 }
-[[handle]]
-name = "top"
-select.slab = { axis = "z", from = 0.97, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 60.0 }
-translate = [0.0, 0.2, -0.1]
-)";
+const std::string kScenario =
+    testing::CylinderScenario(testing::CylinderMesh(3000), 0.03, 60.0, "[0.0, 0.2, -0.1]");
 
 fs::path TempDir() {
   fs::path dir = fs::temp_directory_path() / fmt::format("harap-test-{}", getpid());

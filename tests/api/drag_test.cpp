@@ -10,6 +10,7 @@
 #include "api/builtins.h"
 #include "tests/support/run_harap.h"
 #include "tests/support/shared_data.h"
+#include "tests/support/test_files.h"
 
 using namespace harap;
 using namespace harap::testing;
@@ -119,18 +120,10 @@ TEST_CASE("drag: a session replays the cylinder bend, frame by frame", "[experim
 
 TEST_CASE("drag: soft handles (a handle's weight) stay soft in the session", "[experiments]") {
   const Registries registries = MakeBuiltinRegistries();
-  const Scenario scenario = ParseScenario(R"(
-mesh = { builtin = "cylinder", vertices = 1500 }
-[[handle]]
-name = "bottom"
-select.slab = { axis = "z", from = 0.0, to = 0.03 }
-[[handle]]
-name = "top"
-select.slab = { axis = "z", from = 0.97, to = 1.0 }
-translate = [0.0, 0.3, -0.1]
-weight = 2.0
-)",
-                                          "inline", ".");
+  const Scenario scenario =
+      ParseScenario(testing::CylinderScenario(testing::CylinderMesh(1500), 0.03, 0.0,
+                                              "[0.0, 0.3, -0.1]", "weight = 2.0\n"),
+                    "inline", ".");
   REQUIRE(scenario.MergedConstraints().has_soft());
   for (const char* optimizer : {"classic", "hierarchical"}) {
     DYNAMIC_SECTION(optimizer) {

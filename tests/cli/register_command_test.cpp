@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // `harap register SOURCE TARGET`: the command end to end on a generated mesh, and its refusals.
 #include <catch2/catch.hpp>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -11,6 +10,7 @@
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
 #include "tests/support/temp_folder.h"
+#include "tests/support/test_files.h"
 
 namespace harap {
 namespace {
@@ -21,16 +21,8 @@ using testing::RunHarap;
 using testing::TempFolder;
 
 // A capped cylinder bent by 45 degrees: the known answer the tests register to.
-constexpr const char* kBendScenario = R"(mesh = { builtin = "cylinder", vertices = 3000 }
-[[handle]]
-name = "bottom"
-select.slab = { axis = "z", from = 0.0, to = 0.05 }
-[[handle]]
-name = "top"
-select.slab = { axis = "z", from = 0.95, to = 1.0 }
-rotate = { axis = [1.0, 0.0, 0.0], degrees = 45.0 }
-translate = [0.0, 0.2, -0.1]
-)";
+const std::string kBendScenario =
+    testing::CylinderScenario(testing::CylinderMesh(3000), 0.05, 45.0, "[0.0, 0.2, -0.1]");
 
 double MeanDistance(const Positions& a, const Positions& b) {
   return (a - b).rowwise().norm().mean();
@@ -167,10 +159,10 @@ TEST_CASE("harap register refuses bad input or says what happened", "[cli][regis
 
 TEST_CASE("harap register deforms a tetrahedral source by its boundary", "[cli][registration]") {
   const TempFolder folder("register-tets");
-  const std::string scenario =
-      folder.Write("bend.toml", std::string("mesh = { tetrahedralize = { builtin = \"cylinder\", "
-                                            "vertices = 1500 } }\n") +
-                                    (std::strchr(kBendScenario, '\n') + 1));
+  const std::string scenario = folder.Write(
+      "bend.toml",
+      testing::CylinderScenario("{ tetrahedralize = " + testing::CylinderMesh(1500) + " }", 0.05,
+                                45.0, "[0.0, 0.2, -0.1]"));
   const fs::path rest = folder.dir / "rest.mesh", answer = folder.dir / "answer.mesh";
   const auto deformed = RunHarap(
       fmt::format("deform {} --out {} --out-rest {} -q", scenario, answer.string(), rest.string()));

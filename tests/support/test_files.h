@@ -8,6 +8,29 @@
 
 namespace harap::testing {
 
+/// A cylinder bend scenario: `mesh` (the value of the `mesh` key, e.g. CylinderMesh(3000)), its
+/// bottom (z in [0, slab] of the box) held as 'bottom', its top (z in [1 − slab, 1]) as 'top'
+/// turned `degrees` about x (no rotation for 0) and shifted by `translate`, with `top_extra`
+/// (TOML lines, e.g. "weight = 2.0\n") added to the top handle.
+inline std::string CylinderScenario(const std::string& mesh, double slab, double degrees,
+                                    const std::string& translate = "[0.0, 0.0, 0.0]",
+                                    const std::string& top_extra = "") {
+  std::string text = fmt::format(
+      "mesh = {}\n[[handle]]\nname = \"bottom\"\nselect.slab = {{ axis = \"z\", from = 0.0, to "
+      "= {} }}\n[[handle]]\nname = \"top\"\nselect.slab = {{ axis = \"z\", from = {}, to = 1.0 "
+      "}}\n",
+      mesh, slab, 1.0 - slab);
+  if (degrees != 0.0) {
+    text += fmt::format("rotate = {{ axis = [1.0, 0.0, 0.0], degrees = {:.1f} }}\n", degrees);
+  }
+  return text + fmt::format("translate = {}\n", translate) + top_extra;
+}
+
+/// The `mesh` value of a built-in cylinder with about `vertices` vertices.
+inline std::string CylinderMesh(int vertices) {
+  return fmt::format("{{ builtin = \"cylinder\", vertices = {} }}", vertices);
+}
+
 /// A 600-vertex built-in cylinder, its bottom held ('bottom') and its top turned 60° about x
 /// ('top'): a scenario that solves in a fraction of a second.
 inline constexpr const char* kCylinderBendScenario = R"(
