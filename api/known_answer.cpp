@@ -8,6 +8,7 @@
 
 #include "api/deform.h"
 #include "framework/error.h"
+#include "framework/mesh_topology.h"
 #include "io/mesh_writers.h"
 
 namespace harap {
@@ -62,9 +63,11 @@ KnownAnswerCase MakeKnownAnswerCase(const Registries& registries, const Scenario
                                     const ConfigNode& answer_config,
                                     const KnownAnswerOptions& options) {
   options.Validate();
-  if (scenario.mesh.kind() != ElementKind::kTriangle) {
-    throw InputError(fmt::format("{}: a known-answer registration case needs a triangle mesh",
-                                 scenario.mesh_source));
+  if (scenario.mesh.planar) {
+    throw InputError(fmt::format(
+        "{}: a known-answer registration case needs a surface or a volume in space, not a "
+        "planar mesh",
+        scenario.mesh_source));
   }
   DeformOptions deform;
   deform.threads = options.threads;
@@ -88,9 +91,14 @@ KnownAnswerCase MakeKnownAnswerCase(const Registries& registries, const Scenario
     known.target.mesh = std::move(deformed);
     return known;
   }
+  // Points on the deformed surface: a volume's boundary.
+  Mesh surface{deformed.vertices,
+               deformed.kind() == ElementKind::kTetrahedron ? BoundaryTriangles(deformed.elements)
+                                                            : deformed.elements,
+               false};
   const auto count = static_cast<Index>(
       std::llround(options.points_per_vertex * static_cast<double>(deformed.num_vertices())));
-  SampledPoints sample = SampleSurface(deformed, count, options.seed);
+  SampledPoints sample = SampleSurface(surface, count, options.seed);
   if (options.target == KnownAnswerTarget::kDamaged) {
     // A seed of its own, so the damaged points are the undamaged ones minus the hole.
     sample = DamagePoints(sample, options.damage, options.seed + 1);
@@ -100,8 +108,19 @@ KnownAnswerCase MakeKnownAnswerCase(const Registries& registries, const Scenario
   return known;
 }
 
-KnownAnswerFiles KnownAnswerFiles::In(const std::filesystem::path& folder) {
-  return {folder / "source.ply", folder / "target.ply", folder / "answer.ply"};
+KnownAnswerFiles KnownAnswerFiles::In(const std::filesystem::path& folder, ElementKind kind) {
+  const char* extension = kind == ElementKind::kTetrahedron ? ".mesh" : ".ply";
+  return {folder / (std::string("source") + extension), folder / "target.ply",
+          folder / (std::string("answer") + extension)};
+}
+
+std::optional<KnownAnswerFiles> KnownAnswerFiles::Find(const std::filesystem::path& folder) {
+  for (const ElementKind kind : {ElementKind::kTriangle, ElementKind::kTetrahedron}) {
+    KnownAnswerFiles files = In(folder, kind);
+    std::error_code error;
+    if (std::filesystem::exists(files.answer, error)) return files;
+  }
+  return std::nullopt;
 }
 
 KnownAnswerFiles WriteKnownAnswerCase(const KnownAnswerCase& known,
@@ -112,9 +131,9 @@ KnownAnswerFiles WriteKnownAnswerCase(const KnownAnswerCase& known,
     throw InputError(
         fmt::format("{}: cannot create the folder: {}", folder.string(), error.message()));
   }
-  const KnownAnswerFiles files = KnownAnswerFiles::In(folder);
-  WritePly(files.source, known.source.vertices, known.source.elements);
-  WritePly(files.answer, known.answer, known.source.elements);
+  const KnownAnswerFiles files = KnownAnswerFiles::In(folder, known.source.kind());
+  WriteMesh(files.source, known.source.vertices, known.source.elements);
+  WriteMesh(files.answer, known.answer, known.source.elements);
   if (known.target.mesh) {
     WritePly(files.target, known.target.mesh->vertices, known.target.mesh->elements);
   } else {

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -54,18 +55,22 @@ struct KnownAnswerCase {
 };
 
 /// Solves `scenario` with the run config `answer_config` (`harap deform`'s tables; empty:
-/// its defaults) and makes the target. Throws InputError when the scenario's solve does not give
-/// one position per mesh vertex (a mesh that repair would weld).
+/// its defaults) and makes the target (of a tetrahedral mesh: from its boundary). Throws
+/// InputError for a planar mesh or when the scenario's solve does not give one position per mesh
+/// vertex (a mesh that repair would weld).
 KnownAnswerCase MakeKnownAnswerCase(const Registries& registries, const Scenario& scenario,
                                     const ConfigNode& answer_config,
                                     const KnownAnswerOptions& options);
 
-/// The files of a case in a folder: source.ply (the rest mesh), answer.ply (the deformed mesh)
-/// and target.ply (the deformed mesh, or the points with their normals as a PLY without faces,
-/// which `harap register` reads as a point cloud).
+/// The files of a case in a folder: source (the rest mesh) and answer (the deformed mesh), as
+/// .ply for a triangle mesh and as MEDIT .mesh for a tetrahedral one (PLY would keep only its
+/// boundary), and target.ply (the deformed surface, or the points with their normals as a PLY
+/// without faces, which `harap register` reads as a point cloud).
 struct KnownAnswerFiles {
   std::filesystem::path source, target, answer;
-  static KnownAnswerFiles In(const std::filesystem::path& folder);
+  static KnownAnswerFiles In(const std::filesystem::path& folder, ElementKind kind);
+  /// The files of a case written in `folder` (either kind), or nothing when it holds none.
+  static std::optional<KnownAnswerFiles> Find(const std::filesystem::path& folder);
 };
 
 /// Writes the case's files into `folder` (created if missing). Throws InputError naming a file

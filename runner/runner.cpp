@@ -34,6 +34,7 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -458,9 +459,10 @@ class Sweep {
   // InputError with the child's message when it fails.
   KnownAnswerFiles KnownAnswerCase(const ExperimentScenario& scenario) {
     const fs::path folder = dir_ / "cases" / scenario.name;
-    const KnownAnswerFiles files = KnownAnswerFiles::In(folder);
     std::lock_guard lock(case_mutex_);
-    if (fs::exists(files.answer)) return files;
+    if (const std::optional<KnownAnswerFiles> files = KnownAnswerFiles::Find(folder)) {
+      return *files;
+    }
     const fs::path temporary = dir_ / "cases" / fmt::format(".{}.{}", scenario.name, tag_);
     const fs::path log = dir_ / "cases" / (scenario.name + ".log");
     const KnownAnswerSettings& settings = experiment_.known_answers;
@@ -496,10 +498,11 @@ class Sweep {
     // Another host may have made the same (deterministic) case meanwhile: keep the first.
     fs::rename(temporary, folder, ignore);
     fs::remove_all(temporary, ignore);
-    if (!fs::exists(files.answer)) {
+    const std::optional<KnownAnswerFiles> files = KnownAnswerFiles::Find(folder);
+    if (!files) {
       throw InputError(fmt::format("{}: the known-answer case was not written", folder.string()));
     }
-    return files;
+    return *files;
   }
 
   // How every child runs: its output in `log`, the run timeout, killed with this process, and
@@ -570,8 +573,11 @@ class Sweep {
       if (experiment_.settings.save_mesh) {
         arguments.insert(arguments.end(), {"--out", mesh_temporary.string()});
         info["mesh"] = "meshes/" + mesh_file.filename().string();
-        info["rest_mesh"] = registration ? "cases/" + scenario.name + "/source.ply"
-                                         : "meshes/" + rest_file.filename().string();
+        // A registration's case exists once its arguments are made (RunArguments).
+        const std::optional<KnownAnswerFiles> known =
+            registration ? KnownAnswerFiles::Find(dir_ / "cases" / scenario.name) : std::nullopt;
+        info["rest_mesh"] = known ? fs::relative(known->source, dir_).generic_string()
+                                  : "meshes/" + rest_file.filename().string();
         if (!registration) info["handles"] = "meshes/" + handles_file.filename().string();
       }
       if (write_rest) {

@@ -190,6 +190,16 @@ TEST_CASE("harap register deforms a tetrahedral source by its boundary", "[cli][
   const double diagonal = BoundingBoxDiagonal(source);
   const double rest_error = MeanDistance(source.vertices, ReadMesh(answer).vertices) / diagonal;
   CHECK(report["answer"]["mean_error_relative"].get<double>() < 0.5 * rest_error);
+
+  // harap known-answer keeps a volume's tetrahedra in its source and answer (MEDIT .mesh).
+  const fs::path case_dir = folder.dir / "case";
+  const auto made = RunHarap(
+      fmt::format("known-answer {} --target points --out-dir {} -q", scenario, case_dir.string()));
+  INFO(made.output);
+  REQUIRE(made.status == 0);
+  CHECK(ReadMesh(case_dir / "source.mesh").kind() == ElementKind::kTetrahedron);
+  CHECK(ReadMesh(case_dir / "answer.mesh").num_vertices() == source.num_vertices());
+  CHECK(ReadRegistrationTarget(case_dir / "target.ply").points.rows() == 2 * source.num_vertices());
 }
 
 TEST_CASE("harap known-answer makes a case that harap register --answer scores",
