@@ -299,10 +299,11 @@ bool MaskedSystem::SetMatrix(const SparseMatrix& a, std::vector<Index>& changed)
     });
   }
   // M changes only where the changed entries are not masked: compare before and after.
+  std::vector<double> before;
   for (Index v = 0; v < n; ++v) {
     if (!touched[v]) continue;
     const Index begin = masked_.outerIndexPtr()[v], end = masked_.outerIndexPtr()[v + 1];
-    const std::vector<double> before(masked_.valuePtr() + begin, masked_.valuePtr() + end);
+    before.assign(masked_.valuePtr() + begin, masked_.valuePtr() + end);
     MaskColumn(v);
     if (!std::equal(before.begin(), before.end(), masked_.valuePtr() + begin)) {
       changed.push_back(v);

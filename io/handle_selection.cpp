@@ -464,7 +464,6 @@ void ReadStiffnessAttribute(const StiffnessSpec& spec, const MeshSpec& mesh_spec
     high = std::max(high, value);
   }
   region.attribute = spec.attribute;
-  region.factor = high;
   (per_vertex ? region.vertex_factors : region.element_factors) = property.values;
   region.selection = fmt::format("{} property '{}' of {}, factors {} to {}", property.element,
                                  spec.attribute, mesh_spec.file.filename().string(), low, high);
@@ -472,12 +471,7 @@ void ReadStiffnessAttribute(const StiffnessSpec& spec, const MeshSpec& mesh_spec
     region.vertices.resize(static_cast<size_t>(scenario.mesh.num_vertices()));
     std::iota(region.vertices.begin(), region.vertices.end(), Index{0});
   } else {
-    std::vector<bool> used(static_cast<size_t>(scenario.mesh.num_vertices()), false);
-    for (Index e = 0; e < scenario.mesh.num_elements(); ++e) {
-      for (int c = 0; c < scenario.mesh.simplex_size(); ++c) {
-        used[static_cast<size_t>(scenario.mesh.elements(e, c))] = true;
-      }
-    }
+    const std::vector<bool> used = ReferencedVertices(scenario.mesh);
     for (Index v = 0; v < scenario.mesh.num_vertices(); ++v) {
       if (used[static_cast<size_t>(v)]) region.vertices.push_back(v);
     }

@@ -33,7 +33,7 @@ struct ScenarioHandle {
 struct ScenarioStiffness {
   std::string name;             ///< `name`, or "stiffness N" (1-based) if absent.
   std::vector<Index> vertices;  ///< Selected vertices, ascending.
-  double factor = 1.0;          ///< finite, > 0 (from an attribute: its largest value)
+  double factor = 1.0;          ///< finite, > 0 (unused with an attribute)
   std::string selection;        ///< What selects the vertices, in words (as ScenarioHandle's).
   /// `attribute = "NAME"`: the PLY property the factors come from, and the factors, one per
   /// vertex (of `vertices`, every vertex) or one per element; empty for a selected region.

@@ -43,17 +43,6 @@ namespace fs = std::filesystem;
 
 constexpr const char* kDeformTables[] = {"optimizer", "energy", "solver", "hierarchy", "upsampler"};
 
-KnownAnswerOptions KnownAnswerOptionsOf(const KnownAnswerSettings& settings,
-                                        const std::string& target) {
-  KnownAnswerOptions options;
-  options.target = ParseKnownAnswerTarget(target);
-  options.points_per_vertex = settings.points_per_vertex;
-  options.damage.removed = settings.removed;
-  options.damage.outliers = settings.outliers;
-  options.seed = static_cast<std::uint64_t>(settings.seed);
-  return options;
-}
-
 class ExperimentParser {
  public:
   ExperimentParser(std::string source, fs::path base)
@@ -353,20 +342,21 @@ class ExperimentParser {
         }
       }
     }
+    KnownAnswerOptions& options = settings.options;
     auto number = [&](std::string_view key, double& value) {
       if (const toml::node* entry = table->get(key)) value = toml_.Number(*entry, key);
     };
-    number("points_per_vertex", settings.points_per_vertex);
-    number("removed", settings.removed);
-    number("outliers", settings.outliers);
+    number("points_per_vertex", options.points_per_vertex);
+    number("removed", options.damage.removed);
+    number("outliers", options.damage.outliers);
     if (const toml::node* seed = table->get("seed")) {
       if (!seed->is_integer() || seed->as_integer()->get() < 0) {
         Fail(*seed, "'seed' must be an integer >= 0");
       }
-      settings.seed = seed->as_integer()->get();
+      options.seed = static_cast<std::uint64_t>(seed->as_integer()->get());
     }
     try {
-      KnownAnswerOptionsOf(settings, settings.targets.front()).Validate();
+      options.Validate();
     } catch (const ConfigError& error) {
       Fail(*node, fmt::format("[known_answers]: {}", error.what()));
     }
@@ -387,8 +377,8 @@ class ExperimentParser {
         known.known_answer_target = target;
         AddScenario(std::move(known),
                     fmt::format("{}:known-answer:{}:{}:{}:{}:{}", identities[s], target,
-                                settings.points_per_vertex, settings.removed, settings.outliers,
-                                settings.seed));
+                                settings.options.points_per_vertex, settings.options.damage.removed,
+                                settings.options.damage.outliers, settings.options.seed));
       }
     }
   }

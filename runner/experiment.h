@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "api/known_answer.h"
 #include "io/scenario_generator.h"
 
 namespace harap {
@@ -45,10 +46,8 @@ struct ExperimentScenario {
 struct KnownAnswerSettings {
   bool enabled = false;
   std::vector<std::string> targets = {"mesh", "points", "damaged"};
-  double points_per_vertex = 2.0;
-  double removed = 0.10;
-  double outliers = 0.01;
-  long long seed = 1;
+  /// How every case is made (its `target` is each of `targets` in turn).
+  KnownAnswerOptions options;
 };
 
 /// One run of the sweep: a scenario with one combination of variant and grid values.

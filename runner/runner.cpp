@@ -161,8 +161,8 @@ std::string CsvRow(const json& report, const std::vector<std::string>& grid_keys
        Number(get(report, "solver")),
        Number(get(report, "hierarchy")),
        Number(get(report, "upsampler")),
-       mesh.is_null() ? "" : Number(mesh["vertices"]),
-       mesh.is_null() ? "" : Number(mesh[registration ? "triangles" : "faces"]),
+       mesh.is_null() ? "" : Number(get(mesh, "vertices")),
+       mesh.is_null() ? "" : Number(get(mesh, registration ? "triangles" : "faces")),
        Number(get(report, registration ? "arap_energy" : "energy")),
        Number(get(report, "iterations")),
        Number(get(report, registration ? "iterations" : "total_iterations")),
@@ -465,7 +465,7 @@ class Sweep {
     }
     const fs::path temporary = dir_ / "cases" / fmt::format(".{}.{}", scenario.name, tag_);
     const fs::path log = dir_ / "cases" / (scenario.name + ".log");
-    const KnownAnswerSettings& settings = experiment_.known_answers;
+    const KnownAnswerOptions& settings = experiment_.known_answers.options;
     const std::vector<std::string> arguments = {options_.executable.string(),
                                                 "known-answer",
                                                 ScenarioFile(scenario).string(),
@@ -476,9 +476,9 @@ class Sweep {
                                                 "--points-per-vertex",
                                                 fmt::format("{}", settings.points_per_vertex),
                                                 "--removed",
-                                                fmt::format("{}", settings.removed),
+                                                fmt::format("{}", settings.damage.removed),
                                                 "--outliers",
-                                                fmt::format("{}", settings.outliers),
+                                                fmt::format("{}", settings.damage.outliers),
                                                 "--seed",
                                                 std::to_string(settings.seed),
                                                 "--threads",
@@ -517,15 +517,15 @@ class Sweep {
     return process;
   }
 
-  // The command line of a run's child: `harap deform SCENARIO` or, in registration
-  // experiments, `harap register SOURCE TARGET --answer ANSWER`, with the run's config.
+  // The command line of a run's child: `harap deform SCENARIO` or, for a registration case
+  // (`known`), `harap register SOURCE TARGET --answer ANSWER`, with the run's config.
   std::vector<std::string> RunArguments(const ExperimentScenario& scenario,
+                                        const std::optional<KnownAnswerFiles>& known,
                                         const fs::path& config_file, const fs::path& report_file) {
     std::vector<std::string> arguments = {options_.executable.string(), experiment_.command()};
-    if (!scenario.known_answer_target.empty()) {
-      const KnownAnswerFiles files = KnownAnswerCase(scenario);
-      arguments.insert(arguments.end(), {files.source.string(), files.target.string(), "--answer",
-                                         files.answer.string()});
+    if (known) {
+      arguments.insert(arguments.end(), {known->source.string(), known->target.string(), "--answer",
+                                         known->answer.string()});
     } else {
       arguments.insert(arguments.end(), {ScenarioFile(scenario).string(), "--trace"});
     }
@@ -555,7 +555,12 @@ class Sweep {
     const auto start = Clock::now();
     try {
       WriteFileAtomically(config_file, run.config_toml);
-      std::vector<std::string> arguments = RunArguments(scenario, config_file, temporary_report);
+      // A registration run's case (made on first use); it has no handles.
+      const bool registration = !scenario.known_answer_target.empty();
+      const std::optional<KnownAnswerFiles> known =
+          registration ? std::optional(KnownAnswerCase(scenario)) : std::nullopt;
+      std::vector<std::string> arguments =
+          RunArguments(scenario, known, config_file, temporary_report);
       const fs::path mesh_file = dir_ / "meshes" / (run.id + ".ply");
       // The child writes the mesh under a temporary name; renamed when the run succeeded, so a
       // killed run leaves no partial mesh under the final name.
@@ -566,16 +571,11 @@ class Sweep {
           dir_ / "meshes" / fmt::format(".{}.{}.rest.ply", run.id, tag_);
       const fs::path handles_temporary =
           dir_ / "meshes" / fmt::format(".{}.{}.handles.json", run.id, tag_);
-      // A registration's rest mesh is its case's source.ply; it has no handles.
-      const bool registration = !scenario.known_answer_target.empty();
       const bool write_rest =
           experiment_.settings.save_mesh && !registration && !fs::exists(rest_file);
       if (experiment_.settings.save_mesh) {
         arguments.insert(arguments.end(), {"--out", mesh_temporary.string()});
         info["mesh"] = "meshes/" + mesh_file.filename().string();
-        // A registration's case exists once its arguments are made (RunArguments).
-        const std::optional<KnownAnswerFiles> known =
-            registration ? KnownAnswerFiles::Find(dir_ / "cases" / scenario.name) : std::nullopt;
         info["rest_mesh"] = known ? fs::relative(known->source, dir_).generic_string()
                                   : "meshes/" + rest_file.filename().string();
         if (!registration) info["handles"] = "meshes/" + handles_file.filename().string();

@@ -115,6 +115,7 @@ void CheckProblem(const RegistrationProblem& problem) {
 struct LevelSurface {
   Elements triangles;
   std::vector<char> on_surface;  // per vertex; empty: every vertex is on the surface
+  std::vector<Index> vertices;   // the vertices on the surface, ascending; empty: every vertex
   Index num_surface_vertices = 0;
 
   LevelSurface() = default;
@@ -129,7 +130,10 @@ struct LevelSurface {
     for (Index t = 0; t < triangles.rows(); ++t) {
       for (int k = 0; k < 3; ++k) on_surface[static_cast<size_t>(triangles(t, k))] = 1;
     }
-    num_surface_vertices = std::count(on_surface.begin(), on_surface.end(), 1);
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      if (on_surface[static_cast<size_t>(v)]) vertices.push_back(v);
+    }
+    num_surface_vertices = static_cast<Index>(vertices.size());
   }
   bool Contains(Index v) const { return on_surface.empty() || on_surface[v]; }
 };
@@ -227,19 +231,15 @@ class CorrespondenceFinder {
   void AddBackward(const Positions& positions, const LevelSurface& surface,
                    const Positions& normals, Correspondences& out, const Context& context) {
     // A volume's target points pull its surface vertices only.
-    std::vector<Index> searched;
-    Positions surface_positions;
-    if (!surface.on_surface.empty()) {
-      for (Index v = 0; v < positions.rows(); ++v) {
-        if (surface.Contains(v)) searched.push_back(v);
-      }
-      surface_positions.resize(static_cast<Index>(searched.size()), 3);
+    const std::vector<Index>& searched = surface.vertices;
+    if (!searched.empty()) {
+      surface_positions_.resize(static_cast<Index>(searched.size()), 3);
       for (size_t k = 0; k < searched.size(); ++k) {
-        surface_positions.row(static_cast<Index>(k)) = positions.row(searched[k]);
+        surface_positions_.row(static_cast<Index>(k)) = positions.row(searched[k]);
       }
     }
     const std::unique_ptr<ClosestPointSearch> source =
-        point_search_(searched.empty() ? positions : surface_positions);
+        point_search_(searched.empty() ? positions : surface_positions_);
     // Every k-th target point, so that a vertex gets about kSymmetricPointsPerVertex of them at
     // most: a coarse level's few vertices need no more to find their share of the target.
     const Index stride = std::max<Index>(
@@ -292,6 +292,7 @@ class CorrespondenceFinder {
   std::vector<Index> counts_;
   Index sample_stride_ = 0;  // of sample_points_ (0: none yet)
   Positions sample_points_, sample_normals_;
+  Positions surface_positions_;  // a volume's surface vertices (AddBackward)
 };
 
 // The data weight of a vertex whose correspondence was rejected when the system was factored,
