@@ -9,15 +9,10 @@ namespace harap {
 
 namespace {
 
-std::string TypeOf(const ConfigNode& table, const std::string& default_name,
-                   const std::string& kind) {
-  return table.Get("type", default_name, fmt::format("which {} to use", kind));
-}
-
 constexpr std::string_view kSmallSystems = "small_systems";
 
 // Reads the size limit of a `[solver.small_systems]` table (0 if the table is absent).
-Index SmallSystemsLimit(const ConfigNode& table) {
+Index SmallSystemsLimit(OptionReader table) {
   const int limit = table.Get("max_unknowns", 0,
                               "reduced systems with at most this many unknowns (free vertices) "
                               "use this table's solver, larger ones [solver]'s; 0: none",
@@ -58,9 +53,9 @@ namespace {
 // Resolves `key`'s table of `root`. Without such a table, a default the registry lacks (a
 // registry built for a test or an embedding) is an error only if a run asks for the piece.
 template <class Interface>
-Recipe<Interface> ResolvePiece(const Registry<Interface>& registry, const ConfigNode& root,
+Recipe<Interface> ResolvePiece(const Registry<Interface>& registry, OptionReader& root,
                                std::string_view key, const std::string& default_name) {
-  const ConfigNode table = root.Child(key);
+  OptionReader table = root.Child(key);
   if (root.Has(key) || registry.Contains(default_name)) {
     return registry.Resolve(table, default_name);
   }
@@ -76,10 +71,12 @@ RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
                                                    const ConfigNode& root,
                                                    DefaultComponents defaults)
     : defaults_(std::move(defaults)), choices_(std::make_shared<Choices>()) {
-  energy_ = registries.energies.Resolve(root.Child("energy"), defaults_.energy);
-  const ConfigNode solver = root.Child("solver");
+  // The pieces' tables only: the root's other keys are ValidateRunConfig's.
+  OptionReader reader(root);
+  energy_ = registries.energies.Resolve(reader.Child("energy"), defaults_.energy);
+  OptionReader solver = reader.Child("solver");
   // The sub-tables first: reading them marks them as known to [solver]'s unknown-key check.
-  const ConfigNode small = solver.Child(kSmallSystems);
+  OptionReader small = solver.Child(kSmallSystems);
   if (solver.Has(kSmallSystems)) {
     small_systems_limit_ = SmallSystemsLimit(small);
     if (small_systems_limit_ == 0) {
@@ -88,16 +85,16 @@ RegistryComponentFactory::RegistryComponentFactory(const Registries& registries,
     }
     small_systems_ = ResolveSolverTable(registries, small);
   }
-  for (int level : LevelTables(solver)) {
+  for (int level : LevelTables(solver.table())) {
     level_tables_[level] = ResolveSolverTable(registries, solver.Child(LevelTableKey(level)));
   }
   solver_ = ResolveSolverTable(registries, solver);
-  hierarchy_ = ResolvePiece(registries.hierarchies, root, "hierarchy", defaults_.hierarchy);
-  upsampler_ = ResolvePiece(registries.upsamplers, root, "upsampler", defaults_.upsampler);
+  hierarchy_ = ResolvePiece(registries.hierarchies, reader, "hierarchy", defaults_.hierarchy);
+  upsampler_ = ResolvePiece(registries.upsamplers, reader, "upsampler", defaults_.upsampler);
 }
 
 RegistryComponentFactory::SolverTable RegistryComponentFactory::ResolveSolverTable(
-    const Registries& registries, const ConfigNode& table) const {
+    const Registries& registries, OptionReader table) const {
   SolverTable resolved;
   resolved.recipe = registries.linear_solvers.Resolve(table, defaults_.solver);
   // Creating a solver is cheap (no factorization); it knows whether it is direct.
@@ -156,11 +153,11 @@ bool RegistryComponentFactory::solver_direct(int level, Index num_unknowns) cons
 
 std::unique_ptr<Optimizer> MakeOptimizer(const Registries& registries, const ConfigNode& root,
                                          const DefaultComponents& defaults) {
-  return registries.optimizers.Create(root.Child("optimizer"), defaults.optimizer);
+  return registries.optimizers.Create(OptionReader(root).Child("optimizer"), defaults.optimizer);
 }
 
 std::vector<OptionInfo> DescribeSmallSystemsOptions() {
-  const ConfigNode node = ConfigNode::Describing();
+  OptionReader node = OptionReader::Describing();
   SmallSystemsLimit(node);
   node.Get("type", DefaultComponents{}.solver,
            "the solver for the small systems (its own options go in the same table)");
@@ -188,18 +185,21 @@ DefaultComponents ValidatedDefaults(const Registries& registries, const ConfigNo
 ResolvedRunConfig::ResolvedRunConfig(const Registries& registries, const ConfigNode& config,
                                      const Mesh& mesh)
     : defaults(ValidatedDefaults(registries, config, mesh)),
-      optimizer_name(TypeOf(config.Child("optimizer"), defaults.optimizer, "optimizer")),
-      optimizer(registries.optimizers.Create(optimizer_name, config.Child("optimizer"))),
+      optimizer_recipe(registries.optimizers.Resolve(OptionReader(config).Child("optimizer"),
+                                                     defaults.optimizer)),
+      optimizer_name(optimizer_recipe.name()),
+      optimizer(optimizer_recipe.Make()),
       factory(registries, config, defaults) {
   optimizer->CheckComponents(factory);
 }
 
 void ValidateRunConfig(const ConfigNode& root, std::initializer_list<const char*> command_tables) {
+  OptionReader reader(root);
   for (const char* table : {"optimizer", "energy", "solver", "hierarchy", "upsampler"}) {
-    root.Child(table);
+    reader.Child(table);
   }
-  for (const char* table : command_tables) root.Child(table);
-  root.RejectUnknownKeys();
+  for (const char* table : command_tables) reader.Child(table);
+  reader.RejectUnknownKeys();
 }
 
 }  // namespace harap

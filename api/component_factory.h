@@ -84,7 +84,7 @@ class RegistryComponentFactory final : public ComponentFactory {
     Recipe<LinearSolver> recipe;
     bool direct = false;
   };
-  SolverTable ResolveSolverTable(const Registries& registries, const ConfigNode& table) const;
+  SolverTable ResolveSolverTable(const Registries& registries, OptionReader table) const;
   /// The table whose solver a system of `num_unknowns` unknowns gets on level `level` (-1: any
   /// level without its own table).
   const SolverTable& SolverTableFor(int level, Index num_unknowns) const;
@@ -119,7 +119,8 @@ struct ResolvedRunConfig {
   ResolvedRunConfig(const Registries& registries, const ConfigNode& config, const Mesh& mesh);
 
   DefaultComponents defaults;
-  std::string optimizer_name;  ///< `[optimizer] type`, or the default.
+  Recipe<Optimizer> optimizer_recipe;  ///< `[optimizer]` resolved
+  std::string optimizer_name;          ///< `[optimizer] type`, or the default.
   std::unique_ptr<Optimizer> optimizer;
   RegistryComponentFactory factory;
 };

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <thread>
 
 #include "api/component_factory.h"
 #include "api/run_warnings.h"
@@ -23,18 +22,18 @@ long long PeakMemoryBytes() {
 DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
                         const ConfigNode& config, const DeformOptions& options) {
   const ResolvedRunConfig run(registries, config, scenario.mesh);
-  const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config.Child("mesh"));
+  const MeshRepairOptions mesh_options =
+      MeshRepairOptions::FromConfig(OptionReader(config.Child("mesh")));
   const RegistryComponentFactory& factory = run.factory;
 
   DeformOutcome outcome;
   outcome.optimizer = run.optimizer_name;
   outcome.energy_type = factory.energy_name();
   outcome.solver = factory.solver_name();
-  outcome.threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
   outcome.resolved_config = config.ToToml();
 
   Context context = Context::WithThreads(options.threads);
+  outcome.threads = context.threads();
   context.phase_callback = options.phase;
   context.iteration_callback = [&](const IterationSummary& summary) {
     outcome.trace.push_back(

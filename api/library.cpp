@@ -26,8 +26,9 @@ void Describe(const Registry<Interface>& registry, std::vector<ComponentDescript
 
 // Accepts only the tables named in `tables` at the top level of `config`.
 void RejectOtherTables(const ConfigNode& config, std::initializer_list<const char*> tables) {
-  for (const char* table : tables) config.Child(table);
-  config.RejectUnknownKeys();
+  OptionReader reader(config);
+  for (const char* table : tables) reader.Child(table);
+  reader.RejectUnknownKeys();
 }
 
 }  // namespace
@@ -41,11 +42,12 @@ ComponentCatalog DescribeComponents(const Registries& registries) {
   Describe(registries.hierarchies, catalog.components);
   Describe(registries.upsamplers, catalog.components);
   catalog.small_systems_options = DescribeSmallSystemsOptions();
-  const ConfigNode describing = ConfigNode::Describing();
-  MeshRepairOptions::FromConfig(describing.Child("mesh"));
-  catalog.mesh_options = describing.Child("mesh").Options();
-  RegistrationOptions::FromConfig(describing.Child("registration"));
-  catalog.registration_options = describing.Child("registration").Options();
+  const OptionReader mesh = OptionReader::Describing();
+  MeshRepairOptions::FromConfig(mesh);
+  catalog.mesh_options = mesh.Options();
+  const OptionReader registration = OptionReader::Describing();
+  RegistrationOptions::FromConfig(registration);
+  catalog.registration_options = registration.Options();
   catalog.builtin_meshes = BuiltinMeshNames();
   return catalog;
 }
@@ -54,7 +56,8 @@ MeshHierarchy BuildHierarchy(const Registries& registries, const Mesh& mesh,
                              const ConfigNode& config, int threads) {
   RejectOtherTables(config, {"hierarchy"});
   ValidateMesh(mesh, "hierarchy input");
-  const auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
+  const auto hierarchy =
+      registries.hierarchies.Create(OptionReader(config.Child("hierarchy")), "octree");
   const Context context = Context::WithThreads(threads);
   return context.Run([&] { return hierarchy->Build(mesh, context); });
 }
@@ -62,7 +65,7 @@ MeshHierarchy BuildHierarchy(const Registries& registries, const Mesh& mesh,
 EnergyEvaluation EvaluateEnergy(const Registries& registries, const Mesh& rest, const Positions& u,
                                 const ConfigNode& config, int threads) {
   RejectOtherTables(config, {"energy"});
-  const ConfigNode table = config.Child("energy");
+  const OptionReader table(config.Child("energy"));
   if (!table.Has("type")) throw ConfigError("energy: no energy named (its `type`)");
   auto energy = registries.energies.Create(table, "");
   ValidateMesh(rest, "energy rest mesh");

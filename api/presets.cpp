@@ -34,6 +34,11 @@ ConfigNode TableAt(const ConfigNode& config, std::string_view dotted_path) {
   return node;
 }
 
+// The value of option `key` of `table` ("" if absent): a lookup, not an option read for a check.
+std::string StringAt(const ConfigNode& table, std::string_view key) {
+  return OptionReader(table).Get(key, std::string(), "");
+}
+
 }  // namespace
 
 const std::vector<Preset>& Presets() {
@@ -66,9 +71,9 @@ const std::vector<Preset>& Presets() {
 }
 
 std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
-  std::string name = config.Get("preset", std::string(),
-                                "a named option set (fast, hierarchical; docs/solvers.md); the "
-                                "config's own options win over it");
+  std::string name = StringAt(config, "preset");
+  // The preset's settings replace the key, so the run config's check need not know it.
+  config.Remove("preset");
   if (!flag.empty()) name = flag;
   if (name.empty()) return name;
   const Preset* preset = nullptr;
@@ -103,9 +108,7 @@ std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
         type = preset_type(table);
       }
       if (!type.empty() && key != table + ".type" &&
-          fmt::format("\"{}\"",
-                      TableAt(config, table).Get("type", std::string(), "which piece to use")) !=
-              type) {
+          fmt::format("\"{}\"", StringAt(TableAt(config, table), "type")) != type) {
         continue;
       }
       config.Set(key, value);
@@ -113,12 +116,10 @@ std::string ApplyPreset(ConfigNode& config, const std::string& flag) {
   };
   apply(preset->settings);
   const ConfigNode optimizer = config.Child("optimizer");
-  if (optimizer.Has("type") &&
-      optimizer.Get("type", std::string(), "which optimizer to use") == "hierarchical") {
+  if (StringAt(optimizer, "type") == "hierarchical") {
     apply(preset->hierarchical_settings);
     // Another level solver (admm_pd, wrapd) reads none of local_global's options.
-    if (!optimizer.Has("inner") ||
-        optimizer.Get("inner", std::string(), "level solver on each level") == "local_global") {
+    if (!optimizer.Has("inner") || StringAt(optimizer, "inner") == "local_global") {
       apply(preset->local_global_settings);
     }
   }

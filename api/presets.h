@@ -30,8 +30,8 @@ struct Preset {
 const std::vector<Preset>& Presets();
 
 /// Applies the preset named by `flag` (if not empty) or else by the config's top-level `preset`
-/// key (read either way, so the run config's key check accepts it): each of its settings whose
-/// key `config` does not set yet. An unknown name is a ConfigError listing the valid ones.
+/// key, which it removes (the settings stand in for it): each of the preset's settings whose key
+/// `config` does not set yet. An unknown name is a ConfigError listing the valid ones.
 /// Returns the preset's name ("" for none).
 std::string ApplyPreset(ConfigNode& config, const std::string& flag);
 

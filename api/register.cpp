@@ -7,7 +7,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 #include <unordered_set>
 
 #include "api/component_factory.h"
@@ -80,7 +79,7 @@ struct RegistrationDriver {
   std::unique_ptr<LevelSolver> level_solver;
 };
 
-RegistrationDriver ResolveDriver(const Registries& registries, const ConfigNode& table) {
+RegistrationDriver ResolveDriver(const Registries& registries, OptionReader table) {
   RegistrationDriver driver;
   const std::string type =
       table.GetChoice("type", "hierarchical", {"hierarchical", "classic"},
@@ -108,8 +107,9 @@ std::unique_ptr<ClosestPointSearch> BuildSearch(const RegistrationTarget& target
 
 void CheckRegisterConfig(const Registries& registries, const ConfigNode& config) {
   ValidateRunConfig(config, {"registration"});
-  RegistrationOptions::FromConfig(config.Child("registration"));
-  const RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
+  RegistrationOptions::FromConfig(OptionReader(config.Child("registration")));
+  const RegistrationDriver driver =
+      ResolveDriver(registries, OptionReader(config.Child("optimizer")));
   const RegistryComponentFactory factory(registries, config);
   driver.level_solver->CheckCompatible(*factory.MakeEnergy(), /*handle_edits=*/false);
 }
@@ -119,8 +119,8 @@ RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
                             const RegisterOptions& options) {
   ValidateRunConfig(config, {"registration"});
   RegisterOutcome outcome;
-  outcome.options = RegistrationOptions::FromConfig(config.Child("registration"));
-  RegistrationDriver driver = ResolveDriver(registries, config.Child("optimizer"));
+  outcome.options = RegistrationOptions::FromConfig(OptionReader(config.Child("registration")));
+  RegistrationDriver driver = ResolveDriver(registries, OptionReader(config.Child("optimizer")));
   outcome.options.hierarchical = driver.hierarchical;
   outcome.mode = driver.hierarchical ? "hierarchical" : "flat";
   const RegistryComponentFactory factory(registries, config,
@@ -132,11 +132,10 @@ RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
     outcome.hierarchy = factory.hierarchy_name();
     outcome.upsampler = factory.upsampler_name();
   }
-  outcome.threads =
-      options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
   outcome.resolved_config = config.ToToml();
 
   Context context = Context::WithThreads(options.threads);
+  outcome.threads = context.threads();
   context.phase_callback = options.phase;
   context.iteration_callback = options.progress;
   context.ReportPhase("building the target's search tree");

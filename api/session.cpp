@@ -3,7 +3,6 @@
 
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <thread>
 #include <unordered_map>
 
 #include "api/run_warnings.h"
@@ -17,18 +16,18 @@ ConfiguredSession::ConfiguredSession(const Registries& registries, const Mesh& m
                                      const std::vector<double>& stiffness)
     : registries_(registries), config_(run_config) {
   ValidateRunConfig(config_);
-  const MeshRepairOptions mesh_options = MeshRepairOptions::FromConfig(config_.Child("mesh"));
+  const MeshRepairOptions mesh_options =
+      MeshRepairOptions::FromConfig(OptionReader(config_.Child("mesh")));
   // The defaults of `harap deform` (RunDeform).
   const DefaultComponents defaults = DefaultComponentsFor(registries_, mesh);
-  const ConfigNode optimizer_node = config_.Child("optimizer");
+  OptionReader optimizer_node(config_.Child("optimizer"));
   optimizer_ = optimizer_node.Get("type", defaults.optimizer, "which optimizer");
   SessionOptions options = SessionOptions::FromConfig(optimizer_node, registries_.level_solvers);
   if (frame_start) options.frame_start = *frame_start;
   factory_ = std::make_unique<RegistryComponentFactory>(registries_, config_, defaults);
   options.optimizer.level_solver->CheckCompatible(*factory_->MakeEnergy(), /*handle_edits=*/true);
-  threads_ = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
-
   const Context context = Context::WithThreads(threads);
+  threads_ = context.threads();
   DeformationProblem problem;
   problem.mesh = &mesh;
   problem.constraints.targets.resize(0, 3);

@@ -109,7 +109,8 @@ std::unique_ptr<CholmodSolver> MakeSolver(const std::string& refactor, int nativ
   ConfigNode node;
   node.Set("refactor", "\"" + refactor + "\"");
   node.Set("native_threads", std::to_string(native_threads));
-  auto solver = std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(node));
+  auto solver =
+      std::make_unique<CholmodSolver>(CholmodSolver::Options::FromConfig(OptionReader(node)));
   // As a session's level (LevelSetup::handle_edits): refactor = "auto" keeps the
   // copies Refactor() reuses only when prepared.
   solver->PrepareForRefactor();

@@ -131,7 +131,7 @@ int WriteHierarchy(const DeformArguments& args, const std::string& out_dir) {
   progress.Phase(ScenarioLoadingPhase(args.scenario));
   const Scenario scenario = LoadScenario(args.scenario);
   current_stage = "building the hierarchy";
-  auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
+  auto hierarchy = registries.hierarchies.Create(OptionReader(config.Child("hierarchy")), "octree");
   Context context = Context::WithThreads(args.threads);
   progress.Phase("building the hierarchy");
   Stopwatch clock;

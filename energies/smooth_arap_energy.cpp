@@ -124,7 +124,7 @@ constexpr EnumNames<bool, 2> kMassNormalizationNames = {{{true, "input"}, {false
 
 }  // namespace
 
-SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(const ConfigNode& node) {
+SmoothArapEnergy::Options SmoothArapEnergy::Options::FromConfig(OptionReader node) {
   Options options;
   options.lambda = node.Get("lambda", options.lambda,
                             "weight of the Laplacian (smoothness) term; 0 is spokes_and_rims "

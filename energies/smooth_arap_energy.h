@@ -55,7 +55,7 @@ class SmoothArapEnergy final : public CotangentArapEnergy {
     /// M has mean 1 over the input mesh (true: the same energy on every hierarchy level) or over
     /// the mesh it is precomputed on (false: "level").
     bool normalize_mass_on_input = true;
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit SmoothArapEnergy(const Options& options)

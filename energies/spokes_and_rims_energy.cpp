@@ -3,7 +3,7 @@
 
 namespace harap {
 
-SpokesAndRimsEnergy::Options SpokesAndRimsEnergy::Options::FromConfig(const ConfigNode& node) {
+SpokesAndRimsEnergy::Options SpokesAndRimsEnergy::Options::FromConfig(OptionReader node) {
   Options options;
   options.weights = WeightOptions::FromConfig(node, options.weights);
   node.RejectUnknownKeys();

@@ -24,7 +24,7 @@ class SpokesAndRimsEnergy final : public CotangentArapEnergy {
   struct Options {
     /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
     WeightOptions weights{WeightScheme::kCotangent, WeightScheme::kAsInputLevel, 0.01};
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit SpokesAndRimsEnergy(const Options& options)

@@ -3,7 +3,7 @@
 
 namespace harap {
 
-SpokesEnergy::Options SpokesEnergy::Options::FromConfig(const ConfigNode& node) {
+SpokesEnergy::Options SpokesEnergy::Options::FromConfig(OptionReader node) {
   Options options;
   options.weights = WeightOptions::FromConfig(node, options.weights);
   node.RejectUnknownKeys();

@@ -28,7 +28,7 @@ class SpokesEnergy final : public CotangentArapEnergy {
     /// coarse levels of a hierarchy keep non-negative weights even when `weights = "cotan"`
     /// reproduces the published definition on the input mesh.
     WeightOptions weights{WeightScheme::kIntrinsicDelaunay, WeightScheme::kIntrinsicDelaunay, 0.01};
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit SpokesEnergy(const Options& options)

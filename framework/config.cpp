@@ -15,10 +15,12 @@
 
 namespace harap {
 
-struct ConfigNode::State {
+struct ConfigNode::Document {
   toml::table root;
   std::string source;
-  bool describing = false;
+};
+
+struct OptionReader::Record {
   // Per table path: the keys read and the options described, in order.
   std::map<std::string, std::set<std::string>> read_keys;
   std::map<std::string, std::vector<OptionInfo>> options;
@@ -37,33 +39,28 @@ const toml::table* FindTable(const toml::table& root, const std::string& path) {
   return node ? node->as_table() : nullptr;
 }
 
-std::string DescribeSource(const toml::source_region& region, const std::string& source) {
-  return TomlReader(source).Where(region);
-}
-
-void RecordOption(ConfigNode::State& state, const std::string& path, std::string_view key,
-                  std::string default_value, std::string_view help) {
-  state.read_keys[path].insert(std::string(key));
-  auto& list = state.options[path];
-  for (const auto& option : list) {
-    if (option.key == key) return;
-  }
-  list.push_back({std::string(key), std::move(default_value), std::string(help)});
+// The value of `key` in the table at `path` (nullptr if absent).
+const toml::node* FindValue(const toml::table& root, const std::string& path,
+                            std::string_view key) {
+  const toml::table* table = FindTable(root, path);
+  return table ? table->get(key) : nullptr;
 }
 
 }  // namespace
 
-ConfigNode::ConfigNode() : state_(std::make_shared<State>()) { state_->source = "<defaults>"; }
+ConfigNode::ConfigNode() : document_(std::make_shared<Document>()) {
+  document_->source = "<defaults>";
+}
 ConfigNode::~ConfigNode() = default;
 ConfigNode::ConfigNode(const ConfigNode&) = default;
 ConfigNode& ConfigNode::operator=(const ConfigNode&) = default;
-ConfigNode::ConfigNode(std::shared_ptr<State> state, std::string path)
-    : state_(std::move(state)), path_(std::move(path)) {}
+ConfigNode::ConfigNode(std::shared_ptr<Document> document, std::string path)
+    : document_(std::move(document)), path_(std::move(path)) {}
 
 ConfigNode ConfigNode::Parse(std::string_view toml_text, std::string source) {
   ConfigNode node;
-  node.state_->root = TomlReader(source).Parse(toml_text);
-  node.state_->source = std::move(source);
+  node.document_->root = TomlReader(source).Parse(toml_text);
+  node.document_->source = std::move(source);
   return node;
 }
 
@@ -75,53 +72,50 @@ ConfigNode ConfigNode::ParseFile(const std::filesystem::path& file) {
   return Parse(buffer.str(), file.string());
 }
 
-ConfigNode ConfigNode::Describing() {
-  ConfigNode node;
-  node.state_->describing = true;
-  return node;
+ConfigNode ConfigNode::Clone() const {
+  return ConfigNode(std::make_shared<Document>(*document_), path_);
 }
 
 std::string ConfigNode::FullKey(std::string_view key) const { return JoinPath(path_, key); }
 
-std::string ConfigNode::source() const { return state_->source; }
+std::string ConfigNode::source() const { return document_->source; }
 
 std::string ConfigNode::Where(std::string_view key) const {
-  const toml::table* table = FindTable(state_->root, path_);
-  if (table) {
-    if (const toml::node* node = table->get(key)) {
-      return DescribeSource(node->source(), state_->source);
-    }
+  if (const toml::node* node = FindValue(document_->root, path_, key)) {
+    return TomlReader(document_->source).Where(node->source());
   }
-  return state_->source;
+  return document_->source;
 }
 
 void ConfigNode::Fail(std::string_view key, std::string_view problem) const {
   throw ConfigError(fmt::format("{}: option '{}' {}", Where(key), FullKey(key), problem));
 }
 
-namespace {
-
-template <class T>
-std::string DefaultText(const T& value) {
-  if constexpr (std::is_same_v<T, bool>) {
-    return value ? "true" : "false";
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    return fmt::format("\"{}\"", value);
-  } else {
-    return fmt::format("{}", value);
+ConfigNode ConfigNode::Child(std::string_view key) const {
+  if (const toml::node* node = FindValue(document_->root, path_, key); node && !node->is_table()) {
+    throw ConfigError(fmt::format("{}: '{}' must be a table", Where(key), FullKey(key)));
   }
+  return ConfigNode(document_, FullKey(key));
+}
+
+bool ConfigNode::Has(std::string_view key) const {
+  return FindValue(document_->root, path_, key) != nullptr;
+}
+
+std::vector<std::string> ConfigNode::Keys() const {
+  std::vector<std::string> keys;
+  if (const toml::table* table = FindTable(document_->root, path_)) {
+    for (const auto& [key, value] : *table) keys.emplace_back(key.str());
+  }
+  return keys;
 }
 
 template <class T>
-T ReadValue(const ConfigNode::State& state, const toml::table* table, const std::string& path,
-            std::string_view key, T default_value) {
-  if (!table) return default_value;
-  const toml::node* node = table->get(key);
+T ConfigNode::Value(std::string_view key, T default_value) const {
+  const toml::node* node = FindValue(document_->root, path_, key);
   if (!node) return default_value;
   auto fail = [&](std::string_view expected) -> T {
-    throw ConfigError(fmt::format("{}: option '{}' must be {}",
-                                  DescribeSource(node->source(), state.source), JoinPath(path, key),
-                                  expected));
+    Fail(key, fmt::format("must be {}", expected));
   };
   if constexpr (std::is_same_v<T, double>) {
     if (auto v = node->value<double>()) {
@@ -147,142 +141,15 @@ T ReadValue(const ConfigNode::State& state, const toml::table* table, const std:
   }
 }
 
-}  // namespace
-
-double ConfigNode::Get(std::string_view key, double default_value, std::string_view help) const {
-  RecordOption(*state_, path_, key, DefaultText(default_value), help);
-  return ReadValue<double>(*state_, FindTable(state_->root, path_), path_, key, default_value);
-}
-
-int ConfigNode::Get(std::string_view key, int default_value, std::string_view help) const {
-  RecordOption(*state_, path_, key, DefaultText(default_value), help);
-  return ReadValue<int>(*state_, FindTable(state_->root, path_), path_, key, default_value);
-}
-
-bool ConfigNode::Get(std::string_view key, bool default_value, std::string_view help) const {
-  RecordOption(*state_, path_, key, DefaultText(default_value), help);
-  return ReadValue<bool>(*state_, FindTable(state_->root, path_), path_, key, default_value);
-}
-
-std::string ConfigNode::Get(std::string_view key, const std::string& default_value,
-                            std::string_view help) const {
-  RecordOption(*state_, path_, key, DefaultText(default_value), help);
-  return ReadValue<std::string>(*state_, FindTable(state_->root, path_), path_, key, default_value);
-}
-
-std::string ConfigNode::Get(std::string_view key, const char* default_value,
-                            std::string_view help) const {
-  return Get(key, std::string(default_value), help);
-}
-
-std::string Range::ToString() const {
-  const bool has_min = min > -kInfinity, has_max = max < kInfinity;
-  if (has_min && has_max) {
-    return fmt::format("in {}{}, {}{}", min_open ? '(' : '[', min, max, max_open ? ')' : ']');
-  }
-  if (has_min) return fmt::format("{} {}", min_open ? ">" : ">=", min);
-  if (has_max) return fmt::format("{} {}", max_open ? "<" : "<=", max);
-  return "any number";
-}
-
-std::vector<std::string> RangeProblems(std::initializer_list<RangeCheck> checks) {
-  std::vector<std::string> problems;
-  for (const auto& check : checks) {
-    if (!check.range.Contains(check.value)) {
-      problems.push_back(
-          fmt::format("{} is {}, which is not {}", check.key, check.value, check.range.ToString()));
-    }
-  }
-  return problems;
-}
-
-namespace {
-
-// "... which is not in [0, 1)" / "... which is not >= 1".
-template <class T>
-T CheckRange(const ConfigNode& node, std::string_view key, T value, const Range& range) {
-  if (range.Contains(static_cast<double>(value))) return value;
-  node.Fail(key, fmt::format("is {}, which is not {}", value, range.ToString()));
-}
-
-}  // namespace
-
-double ConfigNode::Get(std::string_view key, double default_value, std::string_view help,
-                       const Range& range) const {
-  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
-  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
-}
-
-int ConfigNode::Get(std::string_view key, int default_value, std::string_view help,
-                    const Range& range) const {
-  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
-  return CheckRange(*this, key, Get(key, default_value, std::string_view(full_help)), range);
-}
-
-std::string ConfigNode::GetChoice(std::string_view key, std::string_view default_value,
-                                  const std::vector<std::string>& choices,
-                                  std::string_view help) const {
-  std::string full_help = fmt::format("{} (one of: {})", help, fmt::join(choices, ", "));
-  std::string value = Get(key, std::string(default_value), full_help);
-  for (const auto& choice : choices) {
-    if (choice == value) return value;
-  }
-  throw ConfigError(fmt::format("{}: option '{}' is \"{}\", which is not one of: {}", Where(key),
-                                FullKey(key), value, fmt::join(choices, ", ")));
-}
-
-ConfigNode ConfigNode::Child(std::string_view key) const { return Child(key, ""); }
-
-ConfigNode ConfigNode::Child(std::string_view key, std::string_view help) const {
-  RecordOption(*state_, path_, key, "(table)", help);
-  const toml::table* table = FindTable(state_->root, path_);
-  if (table) {
-    if (const toml::node* node = table->get(key); node && !node->is_table()) {
-      throw ConfigError(fmt::format("{}: '{}' must be a table", Where(key), FullKey(key)));
-    }
-  }
-  return ConfigNode(state_, FullKey(key));
-}
-
-bool ConfigNode::Has(std::string_view key) const {
-  const toml::table* table = FindTable(state_->root, path_);
-  return table && table->contains(key);
-}
-
-std::vector<std::string> ConfigNode::Keys() const {
-  std::vector<std::string> keys;
-  if (const toml::table* table = FindTable(state_->root, path_)) {
-    for (const auto& [key, value] : *table) keys.emplace_back(key.str());
-  }
-  return keys;
-}
-
-void ConfigNode::RejectUnknownKeys() const {
-  if (state_->describing) return;
-  const auto& read = state_->read_keys[path_];
-  std::vector<std::string> unknown;
-  for (const auto& key : Keys()) {
-    if (!read.count(key)) unknown.push_back(key);
-  }
-  if (unknown.empty()) return;
-  std::vector<std::string> valid;
-  for (const auto& option : state_->options[path_]) valid.push_back(option.key);
-  std::string table = path_.empty() ? std::string("the top level") : fmt::format("[{}]", path_);
-  throw ConfigError(
-      fmt::format("{}: unknown option '{}' in {}; valid options: {}", Where(unknown.front()),
-                  FullKey(unknown.front()), table,
-                  valid.empty() ? std::string("none") : fmt::format("{}", fmt::join(valid, ", "))));
-}
-
-std::vector<OptionInfo> ConfigNode::Options() const {
-  auto it = state_->options.find(path_);
-  return it == state_->options.end() ? std::vector<OptionInfo>{} : it->second;
-}
+template double ConfigNode::Value<double>(std::string_view, double) const;
+template int ConfigNode::Value<int>(std::string_view, int) const;
+template bool ConfigNode::Value<bool>(std::string_view, bool) const;
+template std::string ConfigNode::Value<std::string>(std::string_view, std::string) const;
 
 void ConfigNode::Set(std::string_view dotted_key, std::string_view value_literal) {
   std::string full = FullKey(dotted_key);
   // Walk/create the tables on the way.
-  toml::table* table = &state_->root;
+  toml::table* table = &document_->root;
   size_t start = 0;
   while (true) {
     size_t dot = full.find('.', start);
@@ -316,12 +183,156 @@ void ConfigNode::Set(std::string_view dotted_key, std::string_view value_literal
   if (!is_value) table->insert_or_assign(leaf, std::string(value_literal));
 }
 
+void ConfigNode::Remove(std::string_view key) {
+  toml::table* table = path_.empty() ? &document_->root : document_->root.at_path(path_).as_table();
+  if (table) table->erase(key);
+}
+
 std::string ConfigNode::ToToml() const {
-  const toml::table* table = FindTable(state_->root, path_);
+  const toml::table* table = FindTable(document_->root, path_);
   if (!table) return "";
   std::stringstream out;
   out << *table;
   return out.str();
+}
+
+std::string Range::ToString() const {
+  const bool has_min = min > -kInfinity, has_max = max < kInfinity;
+  if (has_min && has_max) {
+    return fmt::format("in {}{}, {}{}", min_open ? '(' : '[', min, max, max_open ? ')' : ']');
+  }
+  if (has_min) return fmt::format("{} {}", min_open ? ">" : ">=", min);
+  if (has_max) return fmt::format("{} {}", max_open ? "<" : "<=", max);
+  return "any number";
+}
+
+std::vector<std::string> RangeProblems(std::initializer_list<RangeCheck> checks) {
+  std::vector<std::string> problems;
+  for (const auto& check : checks) {
+    if (!check.range.Contains(check.value)) {
+      problems.push_back(
+          fmt::format("{} is {}, which is not {}", check.key, check.value, check.range.ToString()));
+    }
+  }
+  return problems;
+}
+
+OptionReader::OptionReader(ConfigNode table)
+    : OptionReader(std::move(table), std::make_shared<Record>()) {}
+
+OptionReader::OptionReader(ConfigNode table, std::shared_ptr<Record> record)
+    : table_(std::move(table)), record_(std::move(record)) {}
+
+OptionReader OptionReader::Describing() { return OptionReader(ConfigNode()); }
+
+void OptionReader::Note(std::string_view key, std::string default_value, std::string_view help) {
+  record_->read_keys[table_.path()].insert(std::string(key));
+  auto& list = record_->options[table_.path()];
+  for (const auto& option : list) {
+    if (option.key == key) return;
+  }
+  list.push_back({std::string(key), std::move(default_value), std::string(help)});
+}
+
+namespace {
+
+template <class T>
+std::string DefaultText(const T& value) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return value ? "true" : "false";
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return fmt::format("\"{}\"", value);
+  } else {
+    return fmt::format("{}", value);
+  }
+}
+
+// "... which is not in [0, 1)" / "... which is not >= 1".
+template <class T>
+T CheckRange(const ConfigNode& table, std::string_view key, T value, const Range& range) {
+  if (range.Contains(static_cast<double>(value))) return value;
+  table.Fail(key, fmt::format("is {}, which is not {}", value, range.ToString()));
+}
+
+}  // namespace
+
+double OptionReader::Get(std::string_view key, double default_value, std::string_view help) {
+  Note(key, DefaultText(default_value), help);
+  return table_.Value(key, default_value);
+}
+
+int OptionReader::Get(std::string_view key, int default_value, std::string_view help) {
+  Note(key, DefaultText(default_value), help);
+  return table_.Value(key, default_value);
+}
+
+bool OptionReader::Get(std::string_view key, bool default_value, std::string_view help) {
+  Note(key, DefaultText(default_value), help);
+  return table_.Value(key, default_value);
+}
+
+std::string OptionReader::Get(std::string_view key, const std::string& default_value,
+                              std::string_view help) {
+  Note(key, DefaultText(default_value), help);
+  return table_.Value(key, default_value);
+}
+
+std::string OptionReader::Get(std::string_view key, const char* default_value,
+                              std::string_view help) {
+  return Get(key, std::string(default_value), help);
+}
+
+double OptionReader::Get(std::string_view key, double default_value, std::string_view help,
+                         const Range& range) {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(table_, key, Get(key, default_value, std::string_view(full_help)), range);
+}
+
+int OptionReader::Get(std::string_view key, int default_value, std::string_view help,
+                      const Range& range) {
+  const std::string full_help = fmt::format("{} ({})", help, range.ToString());
+  return CheckRange(table_, key, Get(key, default_value, std::string_view(full_help)), range);
+}
+
+std::string OptionReader::GetChoice(std::string_view key, std::string_view default_value,
+                                    const std::vector<std::string>& choices,
+                                    std::string_view help) {
+  std::string full_help = fmt::format("{} (one of: {})", help, fmt::join(choices, ", "));
+  std::string value = Get(key, std::string(default_value), full_help);
+  for (const auto& choice : choices) {
+    if (choice == value) return value;
+  }
+  table_.Fail(key,
+              fmt::format("is \"{}\", which is not one of: {}", value, fmt::join(choices, ", ")));
+}
+
+OptionReader OptionReader::Child(std::string_view key) { return Child(key, ""); }
+
+OptionReader OptionReader::Child(std::string_view key, std::string_view help) {
+  Note(key, "(table)", help);
+  return OptionReader(table_.Child(key), record_);
+}
+
+void OptionReader::RejectUnknownKeys() const {
+  const auto read = record_->read_keys.find(table_.path());
+  std::vector<std::string> unknown;
+  for (const auto& key : table_.Keys()) {
+    if (read == record_->read_keys.end() || !read->second.count(key)) unknown.push_back(key);
+  }
+  if (unknown.empty()) return;
+  std::vector<std::string> valid;
+  for (const auto& option : Options()) valid.push_back(option.key);
+  const std::string& path = table_.path();
+  const std::string table = path.empty() ? std::string("the top level") : fmt::format("[{}]", path);
+  throw ConfigError(
+      fmt::format("{}: unknown option '{}' in {}; valid options: {}", Where(unknown.front()),
+                  table_.FullKey(unknown.front()), table,
+                  valid.empty() ? std::string("none") : fmt::format("{}", fmt::join(valid, ", "))));
+}
+
+std::vector<OptionInfo> OptionReader::Options() const {
+  const auto it = record_->options.find(table_.path());
+  return it == record_->options.end() ? std::vector<OptionInfo>{} : it->second;
 }
 
 }  // namespace harap

@@ -75,6 +75,9 @@ struct Context {
     if (phase_callback) phase_callback(phase, fraction);
   }
 
+  /// The worker threads the run's arena uses (the requested count, or all the process may use).
+  int threads() const { return arena->max_concurrency(); }
+
   /// A context with `threads` worker threads (0 = all hardware threads).
   static Context WithThreads(int threads) {
     Context context;

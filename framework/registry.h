@@ -46,7 +46,7 @@ class Recipe {
 /// per-module registration functions (register_energies(...)) — no static initialization tricks.
 ///
 /// An entry parses its options table once into a Recipe (Resolve): every option read with
-/// ConfigNode::Get, unknown keys rejected, values checked; the recipe then builds instances
+/// OptionReader::Get, unknown keys rejected, values checked; the recipe then builds instances
 /// without touching the configuration again.
 ///
 ///   Registry<Energy> energies("energy");
@@ -57,9 +57,9 @@ template <class Interface>
 class Registry {
  public:
   /// Parses and validates an implementation's options table (reads every option with
-  /// ConfigNode::Get and calls RejectUnknownKeys()) into a maker that builds it from the parsed
+  /// OptionReader::Get and calls RejectUnknownKeys()) into a maker that builds it from the parsed
   /// options alone.
-  using Resolver = std::function<typename Recipe<Interface>::Maker(const ConfigNode&)>;
+  using Resolver = std::function<typename Recipe<Interface>::Maker(OptionReader)>;
 
   struct Entry {
     std::string description;
@@ -80,7 +80,7 @@ class Registry {
   template <class Parse, class Make>
   void Add(std::string name, std::string description, Parse parse, Make make) {
     Add(std::move(name), std::move(description),
-        [parse = std::move(parse), make = std::move(make)](const ConfigNode& node) ->
+        [parse = std::move(parse), make = std::move(make)](OptionReader node) ->
         typename Recipe<Interface>::Maker {
           auto options = std::make_shared<const std::decay_t<decltype(parse(node))>>(parse(node));
           return [options, make]() -> std::unique_ptr<Interface> { return make(*options); };
@@ -105,7 +105,7 @@ class Registry {
   void Add(std::string description) {
     static_assert(std::is_base_of_v<Interface, T>, "T must implement the registry's interface");
     AddParsed<T>(std::string(T::kName), std::move(description),
-                 [](const ConfigNode& node) { return T::Options::FromConfig(node); });
+                 [](OptionReader node) { return T::Options::FromConfig(node); });
   }
 
   bool Contains(std::string_view name) const { return entries_.count(std::string(name)) > 0; }
@@ -113,23 +113,34 @@ class Registry {
   /// Resolves `name` with the options in `options` (a table without a `type` key, or whose
   /// `type` key is ignored). Unknown names throw ConfigError listing the valid ones; bad options
   /// throw the entry's ConfigError naming the key.
-  Recipe<Interface> Resolve(std::string_view name, const ConfigNode& options) const {
-    return Recipe<Interface>(std::string(name), Find(name, options).resolve(options));
+  Recipe<Interface> Resolve(std::string_view name, OptionReader options) const {
+    return Recipe<Interface>(std::string(name), Find(name, options.table()).resolve(options));
   }
 
   /// Resolves the implementation named by the `type` key of `table` (`default_name` if absent).
-  Recipe<Interface> Resolve(const ConfigNode& table, std::string_view default_name) const {
+  Recipe<Interface> Resolve(OptionReader table, std::string_view default_name) const {
     std::string name =
         table.Get("type", std::string(default_name), fmt::format("which {} to use", kind_));
     return Resolve(name, table);
   }
 
   /// Resolve(...).Make() in one call, for a component made once.
+  std::unique_ptr<Interface> Create(std::string_view name, OptionReader options) const {
+    return Resolve(name, std::move(options)).Make();
+  }
+  std::unique_ptr<Interface> Create(OptionReader table, std::string_view default_name) const {
+    return Resolve(std::move(table), default_name).Make();
+  }
+  /// The same for a table read on its own, with a record of its own (an options table built in
+  /// code, a test's).
+  Recipe<Interface> Resolve(const ConfigNode& table, std::string_view default_name) const {
+    return Resolve(OptionReader(table), default_name);
+  }
   std::unique_ptr<Interface> Create(std::string_view name, const ConfigNode& options) const {
-    return Resolve(name, options).Make();
+    return Create(name, OptionReader(options));
   }
   std::unique_ptr<Interface> Create(const ConfigNode& table, std::string_view default_name) const {
-    return Resolve(table, default_name).Make();
+    return Create(OptionReader(table), default_name);
   }
 
   /// Sorted names: drives `harap list`, the docs and the conformance tests.
@@ -143,10 +154,10 @@ class Registry {
     return Find(name, ConfigNode()).description;
   }
 
-  /// The options `name` reads, with defaults and help (created on a describing node).
+  /// The options `name` reads, with defaults and help (resolved on a describing reader).
   std::vector<OptionInfo> DescribeOptions(std::string_view name) const {
-    ConfigNode node = ConfigNode::Describing();
-    Find(name, node).resolve(node);
+    OptionReader node = OptionReader::Describing();
+    Find(name, node.table()).resolve(node);
     return node.Options();
   }
 

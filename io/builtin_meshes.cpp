@@ -174,22 +174,21 @@ int ClosestSegmentCount(int vertices, double estimate, Count count, int minimum 
   return best;
 }
 
-void RequireVertices(const ConfigNode& parameters, std::string_view name, int vertices,
-                     int minimum) {
+void RequireVertices(OptionReader parameters, std::string_view name, int vertices, int minimum) {
   if (vertices < minimum) {
     throw ConfigError(fmt::format("{}: built-in {}: 'vertices' must be at least {}, got {}",
                                   parameters.Where("vertices"), name, minimum, vertices));
   }
 }
 
-void RequireAspect(const ConfigNode& parameters, std::string_view name, double aspect) {
+void RequireAspect(OptionReader parameters, std::string_view name, double aspect) {
   if (!(aspect > 0.0) || aspect > 1e4) {
     throw ConfigError(fmt::format("{}: built-in {}: 'aspect' must be in (0, 1e4], got {}",
                                   parameters.Where("aspect"), name, aspect));
   }
 }
 
-void RequireNotTooMany(const ConfigNode& parameters, std::string_view name, int64_t count,
+void RequireNotTooMany(OptionReader parameters, std::string_view name, int64_t count,
                        int vertices) {
   if (count > std::numeric_limits<Index>::max() / 4) {
     throw ConfigError(fmt::format("{}: built-in {}: {} vertices is too many",
@@ -221,7 +220,7 @@ CylinderLayout LayoutCylinder(int segments, double aspect, bool caps) {
   return layout;
 }
 
-Mesh MakeCylinder(const ConfigNode& parameters) {
+Mesh MakeCylinder(OptionReader parameters) {
   const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
   const double aspect = parameters.Get("aspect", 4.0, "height / diameter (the diameter is 1)");
   const bool caps = parameters.Get("caps", true, "close both ends with triangulated disks");
@@ -260,7 +259,7 @@ Mesh MakeCylinder(const ConfigNode& parameters) {
 // ---------------------------------------------------------------------------------------------
 // Disk (planar): radius 0.5 about the origin in the xy-plane, normals +z (counter-clockwise).
 
-Mesh MakeDisk(const ConfigNode& parameters) {
+Mesh MakeDisk(OptionReader parameters) {
   const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
   parameters.RejectUnknownKeys();
   RequireVertices(parameters, "disk", vertices, 4);
@@ -311,7 +310,7 @@ void AddGrid(MeshBuilder& builder, int rows, int columns, double width, double h
 }
 
 // Rectangle (planar): [0, aspect] x [0, 1] in the xy-plane, a grid of nearly square cells.
-Mesh MakeRectangle(const ConfigNode& parameters) {
+Mesh MakeRectangle(OptionReader parameters) {
   const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
   const double aspect = parameters.Get("aspect", 4.0, "width (along x) / height (along y = 1)");
   parameters.RejectUnknownKeys();
@@ -350,7 +349,7 @@ uint64_t SplitMix64(uint64_t& state) {
   return z ^ (z >> 31);
 }
 
-Mesh MakePlane(const ConfigNode& parameters) {
+Mesh MakePlane(OptionReader parameters) {
   const int vertices = parameters.Get("vertices", 10000, "approximate number of vertices");
   const int spikes = parameters.Get("spikes", 16, "number of spikes");
   const double spike_height =
@@ -413,6 +412,10 @@ Mesh MakePlane(const ConfigNode& parameters) {
 std::vector<std::string> BuiltinMeshNames() { return {"cylinder", "plane", "disk", "rectangle"}; }
 
 Mesh MakeBuiltinMesh(const ConfigNode& parameters) {
+  return MakeBuiltinMesh(OptionReader(parameters));
+}
+
+Mesh MakeBuiltinMesh(OptionReader parameters) {
   const std::vector<std::string> names = BuiltinMeshNames();
   if (!parameters.Has("builtin")) {
     throw ConfigError(

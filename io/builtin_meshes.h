@@ -24,6 +24,8 @@ namespace harap {
 ///     default 4), a grid of nearly square cells split by alternating diagonals; `vertices` ≈
 ///     vertex count.
 /// Planar built-ins come with `Mesh::planar` set and counter-clockwise triangles (normals +z).
+Mesh MakeBuiltinMesh(OptionReader parameters);
+/// The same for a table read on its own (the record of its keys is new).
 Mesh MakeBuiltinMesh(const ConfigNode& parameters);
 
 std::vector<std::string> BuiltinMeshNames();

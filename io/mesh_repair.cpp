@@ -407,7 +407,7 @@ MeshCheckReport CheckMesh(const Mesh& mesh, const std::vector<Index>& constraine
   return report;
 }
 
-MeshRepairOptions MeshRepairOptions::FromConfig(const ConfigNode& node) {
+MeshRepairOptions MeshRepairOptions::FromConfig(OptionReader node) {
   MeshRepairOptions options;
   options.weld_duplicates = node.Get(
       "weld_duplicates", options.weld_duplicates,

@@ -84,7 +84,7 @@ struct MeshRepairOptions {
   bool drop_duplicate_elements = true;
 
   /// Reads `weld_duplicates` and `drop_duplicate_elements` and rejects unknown keys.
-  static MeshRepairOptions FromConfig(const ConfigNode& node);
+  static MeshRepairOptions FromConfig(OptionReader node);
 };
 
 /// The problem actually solved: possibly a welded mesh without duplicate elements, with the

@@ -65,7 +65,7 @@ void Refine(Scenario& scenario, const MeshSpec& spec, const ScenarioLimits& limi
 // surface (after `refine`) filled with tetrahedra by TetGen, its vertices first and unchanged.
 void TetrahedralizeSurface(const MeshSpec& spec, const ScenarioLimits& limits, Scenario& scenario) {
   const std::string& where = spec.tetrahedralize_where;
-  const ConfigNode& parameters = spec.parameters;
+  OptionReader parameters(spec.parameters);
   const int refine = spec.refine;
   Scenario surface;
   if (!spec.tetrahedralize_builtin) {

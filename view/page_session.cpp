@@ -380,7 +380,8 @@ void PageSession::RemoveHandle(const RemoveHandleMessage& remove, std::optional<
 }
 
 void PageSession::Configure(const ConfigureMessage& configure, std::optional<int64_t> id) {
-  ConfigNode config = source_.run_config;
+  // A copy: the page may configure again, from the source's options, not from these.
+  ConfigNode config = source_.run_config.Clone();
   const auto set_type = [&](const char* table, const std::string& name) {
     if (!name.empty()) config.Set(fmt::format("{}.type", table), Json(name).dump());
   };

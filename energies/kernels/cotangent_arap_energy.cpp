@@ -43,7 +43,7 @@ void CotangentArapEnergy::ApplyStiffness(const Mesh& rest, TriangleWeights& weig
   }
 }
 
-WeightOptions WeightOptions::FromConfig(const ConfigNode& node, const WeightOptions& defaults) {
+WeightOptions WeightOptions::FromConfig(OptionReader node, const WeightOptions& defaults) {
   WeightOptions options = defaults;
   options.input_level = node.GetEnum(
       "weights", options.input_level, kWeightSchemeNames,

@@ -17,7 +17,7 @@ struct WeightOptions {
   /// `coarse_weights`: on the coarse levels of a hierarchy (kAsInputLevel: as `weights`).
   WeightScheme coarse_levels = WeightScheme::kAsInputLevel;
   double min_cotangent = 0.01;  ///< `min_cotangent`: the bound of the `clamped` scheme
-  static WeightOptions FromConfig(const ConfigNode& node, const WeightOptions& defaults);
+  static WeightOptions FromConfig(OptionReader node, const WeightOptions& defaults);
 };
 
 /// Shared precomputation of the per-vertex cotangent ARAP energies on triangle meshes (spokes,

@@ -123,7 +123,7 @@ void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions
 /// The Options of an energy that has none: the shape Registry::Add<T>() builds from
 /// (T::Options::FromConfig), which still rejects every key, so a typo fails loudly.
 struct NoOptions {
-  static NoOptions FromConfig(const ConfigNode& node) {
+  static NoOptions FromConfig(OptionReader node) {
     node.RejectUnknownKeys();
     return {};
   }

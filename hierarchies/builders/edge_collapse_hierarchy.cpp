@@ -367,7 +367,7 @@ constexpr std::string_view kAspectRatioRule = "which is not 0 (no check) or >= 1
 
 }  // namespace
 
-EdgeCollapseHierarchy::Options EdgeCollapseHierarchy::Options::FromConfig(const ConfigNode& node) {
+EdgeCollapseHierarchy::Options EdgeCollapseHierarchy::Options::FromConfig(OptionReader node) {
   Options options;
   options.ratio = node.Get("ratio", options.ratio,
                            "vertices kept per level; 0 = the octree's level vertex counts for the "

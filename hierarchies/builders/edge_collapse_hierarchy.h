@@ -85,7 +85,7 @@ class EdgeCollapseHierarchy final : public Hierarchy {
     double max_aspect_ratio = 20.0;
 
     /// Reads the options and rejects unknown keys and invalid values (ConfigError).
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
     /// Throws ConfigError listing every violated constraint.
     void Validate() const;
   };

@@ -14,7 +14,7 @@ constexpr Range kMaxLevelsRange = Range::AtLeast(0);
 
 }  // namespace
 
-void LevelLimits::ReadLimits(const ConfigNode& node) {
+void LevelLimits::ReadLimits(OptionReader node) {
   min_vertices =
       node.Get("min_vertices", min_vertices,
                "stop once the coarsest level has at most this many vertices", kMinVerticesRange);

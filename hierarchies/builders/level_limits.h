@@ -20,7 +20,7 @@ struct LevelLimits {
   int max_levels = 0;
 
   /// Reads min_vertices and max_levels (range-checked: ConfigError naming the key).
-  void ReadLimits(const ConfigNode& node);
+  void ReadLimits(OptionReader node);
   /// One line per violated limit, worded as RangeProblems words them.
   std::vector<std::string> LimitProblems() const;
 };

@@ -829,7 +829,7 @@ std::string_view OctreeHierarchy::ToString(CoarsePositions positions) {
   return NameOf(kCoarsePositionNames, positions);
 }
 
-OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(const ConfigNode& node) {
+OctreeHierarchy::Options OctreeHierarchy::Options::FromConfig(OptionReader node) {
   Options options;
   options.topology_aware =
       node.Get("topology_aware", options.topology_aware,

@@ -87,7 +87,7 @@ class OctreeHierarchy final : public Hierarchy {
     // min_vertices, max_levels: LevelLimits.
 
     /// Reads the options and rejects unknown keys and invalid values (ConfigError).
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
     /// Throws ConfigError listing every violated constraint.
     void Validate() const;
   };

@@ -6,7 +6,7 @@
 
 namespace harap {
 
-CellUpsampler::Options CellUpsampler::Options::FromConfig(const ConfigNode& node, Mode mode) {
+CellUpsampler::Options CellUpsampler::Options::FromConfig(OptionReader node, Mode mode) {
   Options options;
   options.mode = mode;
   if (mode == Mode::kSmoothedRotations) {

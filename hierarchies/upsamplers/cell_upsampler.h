@@ -31,7 +31,7 @@ class CellUpsampler final : public Upsampler {
   struct Options {
     Mode mode = Mode::kRotations;
     int passes = 1;  ///< smoothed_rotations only: smoothing passes over the fine 1-ring (>= 1).
-    static Options FromConfig(const ConfigNode& node, Mode mode);
+    static Options FromConfig(OptionReader node, Mode mode);
   };
 
   explicit CellUpsampler(const Options& options) : options_(options) {}

@@ -9,7 +9,7 @@ namespace {
 
 // The options parser of the up-sampler registered in `mode`.
 auto ParseMode(CellUpsampler::Mode mode) {
-  return [mode](const ConfigNode& node) { return CellUpsampler::Options::FromConfig(node, mode); };
+  return [mode](OptionReader node) { return CellUpsampler::Options::FromConfig(node, mode); };
 }
 
 }  // namespace

@@ -25,7 +25,7 @@ constexpr double kColumns = 3.0;
 
 }  // namespace
 
-AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(const ConfigNode& node) {
+AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(OptionReader node) {
   Options options;
   options.choose = node.GetEnum(
       "choose", options.choose, kChoiceNames,

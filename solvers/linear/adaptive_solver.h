@@ -69,7 +69,7 @@ class AdaptiveSolver final : public LinearSolver {
     CholmodSolver::Options direct;
     ConjugateGradientSolver::Options iterative;
 
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   /// Why the last Factorize() chose what it chose.

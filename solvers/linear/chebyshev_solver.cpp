@@ -55,7 +55,7 @@ constexpr EnumNames<ChebyshevSolver::LowerBound, 3> kLowerBoundNames = {{
 
 }  // namespace
 
-ChebyshevSolver::Options ChebyshevSolver::Options::FromConfig(const ConfigNode& node) {
+ChebyshevSolver::Options ChebyshevSolver::Options::FromConfig(OptionReader node) {
   return iterative::ReadIterativeOptions<Options>(node, "Chebyshev step", [&](Options& options) {
     options.lower_bound = node.GetEnum(
         "lower_bound", options.lower_bound, kLowerBoundNames,

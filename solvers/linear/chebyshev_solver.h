@@ -72,7 +72,7 @@ class ChebyshevSolver final : public iterative::MatrixIterativeSolver<ChebyshevS
     /// the interval enclose the spectrum.
     double lower_margin = 0.01;
 
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit ChebyshevSolver(const Options& options)

@@ -47,7 +47,7 @@ constexpr EnumNames<CholmodSolver::RefactorChoice, 5> kRefactorNames = {{
 
 }  // namespace
 
-CholmodSolver::Options CholmodSolver::Options::FromConfig(const ConfigNode& node) {
+CholmodSolver::Options CholmodSolver::Options::FromConfig(OptionReader node) {
   Options options;
   options.mode = node.GetEnum("mode", options.mode, kModeNames,
                               "simplicial = up-looking LDLᵀ, supernodal = BLAS LLᵀ (fastest "

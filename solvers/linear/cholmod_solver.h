@@ -113,7 +113,7 @@ class CholmodSolver final : public LinearSolver {
     Numeric numeric = Numeric::kParallel;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit CholmodSolver(const Options& options);

@@ -28,8 +28,7 @@ constexpr EnumNames<ConjugateGradientSolver::Preconditioner, 2> kPreconditionerN
 
 }  // namespace
 
-ConjugateGradientSolver::Options ConjugateGradientSolver::Options::FromConfig(
-    const ConfigNode& node) {
+ConjugateGradientSolver::Options ConjugateGradientSolver::Options::FromConfig(OptionReader node) {
   return iterative::ReadIterativeOptions<Options>(node, "CG iteration", [&](Options& options) {
     options.preconditioner = node.GetEnum(
         "preconditioner", options.preconditioner, kPreconditionerNames,

@@ -45,7 +45,7 @@ class ConjugateGradientSolver final
     /// Jacobi by default: see docs/solvers.md for the measured comparison.
     Preconditioner preconditioner = Preconditioner::kJacobi;
 
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit ConjugateGradientSolver(const Options& options)

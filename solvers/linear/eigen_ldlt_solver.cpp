@@ -11,7 +11,7 @@
 
 namespace harap {
 
-EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(const ConfigNode& node) {
+EigenLdltSolver::Options EigenLdltSolver::Options::FromConfig(OptionReader node) {
   Options options;
   solver_checks::ReadFactorizationOptions(node, options.pivot_tolerance, options.check_residual);
   node.RejectUnknownKeys();

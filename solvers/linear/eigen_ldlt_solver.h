@@ -35,7 +35,7 @@ class EigenLdltSolver final : public LinearSolver {
     bool check_residual = false;
 
     /// Reads the options and rejects unknown keys (ConfigError listing the valid ones).
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit EigenLdltSolver(const Options& options) : LinearSolver(kName), options_(options) {}

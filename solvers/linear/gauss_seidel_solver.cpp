@@ -52,7 +52,7 @@ constexpr EnumNames<GaussSeidelSolver::Ordering, 2> kOrderingNames = {{
 
 }  // namespace
 
-GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(const ConfigNode& node) {
+GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(OptionReader node) {
   return iterative::ReadIterativeOptions<Options>(node, "sweep", [&](Options& options) {
     options.sweep = node.GetEnum("sweep", options.sweep, kSweepNames,
                                  "forward = rows in order; symmetric = forward then backward "

@@ -49,7 +49,7 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
     /// each smoothing step (relative_residual is then 0 and the outcome kIterationLimit).
     bool check_without_tolerance = true;
 
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit GaussSeidelSolver(const Options& options)

@@ -47,8 +47,7 @@ double ColumnConvergence::max_relative_residual() const {
   return worst;
 }
 
-void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
-                         IterationLimits& limits) {
+void ReadIterationLimits(OptionReader node, std::string_view iteration, IterationLimits& limits) {
   limits.max_iterations =
       node.Get("max_iterations", limits.max_iterations,
                fmt::format("{}s per solve (per global step); a cap when tolerance > 0", iteration),

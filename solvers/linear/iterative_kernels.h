@@ -206,15 +206,13 @@ struct IterationLimits {
 
 /// Reads `max_iterations` and `tolerance` into `limits` (defaults on input) with help texts that
 /// say what one iteration is (`iteration`, e.g. "symmetric sweep"); validates them.
-void ReadIterationLimits(const ConfigNode& node, std::string_view iteration,
-                         IterationLimits& limits);
+void ReadIterationLimits(OptionReader node, std::string_view iteration, IterationLimits& limits);
 
 /// Options::FromConfig() of an iterative solver, written once: Options' defaults, the shared
 /// limits (ReadIterationLimits into options.limits), the solver's own keys (read_own(options)),
 /// then RejectUnknownKeys().
 template <class Options, class ReadOwn>
-Options ReadIterativeOptions(const ConfigNode& node, std::string_view iteration,
-                             ReadOwn&& read_own) {
+Options ReadIterativeOptions(OptionReader node, std::string_view iteration, ReadOwn&& read_own) {
   Options options;
   ReadIterationLimits(node, iteration, options.limits);
   read_own(options);

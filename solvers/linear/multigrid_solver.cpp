@@ -102,7 +102,7 @@ struct MultigridSolver::Level {
   Eigen::MatrixXd b, x, r;  ///< rows × 3
 };
 
-MultigridSolver::Options MultigridSolver::Options::FromConfig(const ConfigNode& node) {
+MultigridSolver::Options MultigridSolver::Options::FromConfig(OptionReader node) {
   return iterative::ReadIterativeOptions<Options>(
       node, "V-cycle-preconditioned CG iteration", [&](Options& options) {
         options.smoother = node.GetEnum(

@@ -61,7 +61,7 @@ class MultigridSolver final : public LinearSolver {
     /// Most levels, the finest included.
     int max_levels = 12;
 
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit MultigridSolver(const Options& options);

@@ -58,8 +58,7 @@ double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::
   return worst;
 }
 
-void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
-                              bool& check_residual) {
+void ReadFactorizationOptions(OptionReader node, double& pivot_tolerance, bool& check_residual) {
   pivot_tolerance =
       node.Get("pivot_tolerance", pivot_tolerance,
                "pivots d_k <= pivot_tolerance * A_kk mean a numerically singular matrix (an "

@@ -37,8 +37,7 @@ double MaxRelativeResidual(const SparseMatrix& a, const Eigen::Ref<const Eigen::
 
 /// Reads the options every factorization-based solver shares — `pivot_tolerance` (validated)
 /// and `check_residual` — with their help texts, into the given fields (defaults on input).
-void ReadFactorizationOptions(const ConfigNode& node, double& pivot_tolerance,
-                              bool& check_residual);
+void ReadFactorizationOptions(OptionReader node, double& pivot_tolerance, bool& check_residual);
 
 /// Advice shared by the "not positive definite" messages.
 inline constexpr std::string_view kNotPositiveDefiniteAdvice =

@@ -75,7 +75,7 @@ double FrobeniusDot(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 
 }  // namespace
 
-AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant) {
+AdmmOptions ReadAdmmOptions(OptionReader node, AdmmVariant variant) {
   AdmmOptions options;
   options.variant = variant;
   options.beta =

@@ -42,7 +42,7 @@ struct AdmmOptions {
 };
 
 /// Reads the ADMM options from an optimizer's config table (the L-BFGS keys for wrapd only).
-AdmmOptions ReadAdmmOptions(const ConfigNode& node, AdmmVariant variant);
+AdmmOptions ReadAdmmOptions(OptionReader node, AdmmVariant variant);
 
 /// The ADMM machinery of one mesh level for the per-element ARAP energy (energy `elements`,
 /// E = Σ_t vol_t ‖F_t − R_t‖²_F on tetrahedra or planar triangles): per-element

@@ -17,7 +17,7 @@
 
 namespace harap {
 
-SessionOptions SessionOptions::FromConfig(const ConfigNode& node,
+SessionOptions SessionOptions::FromConfig(OptionReader node,
                                           const Registry<LevelSolver>& level_solvers) {
   SessionOptions options;
   const std::string type =

@@ -52,7 +52,7 @@ struct SessionOptions {
   /// Reads `type` (classic or hierarchical) and that optimizer's options from an `[optimizer]`
   /// table, `inner` from `level_solvers`; other optimizers are rejected (ConfigError), and level
   /// solver options a session cannot run when the session is built.
-  static SessionOptions FromConfig(const ConfigNode& optimizer_node,
+  static SessionOptions FromConfig(OptionReader optimizer_node,
                                    const Registry<LevelSolver>& level_solvers);
 };
 

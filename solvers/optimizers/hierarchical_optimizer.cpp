@@ -18,7 +18,7 @@
 namespace harap {
 
 HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
-    const ConfigNode& node, const Registry<LevelSolver>& level_solvers) {
+    OptionReader node, const Registry<LevelSolver>& level_solvers) {
   Options options;
   options.inner = node.GetChoice("inner", options.inner, level_solvers.Names(),
                                  "level solver on each level (`harap list inner`): local_global "
@@ -61,7 +61,7 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
 }
 
 HierarchicalOptimizer::Options HierarchicalOptimizer::Options::OneLevel(
-    const ConfigNode& node, const Registry<LevelSolver>& level_solvers, std::string_view inner) {
+    OptionReader node, const Registry<LevelSolver>& level_solvers, std::string_view inner) {
   Options options;
   options.inner = std::string(inner);
   options.hierarchical = false;

@@ -73,9 +73,9 @@ class HierarchicalOptimizer final : public Optimizer {
 
     /// The `hierarchical` table: `inner` (a name in `level_solvers`), that level solver's
     /// options, then the hierarchy's.
-    static Options FromConfig(const ConfigNode& node, const Registry<LevelSolver>& level_solvers);
+    static Options FromConfig(OptionReader node, const Registry<LevelSolver>& level_solvers);
     /// A one-level run of level solver `inner` with its options from `node`.
-    static Options OneLevel(const ConfigNode& node, const Registry<LevelSolver>& level_solvers,
+    static Options OneLevel(OptionReader node, const Registry<LevelSolver>& level_solvers,
                             std::string_view inner);
 
     /// The levels a run solves, coarsest first, of a hierarchy of `num_levels` levels.

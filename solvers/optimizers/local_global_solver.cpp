@@ -609,7 +609,7 @@ Positions InitialPositions(const DeformationProblem& problem) {
   return u;
 }
 
-LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node) {
+LocalGlobalOptions ReadLocalGlobalOptions(OptionReader node) {
   LocalGlobalOptions options;
   options.tolerance = node.Get("tolerance", options.tolerance,
                                "stop when max squared vertex displacement of a global step / "

@@ -226,6 +226,6 @@ class LocalGlobalSolver final : public LevelSolver {
 Positions InitialPositions(const DeformationProblem& problem);
 
 /// Reads the options shared by all local/global optimizers from their config table.
-LocalGlobalOptions ReadLocalGlobalOptions(const ConfigNode& node);
+LocalGlobalOptions ReadLocalGlobalOptions(OptionReader node);
 
 }  // namespace harap

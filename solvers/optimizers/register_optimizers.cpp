@@ -13,7 +13,7 @@ namespace {
 
 // The options parser of a one-level optimizer: level solver `inner` on the input mesh.
 auto OneLevel(std::shared_ptr<const Registry<LevelSolver>> level_solvers, std::string_view inner) {
-  return [level_solvers, inner = std::string(inner)](const ConfigNode& node) {
+  return [level_solvers, inner = std::string(inner)](OptionReader node) {
     return HierarchicalOptimizer::Options::OneLevel(node, *level_solvers, inner);
   };
 }
@@ -32,14 +32,12 @@ void RegisterLevelSolvers(Registry<LevelSolver>& registry) {
       "admm_pd",
       "rotation-unaware ADMM for the per-element ARAP energy [Overby et al. 2017, ADMM "
       "⊇ Projective Dynamics]; energy `elements`",
-      [](const ConfigNode& node) {
-        return ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics);
-      });
+      [](OptionReader node) { return ReadAdmmOptions(node, AdmmVariant::kProjectiveDynamics); });
   registry.AddParsed<AdmmLevelSolver>(
       "wrapd",
       "rotation-aware ADMM with an L-BFGS global step, WRAPD's ARAP mode [Brown & "
       "Narain 2021]; energy `elements`, tetrahedra",
-      [](const ConfigNode& node) { return ReadAdmmOptions(node, AdmmVariant::kRotationAware); });
+      [](OptionReader node) { return ReadAdmmOptions(node, AdmmVariant::kRotationAware); });
 }
 
 void RegisterOptimizers(Registry<Optimizer>& registry, const Registry<LevelSolver>& level_solvers) {
@@ -53,7 +51,7 @@ void RegisterOptimizers(Registry<Optimizer>& registry, const Registry<LevelSolve
       std::string(HierarchicalOptimizer::kName),
       "hierarchical (cascadic) ARAP: coarsest level first, rotations up-sampled level by "
       "level [Meyer, Bickel & Alexa, Algorithm 2]; any level solver (`inner`)",
-      [solvers](const ConfigNode& node) {
+      [solvers](OptionReader node) {
         return HierarchicalOptimizer::Options::FromConfig(node, *solvers);
       });
   // The flat ADMM optimizers: their level solvers on the input mesh.

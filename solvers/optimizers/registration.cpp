@@ -26,7 +26,7 @@ double RegistrationOptions::DataWeight(int stage) const {
   return data_weight_start * std::pow(data_weight_end / data_weight_start, t);
 }
 
-RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& node) {
+RegistrationOptions RegistrationOptions::FromConfig(OptionReader node) {
   RegistrationOptions options;
   options.data_weight_start =
       node.Get("data_weight_start", options.data_weight_start,

@@ -63,7 +63,7 @@ struct RegistrationOptions {
 
   /// The data weight of stage s (0-based).
   double DataWeight(int stage) const;
-  static RegistrationOptions FromConfig(const ConfigNode& node);
+  static RegistrationOptions FromConfig(OptionReader node);
 };
 
 /// What to register: the source mesh (a triangle surface) onto a target.

@@ -15,7 +15,7 @@ using namespace harap;
 namespace {
 
 std::string TypeOf(const ConfigNode& config, const std::string& table) {
-  return config.Child(table).Get("type", std::string(), "");
+  return OptionReader(config.Child(table)).Get("type", std::string(), "");
 }
 
 }  // namespace
@@ -26,14 +26,14 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
   flags.preset = "fast";
   const ConfigNode config = flags.BuildConfig();
   CHECK(TypeOf(config, "optimizer") == "hierarchical");
-  const ConfigNode level0 = config.Child("solver").Child("level_0");
+  OptionReader level0(config.Child("solver").Child("level_0"));
   CHECK(level0.Get("type", std::string(), "") == "adaptive");
   CHECK(level0.Get("expected_solves", 0.0, "") == 4.0);
   // If it factors, it solves with the supernodal factor (few solves: no conversion).
   CHECK(level0.Child("direct").Get("mode", std::string(), "") == "supernodal");
   // Fixed coarse targets, so that Anderson acceleration takes effect on the coarse levels.
-  CHECK_FALSE(config.Child("optimizer").Get("targets_follow_rotations", true, ""));
-  CHECK(config.Child("optimizer").Get("anderson", 0, "") == 5);
+  CHECK_FALSE(OptionReader(config.Child("optimizer")).Get("targets_follow_rotations", true, ""));
+  CHECK(OptionReader(config.Child("optimizer")).Get("anderson", 0, "") == 5);
   // The factory then gives level 0 the adaptive solver and the other levels [solver]'s.
   const Registries registries = MakeBuiltinRegistries();
   const RegistryComponentFactory factory(registries, flags.BuildConfig());
@@ -46,8 +46,8 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   PieceFlags flags;
   flags.preset = "fast";
   flags.settings = {"solver.level_0.expected_solves=9"};
-  CHECK(flags.BuildConfig().Child("solver").Child("level_0").Get("expected_solves", 0.0, "") ==
-        9.0);
+  CHECK(OptionReader(flags.BuildConfig().Child("solver").Child("level_0"))
+            .Get("expected_solves", 0.0, "") == 9.0);
   // Another optimizer: the hierarchical-only settings are left out (classic would reject them).
   flags.settings.clear();
   flags.optimizer = "classic";
@@ -66,7 +66,7 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   flags.settings = {"optimizer.inner=\"admm_pd\""};
   const ConfigNode admm = flags.BuildConfig();
   CHECK_FALSE(admm.Child("optimizer").Has("anderson"));
-  CHECK_FALSE(admm.Child("optimizer").Get("targets_follow_rotations", true, ""));
+  CHECK_FALSE(OptionReader(admm.Child("optimizer")).Get("targets_follow_rotations", true, ""));
 }
 
 TEST_CASE("presets: unknown names are rejected, the config's preset key is read",

@@ -32,11 +32,11 @@ TEST_CASE("Range: membership and text", "[framework][config]") {
   CHECK(Range::Above(0.5).ToString() == "> 0.5");
 }
 
-TEST_CASE("ConfigNode::Get with a range: values outside fail naming where, key and range",
+TEST_CASE("OptionReader::Get with a range: values outside fail naming where, key and range",
           "[framework][config]") {
   const ConfigNode root = ConfigNode::Parse(
       "[solver]\ntolerance = 1.5\nmax_iterations = 0\nrelaxation = 1.2\n", "run.toml");
-  const ConfigNode solver = root.Child("solver");
+  OptionReader solver(root.Child("solver"));
   CHECK(solver.Get("relaxation", 1.0, "ω", Range::Open(0, 2)) == 1.2);
   CHECK(solver.Get("absent", 3, "h", Range::AtLeast(1)) == 3);
   CHECK_THROWS_AS(solver.Get("tolerance", 0.0, "h", Range::HalfOpen(0, 1)), ConfigError);
@@ -50,13 +50,15 @@ TEST_CASE("ConfigNode::Get with a range: values outside fail naming where, key a
                                         ">= 1"));
 }
 
-TEST_CASE("ConfigNode::GetEnum reads names into values; help and errors list the names",
+TEST_CASE("OptionReader::GetEnum reads names into values; help and errors list the names",
           "[framework][config]") {
   const ConfigNode root =
       ConfigNode::Parse("[a]\nsweep = \"symmetric\"\n[b]\nsweep = \"backward\"\n", "run.toml");
-  CHECK(root.Child("a").GetEnum("sweep", Sweep::kForward, kSweepNames, "h") == Sweep::kSymmetric);
-  CHECK(ConfigNode().GetEnum("sweep", Sweep::kSymmetric, kSweepNames, "h") == Sweep::kSymmetric);
-  CHECK_THROWS_WITH(root.Child("b").GetEnum("sweep", Sweep::kForward, kSweepNames, "h"),
+  OptionReader reader(root);
+  CHECK(reader.Child("a").GetEnum("sweep", Sweep::kForward, kSweepNames, "h") == Sweep::kSymmetric);
+  CHECK(OptionReader(ConfigNode()).GetEnum("sweep", Sweep::kSymmetric, kSweepNames, "h") ==
+        Sweep::kSymmetric);
+  CHECK_THROWS_WITH(reader.Child("b").GetEnum("sweep", Sweep::kForward, kSweepNames, "h"),
                     Catch::Contains("run.toml:4") &&
                         Catch::Contains("option 'b.sweep' is \"backward\", which is not one of: "
                                         "forward, symmetric"));
@@ -64,7 +66,7 @@ TEST_CASE("ConfigNode::GetEnum reads names into values; help and errors list the
 }
 
 TEST_CASE("described options show their range and names", "[framework][config]") {
-  const ConfigNode node = ConfigNode::Describing();
+  OptionReader node = OptionReader::Describing();
   node.Get("tolerance", 0.0, "stop below this", Range::HalfOpen(0, 1));
   node.GetEnum("sweep", Sweep::kForward, kSweepNames, "sweep order");
   const auto options = node.Options();

@@ -32,7 +32,7 @@ class GridClusteringHierarchy final : public Hierarchy {
     double growth = 2.0;
     /// Stop once a level has at most this many vertices.
     int min_vertices = 50;
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit GridClusteringHierarchy(const Options& options) : options_(options) {}
@@ -54,8 +54,7 @@ class GridClusteringHierarchy final : public Hierarchy {
 
 namespace harap {
 
-GridClusteringHierarchy::Options GridClusteringHierarchy::Options::FromConfig(
-    const ConfigNode& node) {
+GridClusteringHierarchy::Options GridClusteringHierarchy::Options::FromConfig(OptionReader node) {
   Options options;
   options.cells = node.Get("cells", options.cells, "grid cells along the longest side on level 1",
                            Range::AtLeast(1));

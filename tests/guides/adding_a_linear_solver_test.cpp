@@ -28,7 +28,7 @@ class DenseCholeskySolver final : public LinearSolver {
   struct Options {
     /// Largest system it accepts (a dense n×n factor: 8n² bytes).
     int max_unknowns = 5000;
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit DenseCholeskySolver(const Options& options) : LinearSolver(kName), options_(options) {}
@@ -51,7 +51,7 @@ class DenseCholeskySolver final : public LinearSolver {
 namespace harap {
 
 // [guide:solver-source]
-DenseCholeskySolver::Options DenseCholeskySolver::Options::FromConfig(const ConfigNode& node) {
+DenseCholeskySolver::Options DenseCholeskySolver::Options::FromConfig(OptionReader node) {
   Options options;
   options.max_unknowns =
       node.Get("max_unknowns", options.max_unknowns, "largest system to factor (dense: 8 n² bytes)",

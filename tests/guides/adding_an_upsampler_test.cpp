@@ -26,7 +26,7 @@ class TranslationUpsampler final : public Upsampler {
   static constexpr std::string_view kName = "translations";
 
   struct Options {
-    static Options FromConfig(const ConfigNode& node);
+    static Options FromConfig(OptionReader node);
   };
 
   explicit TranslationUpsampler(const Options& /*options*/) {}
@@ -43,7 +43,7 @@ class TranslationUpsampler final : public Upsampler {
 namespace harap {
 
 // [guide:upsampler-source]
-TranslationUpsampler::Options TranslationUpsampler::Options::FromConfig(const ConfigNode& node) {
+TranslationUpsampler::Options TranslationUpsampler::Options::FromConfig(OptionReader node) {
   node.RejectUnknownKeys();
   return Options{};
 }

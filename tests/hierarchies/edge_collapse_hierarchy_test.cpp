@@ -400,7 +400,7 @@ TEST_CASE("edge_collapse: options from config", "[hierarchies][edge_collapse]") 
   const Registries registries = MakeBuiltinRegistries();
   REQUIRE(registries.hierarchies.Contains("edge_collapse"));
   SECTION("defaults and listing") {
-    const auto options = EdgeCollapseHierarchy::Options::FromConfig(ConfigNode());
+    const auto options = EdgeCollapseHierarchy::Options::FromConfig(OptionReader(ConfigNode()));
     CHECK(options.ratio == 0.0);
     CHECK(options.min_vertices == 750);
     CHECK(options.max_levels == 0);
@@ -418,7 +418,8 @@ TEST_CASE("edge_collapse: options from config", "[hierarchies][edge_collapse]") 
         "[hierarchy]\nratio = 0.5\nmin_vertices = 100\nmax_levels = 4\n"
         "max_normal_deviation = 45\nmax_aspect_ratio = 0\n",
         "test");
-    const auto options = EdgeCollapseHierarchy::Options::FromConfig(config.Child("hierarchy"));
+    const auto options =
+        EdgeCollapseHierarchy::Options::FromConfig(OptionReader(config.Child("hierarchy")));
     CHECK(options.ratio == 0.5);
     CHECK(options.min_vertices == 100);
     CHECK(options.max_levels == 4);

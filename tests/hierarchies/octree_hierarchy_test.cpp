@@ -530,7 +530,7 @@ TEST_CASE("octree: options from config", "[hierarchies][octree]") {
   REQUIRE(registries.hierarchies.Contains("octree"));
 
   SECTION("defaults") {
-    const auto options = OctreeHierarchy::Options::FromConfig(ConfigNode());
+    const auto options = OctreeHierarchy::Options::FromConfig(OptionReader(ConfigNode()));
     CHECK(options.topology_aware);
     CHECK(options.coarse_positions == OctreeHierarchy::CoarsePositions::kMean);
     CHECK(options.min_vertices == 750);
@@ -546,7 +546,8 @@ TEST_CASE("octree: options from config", "[hierarchies][octree]") {
     const std::string table =
         "topology_aware = false\ncoarse_positions = \"quantized\"\nmin_vertices = 100\n"
         "max_levels = 4\n";
-    const auto options = OctreeHierarchy::Options::FromConfig(ConfigNode::Parse(table, "test"));
+    const auto options =
+        OctreeHierarchy::Options::FromConfig(OptionReader(ConfigNode::Parse(table, "test")));
     const ConfigNode config = ConfigNode::Parse("[hierarchy]\ntype = \"octree\"\n" + table, "test");
     CHECK_FALSE(options.topology_aware);
     CHECK(options.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized);

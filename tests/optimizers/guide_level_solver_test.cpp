@@ -37,7 +37,7 @@ class SweepsLevelSolver final : public LevelSolver {
 
     // Step 2: options from the optimizer's table, read once when a run is resolved (the
     // optimizer rejects unknown keys after).
-    static Options FromConfig(const ConfigNode& node) {
+    static Options FromConfig(OptionReader node) {
       Options options;
       options.tolerance = node.Get("tolerance", options.tolerance,
                                    "stop when max squared displacement / diag² falls below this");

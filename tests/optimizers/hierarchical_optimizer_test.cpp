@@ -177,7 +177,8 @@ TEST_CASE("hierarchical options are validated", "[optimizers]") {
                         Catch::Contains("'optimizer.update_constraints'") &&
                         Catch::Contains("'targets_follow_rotations'"));
   const TestSetup fixed_targets("[optimizer]\ntargets_follow_rotations = false\n");
-  CHECK_FALSE(HierarchicalOptimizer::Options::FromConfig(fixed_targets.config.Child("optimizer"),
-                                                         fixed_targets.registries.level_solvers)
+  CHECK_FALSE(HierarchicalOptimizer::Options::FromConfig(
+                  OptionReader(fixed_targets.config.Child("optimizer")),
+                  fixed_targets.registries.level_solvers)
                   .targets_follow_rotations);
 }

@@ -90,9 +90,10 @@ TEST_CASE("TOML readers: numbers must be numbers, and finite", "[experiments][to
   CHECK(readers.Scenario("mesh = \"x.obj\"\n[[handle]]\nselect.indices = [0]\n"
                          "translate = [0, inf, 0]\n") ==
         "scene.toml:4:17: handle 1: translate is a non-finite number (inf)");
-  // A run config's values are typed when an implementation reads them (ConfigNode::Get).
+  // A run config's values are typed when an implementation reads them (OptionReader::Get).
   CHECK_THAT(ErrorOf([] {
-               harap::ConfigNode::Parse("[optimizer]\ntolerance = \"small\"\n", "run.toml")
+               harap::OptionReader(
+                   harap::ConfigNode::Parse("[optimizer]\ntolerance = \"small\"\n", "run.toml"))
                    .Child("optimizer")
                    .Get("tolerance", 1.0, "");
              }),

@@ -38,7 +38,7 @@ std::unique_ptr<ConfiguredSession> SessionWith(const TestSetup& setup, const Mes
 // A session built directly, its context counting the factorizations of every level.
 struct CountingSession {
   CountingSession(const TestSetup& setup, const Mesh& mesh)
-      : options(SessionOptions::FromConfig(setup.config.Child("optimizer"),
+      : options(SessionOptions::FromConfig(OptionReader(setup.config.Child("optimizer")),
                                            setup.registries.level_solvers)),
         context(Counting()),
         session(mesh, setup.factory, options, context) {}

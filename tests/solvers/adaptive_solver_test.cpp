@@ -17,7 +17,7 @@ namespace harap::testing {
 namespace {
 
 AdaptiveSolver::Options Parse(const std::string& toml) {
-  return AdaptiveSolver::Options::FromConfig(ConfigNode::Parse(toml, "<test>"));
+  return AdaptiveSolver::Options::FromConfig(OptionReader(ConfigNode::Parse(toml, "<test>")));
 }
 
 Eigen::MatrixXd RightHandSide(Index rows) {

@@ -239,6 +239,23 @@ TEST_CASE("a page's session: mesh, solve, moves, handle edits, bad messages", "[
         std::string::npos);
 }
 
+TEST_CASE("a page's configure starts from the source's options every time", "[view]") {
+  Page page;
+  page.page->HandleText(R"({"type":"configure","preset":"fast","id":1})");
+  const std::string fast = page.Last("ready")["config"];
+  CHECK(fast.find("level_0") != std::string::npos);
+  CHECK(fast.find("preset") == std::string::npos);  // its settings stand in for it
+  // A refused configure leaves nothing behind, and no preset means none of its settings.
+  page.page->HandleText(R"({"type":"configure","energy":"nonsense","id":2})");
+  CHECK(page.Last("error")["id"] == 2);
+  page.page->HandleText(R"({"type":"configure","id":3})");
+  const std::string plain = page.Last("ready")["config"];
+  CHECK(plain.find("level_0") == std::string::npos);
+  CHECK(plain.find("nonsense") == std::string::npos);
+  CHECK(plain.find("tolerance = 1e-10") != std::string::npos);
+  CHECK(page.Last("solved")["converged"] == true);
+}
+
 TEST_CASE("a page's session: consecutive preview moves of a group are solved once", "[view]") {
   Page page;
   const size_t before = page.sent.size();
