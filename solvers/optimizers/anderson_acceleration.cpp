@@ -14,7 +14,7 @@ void AndersonAcceleration::Reset(Eigen::Index rows, int history) {
   previous_image_.resize(rows, 3);
   // Sized in place, not copied from one prototype: a copy writes every page of every slot, while
   // a slot never written (a level that stops after two iterations uses one of five) then costs
-  // address space only (issue 23: peak memory per vertex).
+  // address space only (peak memory per vertex: docs/results.md, "Scale and memory").
   residual_differences_.resize(history);
   image_differences_.resize(history);
   for (auto* slots : {&residual_differences_, &image_differences_}) {
