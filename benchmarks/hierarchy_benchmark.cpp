@@ -3,6 +3,11 @@
 // same level vertex counts: edge_collapse targets the octree's and builds it for that):
 //
 //   ./build/harap_benchmarks --benchmark_filter=HierarchyBuildFileOrder
+//
+// The intrinsic Delaunay weights of the same meshes (the default weights of `spokes`, computed on
+// every level):
+//
+//   ./build/harap_benchmarks --benchmark_filter=IntrinsicDelaunay
 #include "benchmarks/hierarchy_benchmark.h"
 
 #include <benchmark/benchmark.h>
@@ -13,6 +18,7 @@
 #include <utility>
 
 #include "api/builtins.h"
+#include "energies/kernels/intrinsic_delaunay.h"
 #include "io/scenario.h"
 
 namespace harap::benchmarks {
@@ -46,6 +52,19 @@ void HierarchyBuild(benchmark::State& state, const std::string& hierarchy_name,
   state.counters["coarsest"] = double(coarsest);
 }
 
+void IntrinsicDelaunay(benchmark::State& state, const std::string& key, const MeshLoader& load) {
+  const Mesh& mesh = CachedMesh(key, load);  // outside the timed loop
+  Index flips = 0;
+  for (auto _ : state) {
+    const IntrinsicTriangulation result =
+        IntrinsicDelaunayTriangulation(mesh.vertices, mesh.elements);
+    flips = result.flips;
+    benchmark::DoNotOptimize(result.half_cot.data());
+  }
+  state.counters["faces"] = double(mesh.num_elements());
+  state.counters["flips"] = double(flips);
+}
+
 }  // namespace
 
 void RegisterHierarchyBenchmarks(const std::filesystem::path& shared_dir) {
@@ -71,6 +90,10 @@ void RegisterHierarchyBenchmarks(const std::filesystem::path& shared_dir) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
     }
+    benchmark::RegisterBenchmark(
+        ("IntrinsicDelaunay/" + key).c_str(),
+        [key = key, load = load](benchmark::State& state) { IntrinsicDelaunay(state, key, load); })
+        ->Unit(benchmark::kMillisecond);
   }
 }
 

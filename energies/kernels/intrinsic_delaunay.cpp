@@ -48,15 +48,19 @@ int Prev(int corner) { return (corner + 2) % 3; }
 class Flipper {
  public:
   Flipper(const Positions& vertices, const Elements& triangles)
-      : triangles_(triangles), lengths_(triangles.rows(), 3) {
+      : triangles_(triangles),
+        lengths_(triangles.rows(), 3),
+        cot_(triangles.rows(), 3),
+        degenerate_(static_cast<size_t>(triangles.rows()), 0) {
     const Index num_faces = static_cast<Index>(triangles.rows());
     for (Index f = 0; f < num_faces; ++f) {
       for (int k = 0; k < 3; ++k) {
         lengths_(f, k) =
             (vertices.row(triangles(f, Next(k))) - vertices.row(triangles(f, Prev(k)))).norm();
       }
+      UpdateCotangents(f);
     }
-    FindTwins();
+    FindTwins(triangles.rows() > 0 ? triangles.maxCoeff() + 1 : 0);
   }
 
   IntrinsicTriangulation Run() {
@@ -89,7 +93,12 @@ class Flipper {
         }
       }
     }
-    result.half_cot = HalfCotangentsFromLengths(lengths_, &result.degenerate);
+    // The faces' cotangents are current (UpdateCotangents after every flip): the same values
+    // HalfCotangentsFromLengths(lengths_) computes.
+    result.half_cot = 0.5 * cot_;
+    for (Index f = 0; f < static_cast<Index>(degenerate_.size()); ++f) {
+      if (degenerate_[f]) ++result.degenerate;
+    }
     // Each edge once (a side without twin, or the smaller of two twins): weights that stay
     // negative are set to zero.
     for (Index s = 0; s < num_sides; ++s) {
@@ -119,25 +128,50 @@ class Flipper {
   double& Length(Index side) { return lengths_(side / 3, static_cast<int>(side % 3)); }
   Index Corner(Index face, int k) const { return triangles_(face, k); }
 
+  // The cotangents of face f's corners from its side lengths (zero, and the face marked
+  // degenerate, if it has no defined angles): computed once per face and after each flip instead
+  // of twice per side test.
+  void UpdateCotangents(Index f) {
+    const double l[3] = {lengths_(f, 0), lengths_(f, 1), lengths_(f, 2)};
+    const double double_area = DoubleArea(l[0], l[1], l[2]);
+    degenerate_[static_cast<size_t>(f)] = Degenerate(double_area, l[0], l[1], l[2]);
+    for (int k = 0; k < 3; ++k) {
+      cot_(f, k) = degenerate_[static_cast<size_t>(f)]
+                       ? 0.0
+                       : Cotangent(l[k], l[Next(k)], l[Prev(k)], double_area);
+    }
+  }
+
   // Pairs each side with the one side of the neighbouring face that runs the opposite way along
   // the same edge; sides on boundaries, at non-manifold edges or between faces of opposite
   // orientation keep kNoSide and are never flipped.
-  void FindTwins() {
+  void FindTwins(Index num_vertices) {
     const Index num_sides = 3 * static_cast<Index>(triangles_.rows());
     struct Key {
       Index low, high, side;
     };
-    std::vector<Key> keys;
-    keys.reserve(num_sides);
-    for (Index s = 0; s < num_sides; ++s) {
+    // Sorted by (low, high, side): a counting sort by the lower vertex (sides in order within a
+    // bucket), then each bucket (a vertex's few edges) by the higher one.
+    std::vector<Index> bucket_start(static_cast<size_t>(num_vertices) + 1, 0);
+    const auto ends = [&](Index s) {
       const Index f = s / 3;
       const int k = static_cast<int>(s % 3);
       const Index from = Corner(f, Next(k)), to = Corner(f, Prev(k));
-      keys.push_back({std::min(from, to), std::max(from, to), s});
+      return std::pair{std::min(from, to), std::max(from, to)};
+    };
+    for (Index s = 0; s < num_sides; ++s) ++bucket_start[static_cast<size_t>(ends(s).first) + 1];
+    for (size_t v = 1; v < bucket_start.size(); ++v) bucket_start[v] += bucket_start[v - 1];
+    std::vector<Key> keys(static_cast<size_t>(num_sides));
+    std::vector<Index> fill(bucket_start.begin(), bucket_start.end() - 1);
+    for (Index s = 0; s < num_sides; ++s) {
+      const auto [low, high] = ends(s);
+      keys[static_cast<size_t>(fill[static_cast<size_t>(low)]++)] = {low, high, s};
     }
-    std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-      return std::tie(x.low, x.high, x.side) < std::tie(y.low, y.high, y.side);
-    });
+    for (size_t v = 0; v + 1 < bucket_start.size(); ++v) {
+      // Stable: equal ends keep the sides' order.
+      std::stable_sort(keys.begin() + bucket_start[v], keys.begin() + bucket_start[v + 1],
+                       [](const Key& x, const Key& y) { return x.high < y.high; });
+    }
     twin_.assign(num_sides, kNoSide);
     for (size_t begin = 0; begin < keys.size();) {
       size_t end = begin + 1;
@@ -166,11 +200,8 @@ class Flipper {
     for (const Index side : {s, twin_[s]}) {
       if (side == kNoSide) continue;
       const Index f = side / 3;
-      const int k = static_cast<int>(side % 3);
-      const double a = Length(side), b = Length(SideOf(f, Next(k))), c = Length(SideOf(f, Prev(k)));
-      const double double_area = DoubleArea(a, b, c);
-      if (Degenerate(double_area, a, b, c)) return 0.0;
-      sum += Cotangent(a, b, c, double_area);
+      if (degenerate_[static_cast<size_t>(f)]) return 0.0;
+      sum += cot_(f, static_cast<int>(side % 3));
     }
     return sum;
   }
@@ -209,6 +240,8 @@ class Flipper {
     triangles_.row(f2) << d, c, a;
     lengths_.row(f1) << l_bd, l_ad, l_ab;
     lengths_.row(f2) << l_ca, l_ad, l_dc;
+    UpdateCotangents(f1);
+    UpdateCotangents(f2);
     auto link = [&](Index side, Index other) {
       twin_[side] = other;
       if (other != kNoSide) twin_[other] = side;
@@ -223,6 +256,8 @@ class Flipper {
 
   Elements triangles_;
   Eigen::Matrix<double, Eigen::Dynamic, 3> lengths_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> cot_;  ///< cot of each corner's angle (0: degenerate)
+  std::vector<char> degenerate_;                  ///< per face
   std::vector<Index> twin_;
 };
 
