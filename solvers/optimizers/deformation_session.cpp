@@ -71,7 +71,11 @@ struct DeformationSession::Level {
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
                                        const SessionOptions& options, const Context& context,
                                        const std::vector<double>& stiffness)
-    : mesh_(mesh), factory_(factory), options_(options), context_(context), cascade_(mesh) {
+    : mesh_(mesh),
+      factory_(factory),
+      options_(options),
+      context_(context),
+      cascade_(mesh, context_) {
   ValidateStiffness(stiffness, mesh_, "the session's stiffness");
   Stopwatch clock;
   context_.Run([&] {
@@ -115,9 +119,9 @@ const Positions& DeformationSession::level_positions() const {
 
 const Positions& DeformationSession::positions() const {
   // Mapped out once per change of the finest state (a solve, SetPositions).
-  if (output_stamp_ != std::make_pair(solves_, version_)) {
-    cascade_.ToInput(level_positions(), output_positions_);
-    output_stamp_ = {solves_, version_};
+  if (output_stale_) {
+    cascade_.ToInput(level_positions(), output_positions_, context_);
+    output_stale_ = false;
   }
   return output_positions_;
 }
@@ -268,7 +272,8 @@ void DeformationSession::SetPositions(const Positions& positions) {
   if (mesh_.planar && positions.col(2).cwiseAbs().maxCoeff() != 0.0) {
     throw InputError("SetPositions: the mesh is planar (z = 0) but the positions are not");
   }
-  cascade_.ToLevel(positions).swap(start_positions_);
+  cascade_.ToLevel(positions, context_).swap(start_positions_);
+  output_stale_ = true;
   ++version_;
   preview_rotations_pending_ = false;
   for (const auto& level : levels_) {
@@ -550,7 +555,7 @@ void DeformationSession::FinishResult(const LevelState& final_state, bool previe
                               : ""));
   }
   result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
-  cascade_.ToInput(final_state.positions, result.positions);
+  cascade_.ToInput(final_state.positions, result.positions, context);
 }
 
 // One Solve() or Preview() down the cascade: where each level starts (StartLevel), its request
@@ -612,6 +617,7 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
   }
   LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
     Level& level = *s_.levels_[l];
+    if (l == 0) s_.output_stale_ = true;
     level.has_solution = true;
     level.made_by_solve = s_.solves_;
     level.global_step_only = run != nullptr && global_step_only_;

@@ -246,9 +246,9 @@ class DeformationSession {
   std::vector<double> weights_;  ///< empty (all hard) or one per handle, with a soft one
   Positions start_positions_;    ///< finest positions without a solution (SetPositions; level
                                  ///< numbering)
-  // positions()' copy in the input's numbering and the (solves_, version_) it was made at.
+  // positions()' copy in the input's numbering; stale once the finest state changed.
   mutable Positions output_positions_;
-  mutable std::pair<long long, long long> output_stamp_{-1, -1};
+  mutable bool output_stale_ = true;
   long long version_ = 0;  ///< bumped by every change of handles, targets or positions
   long long solves_ = 0;   ///< Solve() and Preview() calls so far
   /// Solve()'s per-level states, kept between solves (see Run()).

@@ -219,8 +219,8 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   OptimizeResult result;
   Positions initial = InitialPositions(problem);  // validates the constraints
   // The one renumbering (level_cascade.h): the problem goes in here, the positions out at the end.
-  LevelCascade cascade(*problem.mesh);
-  initial = cascade.ToLevel(initial);
+  LevelCascade cascade(*problem.mesh, context);
+  initial = cascade.ToLevel(initial, context);
   const Constraints constraints = cascade.ToLevel(problem.constraints);
 
   // P and C of every solved level (Algorithm 2, first loop). With overlap_setup, a background
@@ -257,9 +257,11 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   Stopwatch clock;
   if (options_.hierarchical) {
     context.ReportPhase("building the hierarchy");
-    MeshHierarchy hierarchy = setup.Isolated(
-        context, [&] { return factory.MakeHierarchy()->Build(*problem.mesh, context); });
-    cascade.SetHierarchy(std::move(hierarchy), factory.MakeUpsampler());
+    // (The cascade renumbers the levels in parallel too.)
+    setup.Isolated(context, [&] {
+      cascade.SetHierarchy(factory.MakeHierarchy()->Build(*problem.mesh, context),
+                           factory.MakeUpsampler());
+    });
   } else {
     cascade.SetSingleLevel();
   }
@@ -300,7 +302,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   const LevelSolver& finest = cascade.solver(0);
   result.measures = finest.AuxiliaryMeasures(state, context);
   result.constraints = finest.constraint_report();
-  cascade.ToInput(state.positions, result.positions);
+  cascade.ToInput(state.positions, result.positions, context);
   result.notes = DescribeConstraintHandling(result.constraints);
   result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
   result.timings.total = total.Seconds();

@@ -11,7 +11,8 @@
 
 namespace harap {
 
-LevelCascade::LevelCascade(const Mesh& mesh) : input_mesh_(mesh), finest_(LocalityOrdering(mesh)) {}
+LevelCascade::LevelCascade(const Mesh& mesh, const Context& context)
+    : input_mesh_(mesh), finest_(context.Run([&] { return LocalityOrdering(mesh); })) {}
 
 void LevelCascade::SetHierarchy(MeshHierarchy hierarchy, std::unique_ptr<Upsampler> upsampler) {
   HARAP_CHECK(upsampler != nullptr, "a hierarchy needs an upsampler");

@@ -36,8 +36,9 @@ namespace harap {
 /// Not thread-safe; set_solver() of different levels from different threads is.
 class LevelCascade {
  public:
-  /// `mesh` (the input mesh, in the caller's numbering) must outlive the cascade.
-  explicit LevelCascade(const Mesh& mesh);
+  /// `mesh` (the input mesh, in the caller's numbering) must outlive the cascade; level 0's
+  /// renumbering runs in `context`.
+  LevelCascade(const Mesh& mesh, const Context& context);
 
   /// A hierarchy built on the input mesh (Hierarchy::Build, the input's numbering) and its
   /// upsampler; without one the cascade is the input mesh alone. Renumbers the hierarchy's
@@ -68,7 +69,9 @@ class LevelCascade {
   /// The problem's constraints with their vertices in level 0's numbering (same order).
   Constraints ToLevel(const Constraints& input) const;
   /// Per-vertex rows of the input mesh in level 0's order.
-  Positions ToLevel(const Positions& input) const { return finest_.ToNew(input); }
+  Positions ToLevel(const Positions& input, const Context& context) const {
+    return context.Run([&] { return finest_.ToNew(input); });
+  }
   /// The problem's constraints (`level0`: in level 0's numbering) on coarse level l > 0
   /// (MapConstraints, coarse_constraints.h), listed in the order of the level's vertices as the
   /// hierarchy built them: a level's system sums its constrained columns in list order, so the
@@ -79,8 +82,8 @@ class LevelCascade {
   std::vector<double> LevelStiffness(int l, const std::vector<double>& input_stiffness) const;
   /// Level 0's positions in the input's numbering (into `out`: no allocation when it has the
   /// size already).
-  void ToInput(const Positions& level_positions, Positions& out) const {
-    finest_.ToOld(level_positions, out);
+  void ToInput(const Positions& level_positions, Positions& out, const Context& context) const {
+    context.Run([&] { finest_.ToOld(level_positions, out); });
   }
   const Upsampler& upsampler() const { return *upsampler_; }
   RotationSite rotation_site() const { return site_; }

@@ -549,7 +549,7 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
   const Mesh& source = *problem.source;
   // The one renumbering (level_cascade.h): the registration runs in the level numbering, the
   // source and its landmarks mapped in here, the positions and distances out at the end.
-  LevelCascade cascade(source);
+  LevelCascade cascade(source, context);
   const RegistrationProblem level_problem{&cascade.LevelMesh(0),
                                           problem.target,
                                           cascade.ToLevel(problem.landmarks),
@@ -608,7 +608,7 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
   result.residual_rms = std::sqrt(last.kept_squared_sum / std::max<Index>(1, last.counts.kept));
   result.residual_max = last.kept_max;
   result.correspondence_updates = pass.updates();
-  cascade.ToInput(state.positions, result.run.positions);
+  cascade.ToInput(state.positions, result.run.positions, context);
   result.run.timings.total = total.Seconds();
   return result;
 }

@@ -53,6 +53,15 @@ std::vector<Index> StableOrderByKey(const std::vector<uint64_t>& key) {
   return order;
 }
 
+// body(k) for k in [0, count), in parallel (independent iterations).
+template <typename Body>
+void ForEach(Index count, Body&& body) {
+  tbb::parallel_for(tbb::blocked_range<Index>(0, count, 8192),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index k = range.begin(); k != range.end(); ++k) body(k);
+                    });
+}
+
 }  // namespace
 
 MeshOrdering LocalityOrdering(const Mesh& mesh) {
@@ -63,12 +72,7 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   const double scale = extent.maxCoeff() > 0.0 ? ((1 << 21) - 1) / extent.maxCoeff() : 0.0;
   // The loops below are independent per vertex / element (the sorts are parallel already): in
   // parallel, the same permutation.
-  const auto for_each = [](Index count, auto&& body) {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, count, 8192),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index k = range.begin(); k != range.end(); ++k) body(k);
-                      });
-  };
+  const auto for_each = [](Index count, auto&& body) { ForEach(count, body); };
   std::vector<uint64_t> keys(n);
   for_each(n, [&](Index v) {
     const Eigen::RowVector3d q = (mesh.vertices.row(v) - lo) * scale;
@@ -112,59 +116,15 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
 
 Positions MeshOrdering::ToNew(const Positions& input) const {
   Positions result(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    result.row(k) = input.row(old_vertex[k]);
+  ForEach(static_cast<Index>(old_vertex.size()),
+          [&](Index k) { result.row(k) = input.row(old_vertex[k]); });
   return result;
-}
-
-Positions MeshOrdering::ToOld(const Positions& renumbered) const {
-  Positions result(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    result.row(old_vertex[k]) = renumbered.row(k);
-  return result;
-}
-
-Rotations MeshOrdering::ToNew(const Rotations& input, bool per_element) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  if (input.size() != old.size()) return input;  // not set yet (e.g. empty): nothing to permute
-  Rotations result(input.size());
-  for (size_t k = 0; k < old.size(); ++k) result[k] = input[old[k]];
-  return result;
-}
-
-Rotations MeshOrdering::ToOld(const Rotations& renumbered, bool per_element) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  Rotations result(renumbered.size());
-  for (size_t k = 0; k < old.size(); ++k) result[old[k]] = renumbered[k];
-  return result;
-}
-
-void MeshOrdering::ToNew(const Positions& input, Positions& out) const {
-  out.resize(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    out.row(k) = input.row(old_vertex[k]);
 }
 
 void MeshOrdering::ToOld(const Positions& renumbered, Positions& out) const {
   out.resize(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    out.row(old_vertex[k]) = renumbered.row(k);
-}
-
-void MeshOrdering::ToNew(const Rotations& input, bool per_element, Rotations& out) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  if (input.size() != old.size()) {  // not set yet (e.g. empty): nothing to permute
-    out = input;
-    return;
-  }
-  out.resize(input.size());
-  for (size_t k = 0; k < old.size(); ++k) out[k] = input[old[k]];
-}
-
-void MeshOrdering::ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  out.resize(renumbered.size());
-  for (size_t k = 0; k < old.size(); ++k) out[old[k]] = renumbered[k];
+  ForEach(static_cast<Index>(old_vertex.size()),
+          [&](Index k) { out.row(old_vertex[k]) = renumbered.row(k); });
 }
 
 std::vector<std::vector<Index>> RenumberForLocality(const MeshOrdering& finest,

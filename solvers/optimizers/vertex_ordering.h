@@ -21,18 +21,12 @@ struct MeshOrdering {
   std::vector<Index> new_element;  ///< input element index → new element index
   Mesh mesh;                       ///< the renumbered mesh
 
-  /// Rows of `input` (#V×k, input order) in the new order, and back.
+  /// Rows of `input` (#V×k, input order) in the new order (in parallel, like ToOld).
   Positions ToNew(const Positions& input) const;
-  Positions ToOld(const Positions& renumbered) const;
-  /// Site rotations (per vertex or per element) in the new order, and back.
-  Rotations ToNew(const Rotations& input, bool per_element) const;
-  Rotations ToOld(const Rotations& renumbered, bool per_element) const;
-  /// The same into `out` (resized if needed; no allocation when it has the size already: a
-  /// session maps every frame's result out).
-  void ToNew(const Positions& input, Positions& out) const;
+  /// Rows of `renumbered` in the input order, into `out` (resized if needed; no allocation when
+  /// it has the size already: a session maps every frame's result out). In parallel: call it
+  /// inside the run's Context::Run.
   void ToOld(const Positions& renumbered, Positions& out) const;
-  void ToNew(const Rotations& input, bool per_element, Rotations& out) const;
-  void ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const;
 };
 
 MeshOrdering LocalityOrdering(const Mesh& mesh);

@@ -71,7 +71,7 @@ TEST_CASE("level cascade: every stored level is in locality order and the maps f
   const TestSetup setup("[hierarchy]\nmin_vertices = 20\n");
   const MeshHierarchy built = setup.factory.MakeHierarchy()->Build(mesh, Context());
   REQUIRE(built.num_levels() >= 3);
-  LevelCascade cascade(mesh);
+  LevelCascade cascade(mesh, Context());
   cascade.SetHierarchy(built, setup.factory.MakeUpsampler());
   REQUIRE(cascade.num_levels() == built.num_levels());
   const std::vector<Index>& to_level = cascade.finest_ordering().new_vertex;
@@ -111,6 +111,6 @@ TEST_CASE("level cascade: every stored level is in locality order and the maps f
   }
   CHECK(in_level.targets == constraints.targets);
   Positions out;
-  cascade.ToInput(cascade.LevelMesh(0).vertices, out);
+  cascade.ToInput(cascade.LevelMesh(0).vertices, out, Context());
   CHECK(out == mesh.vertices);
 }
