@@ -9,9 +9,15 @@
 namespace harap {
 
 /// One level of a nested mesh hierarchy (the paper's T_l, V_l).
+///
+/// Numbering: Hierarchy::Build returns level 0 as the input mesh, in the input's numbering, and
+/// each coarse level in the order the builder made it. The optimizers' level cascade renumbers
+/// every level once for memory locality (solvers/optimizers/level_cascade.h): the hierarchy it
+/// stores, the upsamplers' states and the level solvers' states and constraints are all in that
+/// level numbering, and only the cascade's users map to and from the input's numbering.
 struct HierarchyLevel {
   /// The level's rest mesh: its own compact vertex set (coarse rest positions) and elements
-  /// indexing it. Level 0 is the input mesh itself.
+  /// indexing it. Level 0 is the input mesh itself (renumbered in a cascade).
   Mesh mesh;
 
   /// For each vertex of this level, the vertex of the next coarser level (l+1) that represents it
@@ -25,7 +31,8 @@ struct HierarchyLevel {
   std::vector<unsigned char> in_cluster;
 };
 
-/// The levels, finest first: levels[0] is the input mesh, levels.back() the coarsest.
+/// The levels, finest first: levels[0] is the input mesh, levels.back() the coarsest (numbering:
+/// see HierarchyLevel).
 struct MeshHierarchy {
   std::vector<HierarchyLevel> levels;
 

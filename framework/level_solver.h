@@ -122,9 +122,10 @@ struct ConstrainSummary {
 /// The solver of one mesh level: local/global ARAP, ADMM-PD, WRAPD, ... The optimizers drive one
 /// level solver per hierarchy level (classic and the flat ADMM optimizers: one level); an
 /// interactive session keeps them between solves. A level solver owns everything of its level:
-/// its numbering, energy, constrained system and factorization, and where its constrained
-/// vertices go (it places them itself, in its own numbering, as often as it needs). States go in
-/// and out in the level mesh's numbering.
+/// its energy, constrained system and factorization, and where its constrained vertices go (it
+/// places them itself, as often as it needs). Meshes, constraints and states are in the level
+/// mesh's numbering, which the level cascade has already made local (HierarchyLevel): a level
+/// solver works in it directly, with no renumbering of its own.
 ///
 /// Phases (the paper's Table 1): Precompute() is P, Constrain() is C (again for another
 /// constraint set), Solve() is S. MoveTargets() moves the constrained vertices' targets without

@@ -22,7 +22,8 @@ enum class UpsampleOutput {
 /// Turns the solution on a coarse level into the initial state of the next finer level
 /// (Section 5.1 of the paper).
 ///
-/// Contract: `fine.coarse_vertex` maps fine vertices to `coarse` vertices; `site` says whether
+/// Contract: `fine.coarse_vertex` maps fine vertices to `coarse` vertices (states and levels in
+/// one numbering: the level cascade's, HierarchyLevel); `site` says whether
 /// the rotations live on vertices or elements of each level. On return `fine_state.rotations`
 /// has one rotation per fine site and `fine_state.positions` one row per fine vertex (both are
 /// always filled: positions from the coarse solution by Eq. 6 where the output is rotations, so a

@@ -432,7 +432,8 @@ void PageSession::SendClusters(int level) {
   AppendU32(frame, static_cast<uint32_t>(level));
   AppendU32(frame, static_cast<uint32_t>(display_.vertices.size()));
   for (const Index v : display_.vertices) {
-    const Index coarse = level < hierarchy.num_levels() ? hierarchy.MapFinestVertex(v, level) : v;
+    const Index coarse =
+        level < hierarchy.num_levels() ? session_->session().CoarseVertex(v, level) : v;
     AppendU32(frame, coarse == kNoVertex ? 0xffffffffu : static_cast<uint32_t>(coarse));
   }
   send_(Outgoing{true, std::move(frame)});

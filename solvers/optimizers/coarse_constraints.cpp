@@ -8,7 +8,7 @@
 namespace harap {
 
 LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
-                                const Constraints& finest) {
+                                const Constraints& finest, const std::vector<Index>* listing) {
   const Mesh& mesh = hierarchy.levels[level].mesh;
   const Mesh& input = hierarchy.levels[0].mesh;
   std::vector<int> count(mesh.num_vertices(), 0);
@@ -32,8 +32,9 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
   }
   LevelConstraints result;
   result.planar = mesh.planar;
-  for (Index c = 0; c < mesh.num_vertices(); ++c) {
-    if (count[c] > 0) result.vertices.push_back(c);
+  const auto listed = [&](Index k) { return listing == nullptr ? k : (*listing)[k]; };
+  for (Index k = 0; k < mesh.num_vertices(); ++k) {
+    if (count[listed(k)] > 0) result.vertices.push_back(listed(k));
   }
   result.mean_target.resize(result.vertices.size(), 3);
   result.mean_offset.resize(result.vertices.size(), 3);
@@ -45,7 +46,8 @@ LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
   // Σ_m w_m ‖u_c − t_m‖² = W_c ‖u_c − t̄_c‖² + const with W_c = Σ_m w_m and t̄_c the weighted
   // mean: the coarse vertex stands for its members' pull. A hard member pins the vertex, which
   // makes the soft ones constant there.
-  for (Index c = 0; c < mesh.num_vertices(); ++c) {
+  for (Index k = 0; k < mesh.num_vertices(); ++k) {
+    const Index c = listed(k);
     if (soft_weight[c] > 0.0 && count[c] == 0) result.soft.vertices.push_back(c);
   }
   result.soft.targets.resize(static_cast<Index>(result.soft.vertices.size()), 3);
@@ -95,18 +97,6 @@ void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite 
   }
 }
 
-LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
-                                       const std::vector<Index>& new_vertex,
-                                       const std::vector<Index>& new_element) {
-  LevelConstraints renumbered = constraints;
-  for (Index& v : renumbered.vertices) v = new_vertex[v];
-  for (Index& v : renumbered.soft.vertices) v = new_vertex[v];
-  for (auto& elements : renumbered.incident_elements) {
-    for (Index& e : elements) e = new_element[e];
-  }
-  return renumbered;
-}
-
 void MoveMeanTargets(LevelConstraints& constraints, const Positions& mean_target) {
   HARAP_CHECK(mean_target.rows() == constraints.mean_target.rows(),
               "{} targets for {} constrained vertices", mean_target.rows(),
@@ -127,16 +117,17 @@ ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
   return ConstrainSummary{true, LinearSolver::RefactorRoute::kFull, system.num_unknowns(), seconds};
 }
 
-std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level,
-                                   const std::vector<double>& input_stiffness) {
-  if (input_stiffness.empty() || level == 0) return input_stiffness;
-  const Mesh& input = hierarchy.levels[0].mesh;
+std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level, const Mesh& input,
+                                   const std::vector<double>& input_stiffness,
+                                   const std::vector<Index>& input_to_level0) {
+  if (input_stiffness.empty()) return input_stiffness;
+  HARAP_CHECK(level > 0, "the input level's stiffness is the input's");
   const Mesh& mesh = hierarchy.levels[level].mesh;
   const std::vector<double> input_vertex = VertexStiffness(input, input_stiffness);
   std::vector<double> sum(mesh.num_vertices(), 0.0);
   std::vector<int> count(mesh.num_vertices(), 0);
   for (Index m = 0; m < input.num_vertices(); ++m) {
-    const Index c = hierarchy.MapFinestVertex(m, level);
+    const Index c = hierarchy.MapFinestVertex(input_to_level0[m], level);
     if (c == kNoVertex) continue;
     sum[c] += input_vertex[m];
     ++count[c];

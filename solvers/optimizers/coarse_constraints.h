@@ -18,8 +18,11 @@ namespace harap {
 /// offset of their finest-level members, so that target_c(R_c) = mean_target − R_c · mean_offset.
 /// Soft constraints map to soft ones: a coarse vertex without hard members takes the summed
 /// weight of its soft members and their weighted mean target.
+/// The constrained vertices are listed in the order of `listing` (all vertices of the level),
+/// ascending if it is null.
 LevelConstraints MapConstraints(const MeshHierarchy& hierarchy, int level,
-                                const Constraints& finest);
+                                const Constraints& finest,
+                                const std::vector<Index>* listing = nullptr);
 
 /// Fills constraints.incident_elements from `mesh` (the elements around each constrained vertex,
 /// in increasing order): what a per-element energy's coarse targets need (Eq. 11).
@@ -31,12 +34,6 @@ void FindIncidentElements(const Mesh& mesh, LevelConstraints& constraints);
 /// `rotations` is null.
 void PlaceConstrainedVertices(const LevelConstraints& constraints, RotationSite site,
                               const Rotations* rotations, Positions& positions);
-
-/// `constraints` with vertices and incident elements renumbered (a level solver's own
-/// numbering: new_vertex[v], new_element[e]).
-LevelConstraints RenumberedConstraints(const LevelConstraints& constraints,
-                                       const std::vector<Index>& new_vertex,
-                                       const std::vector<Index>& new_element);
 
 /// Replaces the mean targets of `constraints` by `mean_target`, which must have one row per
 /// constrained vertex (InternalError otherwise): a level solver's MoveTargets().
@@ -53,11 +50,14 @@ ConstrainSummary FactorGlobalStep(const GlobalStepSystem& system, int level,
                                   const Stopwatch& clock, std::unique_ptr<LinearSolver>& solver,
                                   Eigen::MatrixXd& rhs, Eigen::MatrixXd& x);
 
-/// The stiffness of `level` (framework/stiffness.h) from the input mesh's per-element factors:
-/// the input level's own; on a coarse level each vertex takes the mean of its input members'
-/// vertex factors (VertexStiffness) and each element the mean of its vertices', so a stiff region
-/// stays stiff where the clustering puts it (docs/energies.md, "Stiffness"). Empty in, empty out.
-std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level,
-                                   const std::vector<double>& input_stiffness);
+/// The stiffness of coarse level `level` > 0 (framework/stiffness.h) from the input mesh's
+/// per-element factors: each coarse vertex takes the mean of its input members' vertex factors
+/// (VertexStiffness) and each element the mean of its vertices', so a stiff region stays stiff
+/// where the clustering puts it (docs/energies.md, "Stiffness"). `input` and `input_stiffness`
+/// are in the input's numbering, `input_to_level0` maps its vertices to the hierarchy's level 0
+/// (the members are summed in the input's order). Empty in, empty out.
+std::vector<double> LevelStiffness(const MeshHierarchy& hierarchy, int level, const Mesh& input,
+                                   const std::vector<double>& input_stiffness,
+                                   const std::vector<Index>& input_to_level0);
 
 }  // namespace harap

@@ -53,7 +53,7 @@ std::string_view SessionOptions::FrameStartName(FrameStart start) {
 }
 
 struct DeformationSession::Level {
-  LevelState state;  ///< the last solution, in the mesh's numbering
+  LevelState state;  ///< the last solution, in the level numbering (level_cascade.h)
   bool has_solution = false;
   /// Coarse levels: the solver's mean targets are not yet mapped from the current targets.
   bool targets_stale = false;
@@ -71,12 +71,16 @@ struct DeformationSession::Level {
 DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory& factory,
                                        const SessionOptions& options, const Context& context,
                                        const std::vector<double>& stiffness)
-    : mesh_(mesh), factory_(factory), options_(options), context_(context), cascade_(mesh) {
+    : mesh_(mesh),
+      factory_(factory),
+      options_(options),
+      context_(context),
+      cascade_(mesh, context_) {
   ValidateStiffness(stiffness, mesh_, "the session's stiffness");
   Stopwatch clock;
   context_.Run([&] {
     diagonal_ = BoundingBoxDiagonal(mesh_);
-    start_positions_ = mesh_.vertices;
+    start_positions_ = cascade_.LevelMesh(0).vertices;
     Stopwatch phase;
     if (options_.hierarchical) {
       context_.ReportPhase("building the hierarchy");
@@ -94,12 +98,10 @@ DeformationSession::DeformationSession(const Mesh& mesh, const ComponentFactory&
       cascade_.set_solver(l, options_.optimizer.level_solver->CreateAnother());
       // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh);
       // every level keeps one system for all handle sets (handle edits).
-      const std::vector<double> coarse_stiffness =
-          l > 0 ? LevelStiffness(cascade_.hierarchy(), l, stiffness) : std::vector<double>{};
-      cascade_.solver(l).Precompute(
-          LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
-                     /*handle_edits=*/true, l > 0 ? &coarse_stiffness : &stiffness},
-          factory_, context_);
+      const std::vector<double> level_stiffness = cascade_.LevelStiffness(l, stiffness);
+      cascade_.solver(l).Precompute(LevelSetup{&cascade_.LevelMesh(l), l > 0 ? &mesh_ : nullptr, l,
+                                               /*handle_edits=*/true, &level_stiffness},
+                                    factory_, context_);
       setup_timings_.precompute += cascade_.solver(l).precompute_seconds();
     }
     cascade_.TakeRotationSite(solved_levels_.front());
@@ -111,8 +113,17 @@ DeformationSession::~DeformationSession() = default;
 
 int DeformationSession::num_levels() const { return cascade_.num_levels(); }
 
-const Positions& DeformationSession::positions() const {
+const Positions& DeformationSession::level_positions() const {
   return levels_[0]->has_solution ? levels_[0]->state.positions : start_positions_;
+}
+
+const Positions& DeformationSession::positions() const {
+  // Mapped out once per change of the finest state (a solve, SetPositions).
+  if (output_stale_) {
+    cascade_.ToInput(level_positions(), output_positions_, context_);
+    output_stale_ = false;
+  }
+  return output_positions_;
 }
 
 void DeformationSession::ValidateIndices(const std::vector<Index>& indices,
@@ -174,9 +185,10 @@ HandleEditResult DeformationSession::SetHandles(const std::vector<Index>& indice
                                                 const std::vector<double>& weights) {
   ValidateIndices(indices, "SetHandles");
   ValidateWeights(weights, indices.size(), "SetHandles");
-  const Positions& current = positions();
+  const Positions& current = level_positions();
+  const std::vector<Index>& to_level = cascade_.finest_ordering().new_vertex;
   Positions targets(indices.size(), 3);
-  for (size_t k = 0; k < indices.size(); ++k) targets.row(k) = current.row(indices[k]);
+  for (size_t k = 0; k < indices.size(); ++k) targets.row(k) = current.row(to_level[indices[k]]);
   return ApplyHandles(indices, std::move(targets), weights);
 }
 
@@ -260,7 +272,8 @@ void DeformationSession::SetPositions(const Positions& positions) {
   if (mesh_.planar && positions.col(2).cwiseAbs().maxCoeff() != 0.0) {
     throw InputError("SetPositions: the mesh is planar (z = 0) but the positions are not");
   }
-  start_positions_ = positions;
+  cascade_.ToLevel(positions, context_).swap(start_positions_);
+  output_stale_ = true;
   ++version_;
   preview_rotations_pending_ = false;
   for (const auto& level : levels_) {
@@ -284,6 +297,7 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
   handles_ = std::move(indices);
   targets_ = std::move(targets);
   weights_ = std::move(weights);
+  MapHandles();
   ++version_;
   try {
     return ConstrainLevels();
@@ -293,9 +307,20 @@ HandleEditResult DeformationSession::ApplyHandles(std::vector<Index> indices, Po
     handles_ = std::move(old_handles);
     targets_ = std::move(old_targets);
     weights_ = std::move(old_weights);
+    MapHandles();
     if (!handles_.empty()) ConstrainLevels();
     throw;
   }
+}
+
+void DeformationSession::MapHandles() {
+  const std::vector<Index>& to_level = cascade_.finest_ordering().new_vertex;
+  level_handles_.resize(handles_.size());
+  for (size_t k = 0; k < handles_.size(); ++k) level_handles_[k] = to_level[handles_[k]];
+}
+
+Constraints DeformationSession::LevelHandles() const {
+  return Constraints{level_handles_, targets_, weights_};
 }
 
 HandleEditResult DeformationSession::ConstrainLevels() {
@@ -303,7 +328,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
   HandleEditResult result;
   const ComponentFactory& factory = factory_;  // thread-safe: levels are constrained in parallel
   std::vector<HandleEditResult::Level> done(levels_.size());
-  const Constraints finest = constraints();
+  const Constraints finest = LevelHandles();
   const auto constrain = [&](int l) {
     Level& level = *levels_[l];
     LevelSolver& solver = cascade_.solver(l);
@@ -313,7 +338,7 @@ HandleEditResult DeformationSession::ConstrainLevels() {
       summary = solver.Constrain(LevelConstraints::Exact(finest, mesh_.planar), factory, context_);
     } else {
       // As the hierarchical optimizer's level setup: clusters holding a handle are constrained.
-      const LevelConstraints mapped = MapConstraints(cascade_.hierarchy(), l, finest);
+      const LevelConstraints mapped = cascade_.MapConstraints(l, finest);
       level.targets_stale = false;
       constrained = static_cast<Index>(mapped.vertices.size());
       summary = solver.Constrain(mapped, factory, context_);
@@ -382,7 +407,7 @@ void DeformationSession::UpdateCoarseTargets(int l) {
   if (l == 0 || !level.targets_stale) return;
   // The constrained vertices are the same (same handles and weights): only the mean targets and
   // the soft clusters' weighted mean targets move.
-  const LevelConstraints mapped = MapConstraints(cascade_.hierarchy(), l, constraints());
+  const LevelConstraints mapped = cascade_.MapConstraints(l, LevelHandles());
   cascade_.solver(l).MoveTargets(mapped.mean_target);
   if (!mapped.soft.empty()) cascade_.solver(l).MoveSoftTargets(mapped.soft.targets);
   level.targets_stale = false;
@@ -410,7 +435,7 @@ double DeformationSession::CurrentEnergy() {
   // Kept buffers: called after every preview frame of a drag, where fresh 10 MB arrays (page
   // faults, unmapping) slowed the next frames down.
   LevelState& state = energy_state_;
-  state.positions = positions();
+  state.positions = level_positions();
   if (levels_[0]->has_solution) {
     state.rotations = levels_[0]->state.rotations;
   } else {
@@ -431,6 +456,7 @@ bool DeformationSession::StraightPreview(bool preview, int top) {
                         cascade_.upsampler().output() == UpsampleOutput::kRotations &&
                         cascade_.upsampler().RotationsFollowCoarseVertex(cascade_.rotation_site());
   if (straight && preview_map_.empty()) {
+    // In the level numbering, like the finest level's rotation sites.
     preview_map_.resize(mesh_.num_vertices());
     for (Index v = 0; v < mesh_.num_vertices(); ++v) {
       preview_map_[v] = cascade_.hierarchy().MapFinestVertex(v, top);
@@ -529,7 +555,7 @@ void DeformationSession::FinishResult(const LevelState& final_state, bool previe
                               : ""));
   }
   result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
-  result.positions = final_state.positions;
+  cascade_.ToInput(final_state.positions, result.positions, context);
 }
 
 // One Solve() or Preview() down the cascade: where each level starts (StartLevel), its request
@@ -541,7 +567,7 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
       : s_(session), options_(options), preview_(preview), top_(top), context_(context) {
     straight_ = s_.StraightPreview(preview, top);
     // With per-vertex rotations the finest level's global step reads the coarse rotations
-    // straight into its own numbering (no finest rotations in the mesh's numbering at all).
+    // itself (no finest rotations written out at all).
     gathered_ = straight_ && s_.cascade_.solver(0).accepts_gathered_rotations();
   }
 
@@ -561,8 +587,8 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
     return s_.levels_[l] != nullptr && (!preview_ || l == top_ || l == 0);
   }
   LevelState& Start(int l, const LevelState* coarser, bool& from_rotations) override {
-    // (A stop on a coarse level finishes from the up-sampled state: gathered in the mesh's
-    // numbering.)
+    // (A stop on a coarse level finishes from the up-sampled state: gathered into the finest
+    // level's rotations.)
     gather_step_ = gathered_ && l == 0 && !user_stop;
     const bool coarser_previous_matches = coarse_before_level_ == l + 1 && s_.levels_[l] &&
                                           s_.levels_[l]->made_by_solve == coarse_before_solve_;
@@ -591,6 +617,7 @@ class DeformationSession::Frame final : public LevelCascade::Pass {
   }
   LevelState& Done(int l, LevelState& state, const LevelSolveResult* run) override {
     Level& level = *s_.levels_[l];
+    if (l == 0) s_.output_stale_ = true;
     level.has_solution = true;
     level.made_by_solve = s_.solves_;
     level.global_step_only = run != nullptr && global_step_only_;

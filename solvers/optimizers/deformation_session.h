@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "framework/config.h"
@@ -154,8 +155,16 @@ class DeformationSession {
 
   const Mesh& mesh() const { return mesh_; }
   int num_levels() const;
-  /// The hierarchy the session solves on (classic: no levels); level l < num_levels().
+  /// The hierarchy the session solves on (classic: no levels); level l < num_levels(). In the
+  /// level numbering (level_cascade.h): its level 0 is the mesh renumbered; CoarseVertex() maps
+  /// a vertex of the mesh.
   const MeshHierarchy& hierarchy() const { return cascade_.hierarchy(); }
+  /// The vertex of level `level` that mesh vertex `vertex` (the mesh's numbering) maps to, or
+  /// kNoVertex (MeshHierarchy::MapFinestVertex).
+  Index CoarseVertex(Index vertex, int level) const {
+    return cascade_.hierarchy().MapFinestVertex(cascade_.finest_ordering().new_vertex[vertex],
+                                                level);
+  }
   /// Levels that are solved (coarsest first); classic: {0}.
   const std::vector<int>& solved_levels() const { return solved_levels_; }
   const std::vector<Index>& handles() const { return handles_; }
@@ -164,7 +173,8 @@ class DeformationSession {
   const std::vector<double>& weights() const { return weights_; }
   /// The current handles as constraints (indices, targets, weights).
   Constraints constraints() const { return Constraints{handles_, targets_, weights_}; }
-  /// The current finest-level positions (the last solution, or the start).
+  /// The current finest-level positions (the last solution, or the start), in the mesh's
+  /// numbering.
   const Positions& positions() const;
   /// Timings of the construction: hierarchy and precompute (constrain and solve are 0).
   const PhaseTimings& setup_timings() const { return setup_timings_; }
@@ -184,6 +194,12 @@ class DeformationSession {
   HandleEditResult ApplyHandles(std::vector<Index> indices, Positions targets,
                                 std::vector<double> weights);
   HandleEditResult ConstrainLevels();
+  // level_handles_ from handles_.
+  void MapHandles();
+  // The handles as constraints in the level numbering.
+  Constraints LevelHandles() const;
+  // The finest positions in the level numbering (positions() maps them out).
+  const Positions& level_positions() const;
   /// Moves the finest level's targets after SetTargets() (same handles); the coarse levels'
   /// follow when a solve uses them (UpdateCoarseTargets).
   void UpdateTargets();
@@ -224,12 +240,17 @@ class DeformationSession {
   std::vector<std::unique_ptr<Level>> levels_;  ///< per hierarchy level; null if not solved
   std::vector<int> solved_levels_;              ///< coarsest first
   double diagonal_ = 0.0;
-  std::vector<Index> handles_;
+  std::vector<Index> handles_;        ///< the input's numbering
+  std::vector<Index> level_handles_;  ///< the same vertices in the level numbering
   Positions targets_;
   std::vector<double> weights_;  ///< empty (all hard) or one per handle, with a soft one
-  Positions start_positions_;    ///< finest positions without a solution (SetPositions)
-  long long version_ = 0;        ///< bumped by every change of handles, targets or positions
-  long long solves_ = 0;         ///< Solve() and Preview() calls so far
+  Positions start_positions_;    ///< finest positions without a solution (SetPositions; level
+                                 ///< numbering)
+  // positions()' copy in the input's numbering; stale once the finest state changed.
+  mutable Positions output_positions_;
+  mutable bool output_stale_ = true;
+  long long version_ = 0;  ///< bumped by every change of handles, targets or positions
+  long long solves_ = 0;   ///< Solve() and Preview() calls so far
   /// Solve()'s per-level states, kept between solves (see Run()).
   std::vector<LevelState> work_, scratch_;
   /// Preview() with an upsampler whose rotations follow the coarse vertex: each finest vertex's

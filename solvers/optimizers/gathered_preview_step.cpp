@@ -13,21 +13,6 @@
 
 namespace harap {
 
-const std::vector<Index>& GatheredPreviewStep::InternalSource(const std::vector<Index>& source,
-                                                              const Level& level) {
-  // Renumbered once per map (a session passes the same one every preview frame).
-  if (mesh_source_ != source) {
-    HARAP_CHECK(static_cast<Index>(source.size()) == level.energy.num_rotations(),
-                "{} rotation sources for {} sites", source.size(), level.energy.num_rotations());
-    mesh_source_ = source;
-    internal_source_.resize(source.size());
-    for (size_t s = 0; s < source.size(); ++s) {
-      internal_source_[s] = source[level.ordering.old_vertex[s]];
-    }
-  }
-  return internal_source_;
-}
-
 SolveSummary GatheredPreviewStep::Run(const Level& level, const std::vector<Index>& source,
                                       const Rotations& coarse, const std::vector<Index>& handles,
                                       const Positions& targets, Positions& positions,
@@ -39,19 +24,10 @@ SolveSummary GatheredPreviewStep::Run(const Level& level, const std::vector<Inde
   HARAP_CHECK(positions.rows() == n && targets.rows() == static_cast<Index>(handles.size()),
               "{} positions for {} vertices, {} targets for {} handles", positions.rows(), n,
               targets.rows(), handles.size());
-  Positions& u = positions_;
+  Positions& u = positions;
   Rotations& rotations = rotations_;
-  // Only the fixed rows are read (a direct solver ignores the rest; an iterative one starts
-  // from them all).
-  if (!level.solver.is_direct() || u.rows() != n) {
-    level.ordering.ToNew(positions, u);
-  } else {
-    for (Index v : level.system.fixed_vertices())
-      u.row(v) = positions.row(level.ordering.old_vertex[v]);
-  }
-  for (size_t k = 0; k < handles.size(); ++k) {
-    u.row(level.ordering.new_vertex[handles[k]]) = targets.row(static_cast<Index>(k));
-  }
+  for (size_t k = 0; k < handles.size(); ++k)
+    u.row(handles[k]) = targets.row(static_cast<Index>(k));
   RhsMap& map = rhs_map_;
   if (map.num_coarse != static_cast<Index>(coarse.size()) || map.source != source) {
     BuildRhsMap(level, source, static_cast<Index>(coarse.size()), context);
@@ -93,15 +69,6 @@ SolveSummary GatheredPreviewStep::Run(const Level& level, const std::vector<Inde
     }
     level.system.ScatterFree(reduced_x_, u);
   }
-  // Back to the mesh's numbering, in parallel (ToOld is a serial loop).
-  context.Run([&] {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, n, 4096),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index v = range.begin(); v != range.end(); ++v) {
-                          positions.row(v) = u.row(level.ordering.new_vertex[v]);
-                        }
-                      });
-  });
   return summary;
 }
 

@@ -8,15 +8,13 @@
 #include "framework/energy.h"
 #include "framework/linear_solver.h"
 #include "framework/types.h"
-#include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
 
 /// The finest level's global step of a preview straight from the coarsest level (the paper's
 /// coarse approximation, Fig. 15; LevelSolver::GlobalStepFromGathered): the rotations are not
-/// written out per site but gathered from a few coarse ones, and nothing is renumbered into the
-/// level's order and back per call but the fixed rows and the solution. The same arithmetic as
-/// a global step on the gathered rotations. Vertex rotation sites only.
+/// written out per site but gathered from a few coarse ones. The same arithmetic as a global
+/// step on the gathered rotations. Vertex rotation sites only.
 ///
 /// The right-hand side B(R) is linear in the rotations and, for the ARAP energies, of the form
 /// B_j = Σ_s R_s c_js over the sites s near vertex j; with the rotations gathered from a few
@@ -31,24 +29,17 @@ namespace harap {
 /// Keeps its buffers and the map between calls (a session's preview frames). Not thread-safe.
 class GatheredPreviewStep {
  public:
-  /// The level it solves on (a LocalGlobalSolver's parts, constrained and factored); the
-  /// energy, the system and the solver work in the internal numbering of `ordering`.
+  /// The level it solves on (a LocalGlobalSolver's parts, constrained and factored).
   struct Level {
     const Energy& energy;
     GlobalStepSystem& system;
     LinearSolver& solver;
-    const MeshOrdering& ordering;
     int level = 0;  ///< for error messages
   };
 
-  /// `source` in the mesh's numbering: mesh vertex v takes coarse[source[v]] (kNoVertex: the
-  /// identity). Renumbered into the level's order once per map.
-  const std::vector<Index>& InternalSource(const std::vector<Index>& source, const Level& level);
-
-  /// Internal rotation site s takes coarse[source[s]] (`source` in the internal numbering, one
-  /// per site); the fixed rows take `handles`' `targets` and, for the other fixed (pinned)
-  /// vertices, their rows of `positions`; the free rows of `positions` (the mesh's numbering)
-  /// receive the solution.
+  /// Rotation site (vertex) s takes coarse[source[s]] (kNoVertex: the identity; one per site);
+  /// the fixed rows take `handles`' `targets` and, for the other fixed (pinned) vertices, their
+  /// rows of `positions`; the free rows of `positions` receive the solution.
   SolveSummary Run(const Level& level, const std::vector<Index>& source, const Rotations& coarse,
                    const std::vector<Index>& handles, const Positions& targets,
                    Positions& positions, const Context& context);
@@ -61,7 +52,7 @@ class GatheredPreviewStep {
   void BuildRhsMap(const Level& level, const std::vector<Index>& source, Index num_coarse,
                    const Context& context);
 
-  // The right-hand side as a linear map of the coarse rotations: per internal vertex the
+  // The right-hand side as a linear map of the coarse rotations: per vertex the
   // entries [offset[j], offset[j+1]) of (cluster, w); cluster num_coarse stands for the identity
   // (sites without a source).
   struct RhsMap {
@@ -73,10 +64,8 @@ class GatheredPreviewStep {
     Rotations coarse;  ///< per call: the coarse rotations and the identity
   };
   RhsMap rhs_map_;
-  // InternalSource()'s map in the mesh's numbering and per internal site.
-  std::vector<Index> mesh_source_, internal_source_;
-  // Per-call buffers, in the internal numbering.
-  Positions positions_, rhs_;
+  // Per-call buffers.
+  Positions rhs_;
   Rotations rotations_;
   Eigen::MatrixXd reduced_rhs_, reduced_x_;
 };

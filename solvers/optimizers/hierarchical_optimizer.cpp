@@ -128,24 +128,25 @@ struct LevelSetupResult {
 };
 
 // P and C of level l (from whichever thread gets there first; see LevelSetupPipeline). Level 0
-// is the input mesh, so its setup needs no hierarchy.
+// is the input mesh (renumbered), so its setup needs no hierarchy. `constraints`: the problem's,
+// in level 0's numbering.
 LevelSetupResult SetUpLevel(int l, const HierarchicalOptimizer::Options& options,
                             const LevelCascade& cascade, const DeformationProblem& problem,
-                            const ComponentFactory& factory, const Context& context) {
+                            const Constraints& constraints, const ComponentFactory& factory,
+                            const Context& context) {
   Stopwatch clock;
   const Mesh& mesh = *problem.mesh;
-  const LevelConstraints constraints =
-      l == 0 ? LevelConstraints::Exact(problem.constraints, mesh.planar)
-             : MapConstraints(cascade.hierarchy(), l, problem.constraints);
-  const std::vector<double> coarse_stiffness =
-      l > 0 ? LevelStiffness(cascade.hierarchy(), l, problem.stiffness) : std::vector<double>{};
+  const LevelConstraints level_constraints = l == 0
+                                                 ? LevelConstraints::Exact(constraints, mesh.planar)
+                                                 : cascade.MapConstraints(l, constraints);
+  const std::vector<double> stiffness = cascade.LevelStiffness(l, problem.stiffness);
   LevelSetupResult setup;
   setup.solver = options.level_solver->CreateAnother();
   // Coarse levels' energies are normalized like the input mesh's (Energy::SetInputMesh).
-  setup.solver->Precompute(LevelSetup{&cascade.LevelMesh(l), l > 0 ? &mesh : nullptr, l, false,
-                                      l > 0 ? &coarse_stiffness : &problem.stiffness},
-                           factory, context);
-  setup.solver->Constrain(constraints, factory, context);
+  setup.solver->Precompute(
+      LevelSetup{&cascade.LevelMesh(l), l > 0 ? &mesh : nullptr, l, false, &stiffness}, factory,
+      context);
+  setup.solver->Constrain(level_constraints, factory, context);
   setup.precompute_seconds = setup.solver->precompute_seconds();
   setup.constrain_seconds = setup.solver->constrain_seconds();
   setup.seconds = clock.Seconds();
@@ -166,7 +167,7 @@ class OneShotPass final : public LevelCascade::Pass {
         initial_(std::move(initial)),
         context_(context),
         solved_(options.SolvedLevels(cascade.num_levels())),
-        diagonal_(BoundingBoxDiagonal(cascade.mesh())) {}
+        diagonal_(BoundingBoxDiagonal(cascade.input_mesh())) {}
 
   const std::vector<int>& solved_levels() const { return solved_; }
 
@@ -217,7 +218,10 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   Stopwatch total;
   OptimizeResult result;
   Positions initial = InitialPositions(problem);  // validates the constraints
-  LevelCascade cascade(*problem.mesh);
+  // The one renumbering (level_cascade.h): the problem goes in here, the positions out at the end.
+  LevelCascade cascade(*problem.mesh, context);
+  initial = cascade.ToLevel(initial, context);
+  const Constraints constraints = cascade.ToLevel(problem.constraints);
 
   // P and C of every solved level (Algorithm 2, first loop). With overlap_setup, a background
   // task sets the levels up from fine to coarse while the caller's thread sets up and solves the
@@ -238,7 +242,8 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   LevelSetupPipeline setup(
       {0},
       [&](int l) {
-        LevelSetupResult made = SetUpLevel(l, options_, cascade, problem, factory, context);
+        LevelSetupResult made =
+            SetUpLevel(l, options_, cascade, problem, constraints, factory, context);
         if (l == 0) {
           finest_setup = std::move(made);
         } else {
@@ -252,9 +257,11 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   Stopwatch clock;
   if (options_.hierarchical) {
     context.ReportPhase("building the hierarchy");
-    MeshHierarchy hierarchy = setup.Isolated(
-        context, [&] { return factory.MakeHierarchy()->Build(*problem.mesh, context); });
-    cascade.SetHierarchy(std::move(hierarchy), factory.MakeUpsampler());
+    // (The cascade renumbers the levels in parallel too.)
+    setup.Isolated(context, [&] {
+      cascade.SetHierarchy(factory.MakeHierarchy()->Build(*problem.mesh, context),
+                           factory.MakeUpsampler());
+    });
   } else {
     cascade.SetSingleLevel();
   }
@@ -295,7 +302,7 @@ OptimizeResult HierarchicalOptimizer::Optimize(const DeformationProblem& problem
   const LevelSolver& finest = cascade.solver(0);
   result.measures = finest.AuxiliaryMeasures(state, context);
   result.constraints = finest.constraint_report();
-  result.positions = std::move(state.positions);
+  cascade.ToInput(state.positions, result.positions, context);
   result.notes = DescribeConstraintHandling(result.constraints);
   result.notes.insert(result.notes.end(), level_notes.begin(), level_notes.end());
   result.timings.total = total.Seconds();

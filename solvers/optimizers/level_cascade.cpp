@@ -7,12 +7,17 @@
 #include <vector>
 
 #include "framework/error.h"
+#include "solvers/optimizers/coarse_constraints.h"
 
 namespace harap {
+
+LevelCascade::LevelCascade(const Mesh& mesh, const Context& context)
+    : input_mesh_(mesh), finest_(context.Run([&] { return LocalityOrdering(mesh); })) {}
 
 void LevelCascade::SetHierarchy(MeshHierarchy hierarchy, std::unique_ptr<Upsampler> upsampler) {
   HARAP_CHECK(upsampler != nullptr, "a hierarchy needs an upsampler");
   hierarchy_ = std::move(hierarchy);
+  as_built_ = RenumberForLocality(finest_, hierarchy_);
   upsampler_ = std::move(upsampler);
   solvers_.resize(hierarchy_.num_levels());
   setup_seconds_.resize(hierarchy_.num_levels(), 0.0);
@@ -30,6 +35,33 @@ void LevelCascade::set_solver(int l, std::unique_ptr<LevelSolver> solver, double
 
 void LevelCascade::TakeRotationSite(int coarsest_solved) {
   site_ = solvers_[coarsest_solved]->rotation_site();
+}
+
+Constraints LevelCascade::ToLevel(const Constraints& input) const {
+  Constraints renumbered = input;
+  const Index n = input_mesh_.num_vertices();
+  for (Index& v : renumbered.indices) {
+    HARAP_CHECK(v >= 0 && v < n, "constrained vertex {} out of range", v);
+    v = finest_.new_vertex[v];
+  }
+  return renumbered;
+}
+
+LevelConstraints LevelCascade::MapConstraints(int l, const Constraints& level0) const {
+  // Ascending as built: as_built_[l] lists the level's vertices in that order.
+  return harap::MapConstraints(hierarchy_, l, level0, &as_built_[l]);
+}
+
+std::vector<double> LevelCascade::LevelStiffness(int l,
+                                                 const std::vector<double>& input_stiffness) const {
+  if (input_stiffness.empty()) return {};
+  if (l > 0) {
+    return harap::LevelStiffness(hierarchy_, l, input_mesh_, input_stiffness, finest_.new_vertex);
+  }
+  std::vector<double> stiffness(input_stiffness.size());
+  for (size_t e = 0; e < stiffness.size(); ++e)
+    stiffness[e] = input_stiffness[finest_.old_element[e]];
+  return stiffness;
 }
 
 bool LevelCascade::Upsample(int l, const LevelState& coarse, LevelState& fine,

@@ -10,6 +10,7 @@
 #include "framework/mesh.h"
 #include "framework/optimizer.h"
 #include "framework/upsampler.h"
+#include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
 
@@ -25,16 +26,24 @@ namespace harap {
 /// still to come are not solved, the state is carried down to the finest level, and there the
 /// pass chooses between fitting the rotations (the result as it stands) and one iteration.
 ///
-/// Level 0 is the input mesh itself, so its solver can be set up before the hierarchy is built.
+/// Numbering: the cascade renumbers once, where its levels are made. Level 0 is the input mesh
+/// renumbered for memory locality (LocalityOrdering, made at construction, so level 0's solver
+/// can be set up before the hierarchy is built); SetHierarchy() renumbers every coarse level
+/// and the vertex maps between the levels likewise (RenumberForLocality). Every level mesh,
+/// the hierarchy, the upsampler's states, the level solvers' states and constraints are in that
+/// level numbering; the caller maps the problem in (ToLevel()) and the finest positions out
+/// (ToInput()) once, at its boundary.
 /// Not thread-safe; set_solver() of different levels from different threads is.
 class LevelCascade {
  public:
-  /// `mesh` (the input mesh, level 0) must outlive the cascade.
-  explicit LevelCascade(const Mesh& mesh) : mesh_(mesh) {}
+  /// `mesh` (the input mesh, in the caller's numbering) must outlive the cascade; level 0's
+  /// renumbering runs in `context`.
+  LevelCascade(const Mesh& mesh, const Context& context);
 
-  /// A hierarchy of the input mesh and its upsampler; without one the cascade is the input mesh
-  /// alone. Sizes the per-level slots (solvers, setup times); call before set_solver() of a
-  /// coarse level.
+  /// A hierarchy built on the input mesh (Hierarchy::Build, the input's numbering) and its
+  /// upsampler; without one the cascade is the input mesh alone. Renumbers the hierarchy's
+  /// levels into the level numbering and sizes the per-level slots (solvers, setup times); call
+  /// before set_solver() of a coarse level.
   void SetHierarchy(MeshHierarchy hierarchy, std::unique_ptr<Upsampler> upsampler);
   /// One level: the input mesh (a one-level run).
   void SetSingleLevel();
@@ -48,9 +57,34 @@ class LevelCascade {
 
   int num_levels() const { return static_cast<int>(solvers_.size()); }
   bool hierarchical() const { return upsampler_ != nullptr; }
-  const Mesh& mesh() const { return mesh_; }
-  const Mesh& LevelMesh(int l) const { return l > 0 ? hierarchy_.levels[l].mesh : mesh_; }
+  /// The input mesh, in the caller's numbering.
+  const Mesh& input_mesh() const { return input_mesh_; }
+  /// Level l's mesh, in the level numbering (level 0: the input mesh renumbered).
+  const Mesh& LevelMesh(int l) const { return l > 0 ? hierarchy_.levels[l].mesh : finest_.mesh; }
+  /// The hierarchy in the level numbering (levels[0].mesh is LevelMesh(0)).
   const MeshHierarchy& hierarchy() const { return hierarchy_; }
+  /// Level 0's numbering: new_vertex maps an input vertex to level 0, old_vertex back.
+  const MeshOrdering& finest_ordering() const { return finest_; }
+
+  /// The problem's constraints with their vertices in level 0's numbering (same order).
+  Constraints ToLevel(const Constraints& input) const;
+  /// Per-vertex rows of the input mesh in level 0's order.
+  Positions ToLevel(const Positions& input, const Context& context) const {
+    return context.Run([&] { return finest_.ToNew(input); });
+  }
+  /// The problem's constraints (`level0`: in level 0's numbering) on coarse level l > 0
+  /// (MapConstraints, coarse_constraints.h), listed in the order of the level's vertices as the
+  /// hierarchy built them: a level's system sums its constrained columns in list order, so the
+  /// arithmetic does not depend on the renumbering.
+  LevelConstraints MapConstraints(int l, const Constraints& level0) const;
+  /// Level l's per-element stiffness (framework/stiffness.h) from the input mesh's (its
+  /// numbering): level 0's renumbered, a coarse level's by LevelStiffness (coarse_constraints.h).
+  std::vector<double> LevelStiffness(int l, const std::vector<double>& input_stiffness) const;
+  /// Level 0's positions in the input's numbering (into `out`: no allocation when it has the
+  /// size already).
+  void ToInput(const Positions& level_positions, Positions& out, const Context& context) const {
+    context.Run([&] { finest_.ToOld(level_positions, out); });
+  }
   const Upsampler& upsampler() const { return *upsampler_; }
   RotationSite rotation_site() const { return site_; }
   bool has_solver(int l) const { return solvers_[l] != nullptr; }
@@ -102,8 +136,10 @@ class LevelCascade {
                   std::vector<std::string>& notes);
 
  private:
-  const Mesh& mesh_;
+  const Mesh& input_mesh_;
+  MeshOrdering finest_;  ///< level 0's numbering and mesh
   MeshHierarchy hierarchy_;
+  std::vector<std::vector<Index>> as_built_;  ///< per level: vertex as built → level numbering
   std::unique_ptr<Upsampler> upsampler_;
   RotationSite site_ = RotationSite::kVertex;
   std::vector<std::unique_ptr<LevelSolver>> solvers_;

@@ -67,33 +67,20 @@ void LocalGlobalSolver::Precompute(const LevelSetup& setup, const ComponentFacto
   energy_ = factory.MakeEnergy();
   data_term_ = nullptr;
   CheckCompatible(*energy_, setup.handle_edits);  // the run's check, for callers without one
-  ordering_ = LocalityOrdering(*setup.mesh);
   if (setup.stiffness != nullptr && !setup.stiffness->empty()) {
-    // In the level's own numbering, like its mesh.
-    std::vector<double> stiffness(setup.stiffness->size());
-    for (size_t e = 0; e < stiffness.size(); ++e) {
-      stiffness[e] = (*setup.stiffness)[ordering_.old_element[e]];
-    }
-    energy_->SetStiffness(std::move(stiffness));
+    energy_->SetStiffness(*setup.stiffness);
   }
   if (setup.input_mesh) energy_->SetInputMesh(*setup.input_mesh, context);
-  energy_->Precompute(ordering_.mesh, context);
+  energy_->Precompute(*setup.mesh, context);
   precompute_seconds_ = clock.Seconds();
   rhs_.resize(setup.mesh->num_vertices(), 3);
 }
 
 namespace {
 
-// `constrained` (the mesh's numbering) in the level's internal numbering.
-std::vector<Index> Renumbered(const std::vector<Index>& constrained, const MeshOrdering& ordering) {
-  const Index n = static_cast<Index>(ordering.new_vertex.size());
-  std::vector<Index> renumbered(constrained.size());
-  for (size_t k = 0; k < constrained.size(); ++k) {
-    HARAP_CHECK(constrained[k] >= 0 && constrained[k] < n, "constrained vertex {} out of range",
-                constrained[k]);
-    renumbered[k] = ordering.new_vertex[constrained[k]];
-  }
-  return renumbered;
+// Every index of `vertices` is a vertex of a mesh of `n` vertices.
+void CheckVertices(const std::vector<Index>& vertices, Index n) {
+  for (Index v : vertices) HARAP_CHECK(v >= 0 && v < n, "constrained vertex {} out of range", v);
 }
 
 }  // namespace
@@ -106,6 +93,8 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
               "{} constrained vertices but {} targets", constraints.vertices.size(),
               constraints.mean_target.rows());
   LevelConstraints mapped = constraints;
+  CheckVertices(mapped.vertices, setup_.mesh->num_vertices());
+  CheckVertices(mapped.soft.vertices, setup_.mesh->num_vertices());
   if (mapped.targets_follow_rotations() && energy_->rotation_site() == RotationSite::kElement) {
     FindIncidentElements(*setup_.mesh, mapped);
   }
@@ -116,21 +105,18 @@ ConstrainSummary LocalGlobalSolver::Constrain(const LevelConstraints& constraint
       setup_.handle_edits
           ? ConstrainMasked(mapped.vertices, anchored, data_term_changed, factory, context)
           : ConstrainEliminated(mapped.vertices, anchored, factory, context);
-  internal_ = RenumberedConstraints(mapped, ordering_.new_vertex, ordering_.new_element);
   constraints_ = std::move(mapped);
   return summary;
 }
 
 void LocalGlobalSolver::MoveTargets(const Positions& mean_target) {
   MoveMeanTargets(constraints_, mean_target);
-  internal_.mean_target = mean_target;
 }
 
 void LocalGlobalSolver::MoveSoftTargets(const Positions& targets) {
   HARAP_CHECK(data_term_ != nullptr, "level {}: soft targets moved before they were set", level_);
   data_term_->MoveSoftTargets(targets);
   constraints_.soft.targets = targets;
-  internal_.soft.targets = targets;
 }
 
 bool LocalGlobalSolver::SetDataTerm(const SoftTargets& soft) {
@@ -147,9 +133,7 @@ bool LocalGlobalSolver::SetDataTerm(const SoftTargets& soft) {
     data_term_ = wrapped.get();
     energy_ = std::move(wrapped);
   }
-  SoftTargets internal = soft;
-  internal.vertices = Renumbered(soft.vertices, ordering_);
-  return data_term_->SetSoftTargets(std::move(internal));
+  return data_term_->SetSoftTargets(soft);
 }
 
 ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>& constrained,
@@ -159,8 +143,8 @@ ConstrainSummary LocalGlobalSolver::ConstrainEliminated(const std::vector<Index>
   Stopwatch clock;
   context.ReportPhase(fmt::format("factoring level {}", level_));
   masked_ = nullptr;
-  auto system = std::make_unique<ConstrainedSystem>(energy_->system_matrix(),
-                                                    Renumbered(constrained, ordering_), anchored);
+  auto system =
+      std::make_unique<ConstrainedSystem>(energy_->system_matrix(), constrained, anchored);
   const ConstrainSummary summary =
       FactorGlobalStep(*system, level_, factory, context, clock, solver_, reduced_rhs_, reduced_x_);
   system_ = std::move(system);
@@ -183,11 +167,10 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
     masked_ = nullptr;
   }
   context.ReportPhase(fmt::format("{} level {}", masked_ ? "refactoring" : "factoring", level_));
-  const std::vector<Index> renumbered = Renumbered(constrained, ordering_);
   ConstrainSummary summary;
   if (masked_ == nullptr) {
     auto system = std::make_unique<MaskedSystem>(energy_->system_matrix());
-    system->SetConstrained(renumbered, anchored);
+    system->SetConstrained(constrained, anchored);
     masked_ = system.get();
     system_ = std::move(system);
     solver_ = factory.MakeLinearSolver(level_, masked_->num_unknowns());
@@ -198,7 +181,7 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
     reduced_x_.resize(system_->num_unknowns(), 3);
     summary.changed_rows = masked_->num_unknowns();
   } else {
-    std::vector<Index> changed = masked_->SetConstrained(renumbered, anchored);
+    std::vector<Index> changed = masked_->SetConstrained(constrained, anchored);
     if (!changed_values.empty()) {
       changed.insert(changed.end(), changed_values.begin(), changed_values.end());
       std::sort(changed.begin(), changed.end());
@@ -230,38 +213,23 @@ ConstrainSummary LocalGlobalSolver::ConstrainMasked(const std::vector<Index>& co
 }
 
 LocalGlobalSolver::RunResult LocalGlobalSolver::Run(
-    LevelState& caller_state, bool start_with_global_step, const LocalGlobalOptions& options,
+    LevelState& state, bool start_with_global_step, const LocalGlobalOptions& options,
     double diagonal, const Context& context,
     const TargetsFollowRotations& targets_follow_rotations) {
   HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
-  HARAP_CHECK(caller_state.positions.rows() == system_->num_vertices(),
-              "{} positions for {} vertices", caller_state.positions.rows(),
-              system_->num_vertices());
-  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
-  // The internal state's buffers are kept between runs (a session runs every frame).
-  LevelState& state = internal_state_;
-  ordering_.ToNew(caller_state.positions, state.positions);
-  ordering_.ToNew(caller_state.rotations, per_element, state.rotations);
-  const RunResult result =
-      Iterate(state, start_with_global_step, options, diagonal, context, targets_follow_rotations);
-  ordering_.ToOld(state.positions, caller_state.positions);
-  ordering_.ToOld(state.rotations, per_element, caller_state.rotations);
-  return result;
+  HARAP_CHECK(state.positions.rows() == system_->num_vertices(), "{} positions for {} vertices",
+              state.positions.rows(), system_->num_vertices());
+  return Iterate(state, start_with_global_step, options, diagonal, context,
+                 targets_follow_rotations);
 }
 
 double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context) {
-  // In the level's kept buffers: a session evaluates CurrentEnergy() after every preview frame,
-  // where fresh 10 MB arrays per call (page faults, unmapping) slowed the next frames down.
-  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
-  ordering_.ToNew(state.positions, internal_state_.positions);
-  ordering_.ToNew(state.rotations, per_element, internal_state_.rotations);
-  Rotations& rotations = internal_state_.rotations;
-  if (static_cast<Index>(rotations.size()) != energy_->num_rotations()) {
-    rotations.assign(energy_->num_rotations(), Rotation::Identity());
+  HARAP_CHECK(state.positions.rows() == setup_.mesh->num_vertices(), "{} positions for {} vertices",
+              state.positions.rows(), setup_.mesh->num_vertices());
+  if (static_cast<Index>(state.rotations.size()) != energy_->num_rotations()) {
+    state.rotations.assign(energy_->num_rotations(), Rotation::Identity());
   }
-  const double energy = energy_->FitRotations(internal_state_.positions, rotations, context);
-  ordering_.ToOld(rotations, per_element, state.rotations);
-  return energy;
+  return energy_->FitRotations(state.positions, state.rotations, context);
 }
 
 LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveRequest& request,
@@ -286,9 +254,9 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
   }
   TargetsFollowRotations follow;
   if (request.targets_follow_rotations && constraints_.targets_follow_rotations()) {
-    // Before every global step, in the internal numbering of the iteration.
+    // Before every global step.
     follow = [this, site](const Rotations& rotations, Positions& positions) {
-      PlaceConstrainedVertices(internal_, site, &rotations, positions);
+      PlaceConstrainedVertices(constraints_, site, &rotations, positions);
     };
   }
   const RunResult run =
@@ -315,16 +283,12 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
 
 SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& context) {
   HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
-  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
   HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
               "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
-  Positions& u = internal_state_.positions;
-  Rotations& rotations = internal_state_.rotations;
-  ordering_.ToNew(state.positions, u);
-  ordering_.ToNew(state.rotations, per_element, rotations);
+  Positions& u = state.positions;
   system_->SetFixedPositions(u);
   if (system_->num_free() == 0) return SolveSummary{};
-  energy_->AssembleRhs(rotations, rhs_, context);
+  energy_->AssembleRhs(state.rotations, rhs_, context);
   system_->ReducedRhs(rhs_, reduced_rhs_);
   if (!solver_->is_direct()) system_->GatherFree(u, reduced_x_);
   const SolveSummary summary = solver_->Solve(reduced_rhs_, reduced_x_, context);
@@ -333,13 +297,12 @@ SolveSummary LocalGlobalSolver::GlobalStep(LevelState& state, const Context& con
         fmt::format("linear solve failed on level {}: {}", level_, summary.message));
   }
   system_->ScatterFree(reduced_x_, u);
-  ordering_.ToOld(u, state.positions);
   return summary;
 }
 
 GatheredPreviewStep::Level LocalGlobalSolver::GatheredLevel() {
   HARAP_CHECK(system_ != nullptr, "level {} run before it was constrained", level_);
-  return GatheredPreviewStep::Level{*energy_, *system_, *solver_, ordering_, level_};
+  return GatheredPreviewStep::Level{*energy_, *system_, *solver_, level_};
 }
 
 SolveSummary LocalGlobalSolver::GatheredGlobalStep(const std::vector<Index>& source,
@@ -357,12 +320,11 @@ LevelSolveResult LocalGlobalSolver::GlobalStepFromGathered(LevelState& state,
   HARAP_CHECK(accepts_gathered_rotations(),
               "level {}: gathered rotations for a level that cannot take them", level_);
   PlaceConstrainedVertices(constraints_, energy_->rotation_site(), nullptr, state.positions);
-  // In the level's own numbering; the state's rotations are left as they are.
-  const GatheredPreviewStep::Level level = GatheredLevel();
+  // The state's rotations are left as they are.
   LevelSolveResult result;
-  result.linear_solves.Add(gathered_step_.Run(level, gathered_step_.InternalSource(source, level),
-                                              coarse, constraints_.vertices,
-                                              constraints_.mean_target, state.positions, context));
+  result.linear_solves.Add(gathered_step_.Run(GatheredLevel(), source, coarse,
+                                              constraints_.vertices, constraints_.mean_target,
+                                              state.positions, context));
   result.iterations = 1;
   result.energy = std::numeric_limits<double>::quiet_NaN();
   return result;
@@ -379,19 +341,9 @@ bool LocalGlobalSolver::accepts_gathered_rotations() const {
 
 std::map<std::string, double> LocalGlobalSolver::AuxiliaryMeasures(const LevelState& state,
                                                                    const Context& context) const {
-  const bool per_element = energy_->rotation_site() == RotationSite::kElement;
   HARAP_CHECK(static_cast<Index>(state.rotations.size()) == energy_->num_rotations(),
               "{} rotations for {} sites", state.rotations.size(), energy_->num_rotations());
-  // Run() and FitRotations() leave the state they handed back in internal_state_ (the
-  // internal numbering): used as it is when it still matches, instead of a ~100 bytes per
-  // vertex copy made at the end of a run, when memory peaks.
-  if (ordering_.IsToNew(state.positions, internal_state_.positions) &&
-      ordering_.IsToNew(state.rotations, per_element, internal_state_.rotations)) {
-    return energy_->AuxiliaryMeasures(internal_state_.positions, internal_state_.rotations,
-                                      context);
-  }
-  return energy_->AuxiliaryMeasures(ordering_.ToNew(state.positions),
-                                    ordering_.ToNew(state.rotations, per_element), context);
+  return energy_->AuxiliaryMeasures(state.positions, state.rotations, context);
 }
 
 LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(

@@ -15,7 +15,6 @@
 #include "solvers/optimizers/anderson_acceleration.h"
 #include "solvers/optimizers/gathered_preview_step.h"
 #include "solvers/optimizers/newton_cg.h"
-#include "solvers/optimizers/vertex_ordering.h"
 
 namespace harap {
 
@@ -59,9 +58,9 @@ struct LocalGlobalOptions {
 /// that changed instead of factoring anew: interactive sessions). Newton steps need the
 /// eliminated system.
 ///
-/// Internally the level is renumbered for memory locality (vertex_ordering.h); states go in and
-/// out in the mesh's own numbering. Coarse constraint targets that follow the rotations are
-/// placed in the internal numbering, before every global step (Solve()).
+/// Everything is in the numbering of the level's mesh: the energy, the system, states and
+/// constraints, with no copies in another order. The level cascade hands it meshes already
+/// renumbered for memory locality (level_cascade.h, vertex_ordering.h).
 class LocalGlobalSolver final : public LevelSolver {
  public:
   static constexpr std::string_view kName = "local_global";
@@ -102,10 +101,9 @@ class LocalGlobalSolver final : public LevelSolver {
   /// "hessian_products" (with `newton`).
   LevelSolveResult Solve(LevelState& state, const LevelSolveRequest& request,
                          const Context& context) override;
-  /// The local step on `state` (the mesh's numbering): fits its rotations to its positions and
-  /// returns the energy.
+  /// The local step on `state`: fits its rotations to its positions and returns the energy.
   double FitRotations(LevelState& state, const Context& context) override;
-  /// Energy::AuxiliaryMeasures of `state` (the mesh's numbering, rotations fitted).
+  /// Energy::AuxiliaryMeasures of `state` (rotations fitted).
   std::map<std::string, double> AuxiliaryMeasures(const LevelState& state,
                                                   const Context& context) const override;
   RotationSite rotation_site() const override { return energy_->rotation_site(); }
@@ -146,7 +144,7 @@ class LocalGlobalSolver final : public LevelSolver {
   /// `targets_follow_rotations`, if set, is called before every global step with the current
   /// rotations and may move constrained vertices in the positions (Solve(): coarse constraint
   /// targets that follow the cluster rotations, Section 4); the reduced right-hand side then uses
-  /// the new positions. Both arrays are in the internal numbering of ordering(). Moving targets
+  /// the new positions. Moving targets
   /// make the iteration non-monotone in principle: after the first iteration that increases the
   /// energy, the targets stay where they are and the run continues as a plain, monotone
   /// local/global iteration.
@@ -156,19 +154,17 @@ class LocalGlobalSolver final : public LevelSolver {
                 const TargetsFollowRotations& targets_follow_rotations = {});
 
   /// One global step alone (the paper's coarse approximation, Fig. 15): the free positions of
-  /// `state` (the mesh's numbering) from its rotations, the fixed ones kept; rotations unchanged.
+  /// `state` from its rotations, the fixed ones kept; rotations unchanged.
   SolveSummary GlobalStep(LevelState& state, const Context& context);
-  /// The gathered preview step (GatheredPreviewStep::Run) on this level: `source` in the
-  /// internal numbering of ordering(), `positions` in the mesh's.
+  /// The gathered preview step (GatheredPreviewStep::Run) on this level.
   SolveSummary GatheredGlobalStep(const std::vector<Index>& source, const Rotations& coarse,
                                   const std::vector<Index>& handles, const Positions& targets,
                                   Positions& positions, const Context& context);
   /// Whether GatheredGlobalStep() evaluates its right-hand side from the probed linear map.
   bool gathered_rhs_is_linear() const { return gathered_step_.rhs_is_linear(); }
 
-  /// The level's energy; it works in the internal numbering of ordering().
+  /// The level's energy.
   const Energy& energy() const { return *energy_; }
-  const MeshOrdering& ordering() const { return ordering_; }
 
  private:
   RunResult Iterate(LevelState& state, bool start_with_global_step,
@@ -196,9 +192,7 @@ class LocalGlobalSolver final : public LevelSolver {
   LocalGlobalOptions options_;
   LevelSetup setup_;
   int level_ = 0;
-  LevelConstraints constraints_;  ///< the mesh's numbering (placement before a solve)
-  LevelConstraints internal_;     ///< the same in the internal numbering (moving targets)
-  MeshOrdering ordering_;
+  LevelConstraints constraints_;
   std::unique_ptr<Energy> energy_;
   EnergyWithDataTerm* data_term_ = nullptr;  ///< energy_ once it has soft targets
   std::unique_ptr<GlobalStepSystem> system_;
@@ -206,7 +200,6 @@ class LocalGlobalSolver final : public LevelSolver {
   bool needs_factorization_ = false;  ///< masked: a Refactor threw, factor anew next time
   std::unique_ptr<LinearSolver> solver_;
   // Per-iteration buffers, allocated once.
-  LevelState internal_state_;  ///< Run()'s and GlobalStep()'s state in the internal numbering
   Positions rhs_;
   Eigen::MatrixXd reduced_rhs_;
   Eigen::MatrixXd reduced_x_;

@@ -381,9 +381,9 @@ class RegistrationPass final : public LevelCascade::Pass {
     const Mesh& mesh = cascade_.LevelMesh(l);
     surface_ = l == 0 ? input_surface_ : LevelSurface(mesh);
     masses_ = VertexMasses(cascade_.hierarchical() ? &cascade_.hierarchy() : nullptr,
-                           cascade_.mesh(), input_surface_, l, mesh.num_vertices());
+                           cascade_.LevelMesh(0), input_surface_, l, mesh.num_vertices());
     landmarks_ = l == 0 ? LevelConstraints::Exact(landmark_input_, false).soft
-                        : MapConstraints(cascade_.hierarchy(), l, landmark_input_).soft;
+                        : cascade_.MapConstraints(l, landmark_input_).soft;
     finder_.Find(state_.positions, surface_, correspondences_, context_);
     Constrain(l, FirstStage(l));
   }
@@ -547,7 +547,14 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
   Stopwatch total;
   RegistrationResult result;
   const Mesh& source = *problem.source;
-  LevelCascade cascade(source);
+  // The one renumbering (level_cascade.h): the registration runs in the level numbering, the
+  // source and its landmarks mapped in here, the positions and distances out at the end.
+  LevelCascade cascade(source, context);
+  const RegistrationProblem level_problem{&cascade.LevelMesh(0),
+                                          problem.target,
+                                          cascade.ToLevel(problem.landmarks),
+                                          problem.make_point_search,
+                                          {}};
 
   Stopwatch clock;
   if (options.hierarchical) {
@@ -563,11 +570,10 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
     context.ReportPhase(fmt::format("precomputing level {}", l));
     Stopwatch setup;
     std::unique_ptr<LevelSolver> solver = level_solver.CreateAnother();
-    const std::vector<double> coarse_stiffness =
-        l > 0 ? LevelStiffness(cascade.hierarchy(), l, problem.stiffness) : std::vector<double>{};
-    solver->Precompute(LevelSetup{&cascade.LevelMesh(l), l > 0 ? &source : nullptr, l, false,
-                                  l > 0 ? &coarse_stiffness : &problem.stiffness},
-                       factory, context);
+    const std::vector<double> stiffness = cascade.LevelStiffness(l, problem.stiffness);
+    solver->Precompute(
+        LevelSetup{&cascade.LevelMesh(l), l > 0 ? &source : nullptr, l, false, &stiffness}, factory,
+        context);
     if (!solver->accepts_soft_targets()) {
       throw ConfigError(
           "registration needs a level solver with soft targets (optimizer.inner = "
@@ -580,7 +586,7 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
   cascade.TakeRotationSite(coarsest);
 
   Stopwatch solve_clock;
-  RegistrationPass pass(problem, options, cascade, factory, context);
+  RegistrationPass pass(level_problem, options, cascade, factory, context);
   std::vector<std::string> notes;
   LevelState& state = cascade.Run(coarsest, pass, context, result.run, notes);
   for (int l = 0; l < cascade.num_levels(); ++l) {
@@ -595,12 +601,14 @@ RegistrationResult Register(const RegistrationProblem& problem, const Registrati
   result.run.constraints = finest.constraint_report();
   result.run.notes = std::move(notes);
   const Correspondences& last = pass.last();
-  result.distance = last.distance;
+  result.distance.resize(last.distance.size());
+  const std::vector<Index>& to_input = cascade.finest_ordering().old_vertex;
+  for (size_t k = 0; k < last.distance.size(); ++k) result.distance[to_input[k]] = last.distance[k];
   result.correspondences = last.counts;
   result.residual_rms = std::sqrt(last.kept_squared_sum / std::max<Index>(1, last.counts.kept));
   result.residual_max = last.kept_max;
   result.correspondence_updates = pass.updates();
-  result.run.positions = std::move(state.positions);
+  cascade.ToInput(state.positions, result.run.positions, context);
   result.run.timings.total = total.Seconds();
   return result;
 }

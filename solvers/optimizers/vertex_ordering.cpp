@@ -5,10 +5,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <bit>
 #include <cstdint>
 #include <numeric>
 #include <utility>
+
+#include "framework/error.h"
 
 namespace harap {
 
@@ -52,6 +53,15 @@ std::vector<Index> StableOrderByKey(const std::vector<uint64_t>& key) {
   return order;
 }
 
+// body(k) for k in [0, count), in parallel (independent iterations).
+template <typename Body>
+void ForEach(Index count, Body&& body) {
+  tbb::parallel_for(tbb::blocked_range<Index>(0, count, 8192),
+                    [&](const tbb::blocked_range<Index>& range) {
+                      for (Index k = range.begin(); k != range.end(); ++k) body(k);
+                    });
+}
+
 }  // namespace
 
 MeshOrdering LocalityOrdering(const Mesh& mesh) {
@@ -62,12 +72,7 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   const double scale = extent.maxCoeff() > 0.0 ? ((1 << 21) - 1) / extent.maxCoeff() : 0.0;
   // The loops below are independent per vertex / element (the sorts are parallel already): in
   // parallel, the same permutation.
-  const auto for_each = [](Index count, auto&& body) {
-    tbb::parallel_for(tbb::blocked_range<Index>(0, count, 8192),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        for (Index k = range.begin(); k != range.end(); ++k) body(k);
-                      });
-  };
+  const auto for_each = [](Index count, auto&& body) { ForEach(count, body); };
   std::vector<uint64_t> keys(n);
   for_each(n, [&](Index v) {
     const Eigen::RowVector3d q = (mesh.vertices.row(v) - lo) * scale;
@@ -111,95 +116,51 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
 
 Positions MeshOrdering::ToNew(const Positions& input) const {
   Positions result(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    result.row(k) = input.row(old_vertex[k]);
+  ForEach(static_cast<Index>(old_vertex.size()),
+          [&](Index k) { result.row(k) = input.row(old_vertex[k]); });
   return result;
-}
-
-Positions MeshOrdering::ToOld(const Positions& renumbered) const {
-  Positions result(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    result.row(old_vertex[k]) = renumbered.row(k);
-  return result;
-}
-
-Rotations MeshOrdering::ToNew(const Rotations& input, bool per_element) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  if (input.size() != old.size()) return input;  // not set yet (e.g. empty): nothing to permute
-  Rotations result(input.size());
-  for (size_t k = 0; k < old.size(); ++k) result[k] = input[old[k]];
-  return result;
-}
-
-Rotations MeshOrdering::ToOld(const Rotations& renumbered, bool per_element) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  Rotations result(renumbered.size());
-  for (size_t k = 0; k < old.size(); ++k) result[old[k]] = renumbered[k];
-  return result;
-}
-
-void MeshOrdering::ToNew(const Positions& input, Positions& out) const {
-  out.resize(input.rows(), input.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    out.row(k) = input.row(old_vertex[k]);
 }
 
 void MeshOrdering::ToOld(const Positions& renumbered, Positions& out) const {
   out.resize(renumbered.rows(), renumbered.cols());
-  for (Index k = 0; k < static_cast<Index>(old_vertex.size()); ++k)
-    out.row(old_vertex[k]) = renumbered.row(k);
+  ForEach(static_cast<Index>(old_vertex.size()),
+          [&](Index k) { out.row(old_vertex[k]) = renumbered.row(k); });
 }
 
-void MeshOrdering::ToNew(const Rotations& input, bool per_element, Rotations& out) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  if (input.size() != old.size()) {  // not set yet (e.g. empty): nothing to permute
-    out = input;
-    return;
-  }
-  out.resize(input.size());
-  for (size_t k = 0; k < old.size(); ++k) out[k] = input[old[k]];
-}
-
-void MeshOrdering::ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  out.resize(renumbered.size());
-  for (size_t k = 0; k < old.size(); ++k) out[old[k]] = renumbered[k];
-}
-
-namespace {
-
-bool SameBits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
-
-}  // namespace
-
-bool MeshOrdering::IsToNew(const Positions& input, const Positions& renumbered) const {
-  const Index n = static_cast<Index>(old_vertex.size());
-  if (input.rows() != n || renumbered.rows() != n || input.cols() != renumbered.cols()) {
-    return false;
-  }
-  for (Index c = 0; c < input.cols(); ++c) {
-    for (Index k = 0; k < n; ++k) {
-      if (!SameBits(renumbered(k, c), input(old_vertex[k], c))) return false;
+std::vector<std::vector<Index>> RenumberForLocality(const MeshOrdering& finest,
+                                                    MeshHierarchy& hierarchy) {
+  const int levels = hierarchy.num_levels();
+  HARAP_CHECK(levels > 0 && hierarchy.levels[0].mesh.num_vertices() ==
+                                static_cast<Index>(finest.old_vertex.size()),
+              "a hierarchy of {} levels for a renumbering of {} vertices", levels,
+              finest.old_vertex.size());
+  // The coarse levels' orderings (their meshes moved into the levels below).
+  std::vector<MeshOrdering> coarse(levels);
+  for (int l = 1; l < levels; ++l) coarse[l] = LocalityOrdering(hierarchy.levels[l].mesh);
+  const auto ordering = [&](int l) -> const MeshOrdering& { return l == 0 ? finest : coarse[l]; };
+  std::vector<std::vector<Index>> built(levels);
+  for (int l = 0; l < levels; ++l) {
+    HierarchyLevel& level = hierarchy.levels[l];
+    const std::vector<Index>& old_vertex = ordering(l).old_vertex;
+    if (l + 1 < levels) {
+      const std::vector<Index>& new_coarse = ordering(l + 1).new_vertex;
+      std::vector<Index> coarse_vertex(old_vertex.size());
+      for (size_t k = 0; k < old_vertex.size(); ++k) {
+        const Index c = level.coarse_vertex[old_vertex[k]];
+        coarse_vertex[k] = c == kNoVertex ? kNoVertex : new_coarse[c];
+      }
+      level.coarse_vertex = std::move(coarse_vertex);
+      if (!level.in_cluster.empty()) {
+        std::vector<unsigned char> in_cluster(old_vertex.size());
+        for (size_t k = 0; k < old_vertex.size(); ++k)
+          in_cluster[k] = level.in_cluster[old_vertex[k]];
+        level.in_cluster = std::move(in_cluster);
+      }
     }
+    level.mesh = l == 0 ? finest.mesh : std::move(coarse[l].mesh);
+    if (l > 0) built[l] = std::move(coarse[l].new_vertex);
   }
-  return true;
-}
-
-bool MeshOrdering::IsToNew(const Rotations& input, bool per_element,
-                           const Rotations& renumbered) const {
-  const std::vector<Index>& old = per_element ? old_element : old_vertex;
-  // ToNew passes a rotation list of another size through unchanged; else both have old's size.
-  const bool passed_through = input.size() != old.size();
-  if (renumbered.size() != input.size()) return false;
-  for (size_t k = 0; k < renumbered.size(); ++k) {
-    const Rotation& source = passed_through ? input[k] : input[old[k]];
-    for (int e = 0; e < 9; ++e) {
-      if (!SameBits(renumbered[k].data()[e], source.data()[e])) return false;
-    }
-  }
-  return true;
+  return built;
 }
 
 }  // namespace harap

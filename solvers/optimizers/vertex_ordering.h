@@ -3,6 +3,7 @@
 
 #include <vector>
 
+#include "framework/hierarchy.h"
 #include "framework/mesh.h"
 
 namespace harap {
@@ -20,25 +21,23 @@ struct MeshOrdering {
   std::vector<Index> new_element;  ///< input element index → new element index
   Mesh mesh;                       ///< the renumbered mesh
 
-  /// Rows of `input` (#V×k, input order) in the new order, and back.
+  /// Rows of `input` (#V×k, input order) in the new order (in parallel, like ToOld).
   Positions ToNew(const Positions& input) const;
-  Positions ToOld(const Positions& renumbered) const;
-  /// Site rotations (per vertex or per element) in the new order, and back.
-  Rotations ToNew(const Rotations& input, bool per_element) const;
-  Rotations ToOld(const Rotations& renumbered, bool per_element) const;
-  /// The same into `out` (resized if needed; no allocation when it has the size already: a
-  /// session converts every frame's states).
-  void ToNew(const Positions& input, Positions& out) const;
+  /// Rows of `renumbered` in the input order, into `out` (resized if needed; no allocation when
+  /// it has the size already: a session maps every frame's result out). In parallel: call it
+  /// inside the run's Context::Run.
   void ToOld(const Positions& renumbered, Positions& out) const;
-  void ToNew(const Rotations& input, bool per_element, Rotations& out) const;
-  void ToOld(const Rotations& renumbered, bool per_element, Rotations& out) const;
-  /// Whether `renumbered` equals ToNew(input) bit for bit: O(n) and allocation-free, so a caller
-  /// holding a renumbered copy can use it instead of making another (a copy of a large level's
-  /// state is ~100 bytes per vertex).
-  bool IsToNew(const Positions& input, const Positions& renumbered) const;
-  bool IsToNew(const Rotations& input, bool per_element, const Rotations& renumbered) const;
 };
 
 MeshOrdering LocalityOrdering(const Mesh& mesh);
+
+/// Renumbers a hierarchy built on the input mesh (Hierarchy::Build) for locality: level 0 by
+/// `finest` (LocalityOrdering of the input mesh), every coarse level by its own
+/// LocalityOrdering; the vertex maps between the levels follow. Each level's mesh is then what
+/// LocalityOrdering makes of the level as built, so the level solvers' arithmetic does not depend
+/// on where the renumbering happens. Returns, per coarse level, index as built → new index (empty
+/// for level 0: that is finest.new_vertex).
+std::vector<std::vector<Index>> RenumberForLocality(const MeshOrdering& finest,
+                                                    MeshHierarchy& hierarchy);
 
 }  // namespace harap

@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <numeric>
 
 #include "framework/error.h"
 #include "solvers/optimizers/coarse_constraints.h"
@@ -167,18 +168,20 @@ TEST_CASE("stiffness reaches coarse levels through the clusters", "[optimizers][
   const std::vector<double> ones(tube.mesh.num_elements(), 1.0);
   std::vector<double> mixed(tube.mesh.num_elements(), 1.0);
   for (Index f = 0; f < tube.mesh.num_elements() / 2; ++f) mixed[f] = 9.0;
+  std::vector<Index> same(tube.mesh.num_vertices());  // the hierarchy's level 0 is the mesh
+  std::iota(same.begin(), same.end(), Index{0});
   for (int l = 1; l < hierarchy.num_levels(); ++l) {
-    const std::vector<double> uniform = LevelStiffness(hierarchy, l, ones);
+    const std::vector<double> uniform = LevelStiffness(hierarchy, l, tube.mesh, ones, same);
     REQUIRE(static_cast<Index>(uniform.size()) == hierarchy.levels[l].mesh.num_elements());
     for (const double s : uniform) CHECK(s == 1.0);
-    const std::vector<double> coarse = LevelStiffness(hierarchy, l, mixed);
+    const std::vector<double> coarse = LevelStiffness(hierarchy, l, tube.mesh, mixed, same);
     const auto [lo, hi] = std::minmax_element(coarse.begin(), coarse.end());
     CHECK(*lo >= 1.0);
     CHECK(*hi <= 9.0);
     CHECK(*hi > 5.0);  // the stiff half stays stiff
     CHECK(*lo < 5.0);  // and the soft half soft
   }
-  CHECK(LevelStiffness(hierarchy, 1, {}).empty());
+  CHECK(LevelStiffness(hierarchy, 1, tube.mesh, {}, same).empty());
 }
 
 TEST_CASE("bad stiffness is a clear error before any work", "[optimizers][stiffness]") {

@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: MIT
-// MeshOrdering::IsToNew, and LocalGlobalSolver::AuxiliaryMeasures, which uses it to measure the
-// final state from the level's kept internal copy instead of making another one.
+// The locality ordering of a mesh and the level cascade's one renumbering of its levels.
 #include "solvers/optimizers/vertex_ordering.h"
 
 #include <algorithm>
@@ -10,46 +9,20 @@
 #include <random>
 #include <vector>
 
-#include "solvers/optimizers/local_global_solver.h"
+#include "solvers/optimizers/level_cascade.h"
 #include "tests/support/test_factory.h"
 #include "tests/support/test_meshes.h"
 
 using namespace harap;
 using namespace harap::testing;
 
-namespace {
-
-Rotations RandomRotations(size_t count, unsigned seed) {
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<double> angle(-3.0, 3.0);
-  Rotations rotations(count);
-  for (Rotation& r : rotations) {
-    r = Eigen::AngleAxisd(angle(random),
-                          Eigen::Vector3d(angle(random), 1.0, angle(random)).normalized())
-            .toRotationMatrix();
-  }
-  return rotations;
-}
-
-}  // namespace
-
 TEST_CASE("vertex ordering: a Morton order of the vertices, elements by their first vertex",
           "[optimizers]") {
   // Vertices along the z-order curve, ties (equal positions) in input order; elements by their
   // smallest new vertex index, ties in input order (the radix and counting sorts must give
   // what sorting the (key, index) pairs gave).
-  Mesh mesh = Jittered(Grid(13, 11), 13, 0.3, 7);
-  {  // in a random order, so that locality has something to improve
-    std::vector<Index> to(mesh.num_vertices());
-    std::iota(to.begin(), to.end(), Index{0});
-    std::shuffle(to.begin(), to.end(), std::mt19937(3));
-    Positions shuffled(mesh.num_vertices(), 3);
-    for (Index v = 0; v < mesh.num_vertices(); ++v) shuffled.row(to[v]) = mesh.vertices.row(v);
-    mesh.vertices = shuffled;
-    for (Index e = 0; e < mesh.num_elements(); ++e) {
-      for (int a = 0; a < 3; ++a) mesh.elements(e, a) = to[mesh.elements(e, a)];
-    }
-  }
+  // In a random order, so that locality has something to improve.
+  Mesh mesh = Shuffled(Jittered(Grid(13, 11), 13, 0.3, 7), 3);
   mesh.vertices.row(5) = mesh.vertices.row(40);  // ties
   mesh.vertices.row(77) = mesh.vertices.row(40);
   const MeshOrdering ordering = LocalityOrdering(mesh);
@@ -90,74 +63,54 @@ TEST_CASE("vertex ordering: a Morton order of the vertices, elements by their fi
   }
 }
 
-TEST_CASE("vertex ordering: IsToNew recognizes exactly the renumbered copy", "[optimizers]") {
-  const Mesh mesh = Jittered(Grid(9, 7), 9, 0.2, 3);
-  const MeshOrdering ordering = LocalityOrdering(mesh);
-  const Positions input = Positions::Random(mesh.num_vertices(), 3);
-  const Positions renumbered = ordering.ToNew(input);
-  CHECK(ordering.IsToNew(input, renumbered));
-  CHECK_FALSE(ordering.IsToNew(renumbered, input));  // the ordering is not the identity
-  CHECK_FALSE(ordering.IsToNew(input, input.topRows(input.rows() - 1)));
-  CHECK_FALSE(ordering.IsToNew(input, Positions()));
-  Positions changed = renumbered;
-  changed(4, 2) = std::nextafter(changed(4, 2), 10.0);
-  CHECK_FALSE(ordering.IsToNew(input, changed));
-  // Bit for bit: −0 is not 0.
-  Positions zero = input;
-  zero(7, 1) = 0.0;
-  Positions negative_zero = ordering.ToNew(zero);
-  negative_zero(ordering.new_vertex[7], 1) = -0.0;
-  CHECK(ordering.IsToNew(zero, ordering.ToNew(zero)));
-  CHECK_FALSE(ordering.IsToNew(zero, negative_zero));
-
-  for (const bool per_element : {false, true}) {
-    const size_t sites = per_element ? static_cast<size_t>(mesh.num_elements())
-                                     : static_cast<size_t>(mesh.num_vertices());
-    const Rotations rotations = RandomRotations(sites, 5);
-    const Rotations renumbered_rotations = ordering.ToNew(rotations, per_element);
-    CHECK(ordering.IsToNew(rotations, per_element, renumbered_rotations));
-    Rotations off = renumbered_rotations;
-    off[3](1, 2) += 1e-15;
-    CHECK_FALSE(ordering.IsToNew(rotations, per_element, off));
-    CHECK_FALSE(ordering.IsToNew(rotations, per_element, Rotations()));
-  }
-  // ToNew passes rotations of another count (e.g. none yet) through unchanged.
-  CHECK(ordering.IsToNew(Rotations(), false, Rotations()));
-  const Rotations three = RandomRotations(3, 6);
-  CHECK(ordering.IsToNew(three, false, three));
-  CHECK_FALSE(ordering.IsToNew(three, false, RandomRotations(3, 7)));
-}
-
-TEST_CASE("local/global: auxiliary measures from the kept internal state equal those of copies",
+TEST_CASE("level cascade: every stored level is in locality order and the maps follow",
           "[optimizers]") {
-  const Mesh mesh = TetBox(3, 3, 4);
-  const TestSetup setup("[energy]\ntype = \"elements\"\n");
-  const Context context;
-  const double top = mesh.vertices.col(2).maxCoeff();
-  std::vector<Index> constrained;
-  for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    const double z = mesh.vertices(v, 2);
-    if (z == 0.0 || z == top) constrained.push_back(v);
+  // The hierarchy is built on the input's numbering; the cascade renumbers every level once
+  // (LocalityOrdering) and the vertex maps with them.
+  const Mesh mesh = Shuffled(Jittered(Grid(17, 15), 17, 0.3, 5), 11);
+  const TestSetup setup("[hierarchy]\nmin_vertices = 20\n");
+  const MeshHierarchy built = setup.factory.MakeHierarchy()->Build(mesh, Context());
+  REQUIRE(built.num_levels() >= 3);
+  LevelCascade cascade(mesh, Context());
+  cascade.SetHierarchy(built, setup.factory.MakeUpsampler());
+  REQUIRE(cascade.num_levels() == built.num_levels());
+  const std::vector<Index>& to_level = cascade.finest_ordering().new_vertex;
+  for (int l = 0; l < cascade.num_levels(); ++l) {
+    INFO("level " << l);
+    const Mesh& stored = cascade.LevelMesh(l);
+    CHECK(&stored == &cascade.LevelMesh(l));
+    CHECK(cascade.hierarchy().levels[l].mesh.vertices == stored.vertices);
+    CHECK(cascade.hierarchy().levels[l].mesh.elements == stored.elements);
+    // In locality order already: renumbering it again changes nothing.
+    const MeshOrdering again = LocalityOrdering(stored);
+    std::vector<Index> identity(stored.num_vertices());
+    std::iota(identity.begin(), identity.end(), Index{0});
+    CHECK(again.old_vertex == identity);
+    CHECK(again.mesh.elements == stored.elements);
+    // The same level as built: its vertices permuted, its elements with them.
+    REQUIRE(stored.num_vertices() == built.levels[l].mesh.num_vertices());
+    REQUIRE(stored.num_elements() == built.levels[l].mesh.num_elements());
+    CHECK(LocalityOrdering(built.levels[l].mesh).mesh.vertices == stored.vertices);
+    // Every input vertex reaches the same coarse vertex (by position) through either map.
+    for (Index v = 0; v < mesh.num_vertices(); ++v) {
+      const Index as_built = built.MapFinestVertex(v, l);
+      const Index as_stored = cascade.hierarchy().MapFinestVertex(to_level[v], l);
+      REQUIRE((as_built == kNoVertex) == (as_stored == kNoVertex));
+      if (as_built == kNoVertex) continue;
+      CHECK(built.levels[l].mesh.vertices.row(as_built) == stored.vertices.row(as_stored));
+    }
   }
-  // Two levels alike: one runs (and keeps its internal state), the other never ran.
-  LocalGlobalSolver ran(mesh, constrained, setup.factory, 0, context);
-  const LocalGlobalSolver fresh(mesh, constrained, setup.factory, 0, context);
-  LevelState state;
-  state.positions = mesh.vertices;
-  for (Index v = 0; v < mesh.num_vertices(); ++v) {
-    if (mesh.vertices(v, 2) == top) state.positions(v, 0) += 0.4;  // shear the top
+  // The boundary: constraints in, positions out.
+  Constraints constraints;
+  constraints.indices = {3, 50, 7};
+  constraints.targets = Positions::Random(3, 3);
+  const Constraints in_level = cascade.ToLevel(constraints);
+  for (size_t k = 0; k < constraints.indices.size(); ++k) {
+    CHECK(cascade.LevelMesh(0).vertices.row(in_level.indices[k]) ==
+          mesh.vertices.row(constraints.indices[k]));
   }
-  LocalGlobalOptions options;
-  options.max_iterations = 4;
-  ran.Run(state, false, options, 1.0, context);
-  REQUIRE(state.rotations.size() == static_cast<size_t>(mesh.num_elements()));
-  const auto kept = ran.AuxiliaryMeasures(state, context);
-  REQUIRE_FALSE(kept.empty());
-  CHECK(kept == fresh.AuxiliaryMeasures(state, context));
-  // A state changed since the run: measured from copies, like the other level does.
-  LevelState moved = state;
-  moved.positions(5, 1) += 0.25;
-  const auto after_move = ran.AuxiliaryMeasures(moved, context);
-  CHECK(after_move == fresh.AuxiliaryMeasures(moved, context));
-  CHECK(after_move != kept);
+  CHECK(in_level.targets == constraints.targets);
+  Positions out;
+  cascade.ToInput(cascade.LevelMesh(0).vertices, out, Context());
+  CHECK(out == mesh.vertices);
 }

@@ -424,3 +424,64 @@ TEST_CASE("session: mesh checks and edit summaries for the current handles", "[s
   CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kNumeric) == "numeric");
   CHECK(RefactorRouteName(LinearSolver::RefactorRoute::kPartial) == "partial");
 }
+
+TEST_CASE("one-shot runs and sessions answer in the input mesh's numbering", "[session]") {
+  // The same tube with its vertices in another order: the level solvers work in one locality
+  // order either way, so the result is the same, permuted back to each input's numbering.
+  SmallBentTube tube;
+  std::vector<Index> moved_to;
+  const Mesh shuffled = Shuffled(tube.mesh, 17, &moved_to);
+  DeformationProblem problem = tube.problem;
+  problem.mesh = &shuffled;
+  for (Index& v : problem.constraints.indices) v = moved_to[v];
+  const auto permuted_back = [&](const Positions& positions) {
+    Positions back(positions.rows(), 3);
+    for (Index v = 0; v < positions.rows(); ++v) back.row(v) = positions.row(moved_to[v]);
+    return back;
+  };
+  for (const char* config : {kClassic, kHierarchical}) {
+    DYNAMIC_SECTION(config) {
+      TestSetup setup(config);
+      const Context context = Context::WithThreads(2);
+      const OptimizeResult reference =
+          setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, context);
+      const OptimizeResult result =
+          setup.MakeOptimizer()->Optimize(problem, setup.factory, context);
+      const double scale = reference.positions.cwiseAbs().maxCoeff();
+      CHECK((permuted_back(result.positions) - reference.positions).cwiseAbs().maxCoeff() <
+            1e-9 * scale);
+      CHECK(Close(result.energy, reference.energy, 1e-9));
+
+      auto original = Session(setup, tube.mesh);
+      auto reordered = Session(setup, shuffled);
+      original->session().SetHandles(tube.problem.constraints.indices,
+                                     tube.problem.constraints.targets);
+      reordered->session().SetHandles(problem.constraints.indices, problem.constraints.targets);
+      const Positions solved = reordered->session().Solve().positions;
+      CHECK((permuted_back(solved) - original->session().Solve().positions).cwiseAbs().maxCoeff() <
+            1e-9 * scale);
+      CHECK(reordered->session().positions() == solved);
+      // Handles set where the vertices are now: their targets are their rows of positions().
+      const std::vector<Index> held = {moved_to[0], moved_to[5]};
+      reordered->session().SetHandles(held);
+      for (size_t k = 0; k < held.size(); ++k) {
+        CHECK(reordered->session().targets().row(static_cast<Index>(k)) == solved.row(held[k]));
+      }
+      if (std::string(config) == kHierarchical) {
+        // Clusters of mesh vertices: the same coarse vertex (by position) in either session.
+        const DeformationSession& a = original->session();
+        const DeformationSession& b = reordered->session();
+        for (int l = 1; l < a.num_levels(); ++l) {
+          for (Index v = 0; v < tube.mesh.num_vertices(); ++v) {
+            const Index ca = a.CoarseVertex(v, l), cb = b.CoarseVertex(moved_to[v], l);
+            REQUIRE((ca == kNoVertex) == (cb == kNoVertex));
+            if (ca == kNoVertex) continue;
+            CHECK((a.hierarchy().levels[l].mesh.vertices.row(ca) -
+                   b.hierarchy().levels[l].mesh.vertices.row(cb))
+                      .norm() < 1e-12);
+          }
+        }
+      }
+    }
+  }
+}

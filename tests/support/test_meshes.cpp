@@ -2,10 +2,13 @@
 #include "tests/support/test_meshes.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <random>
+#include <vector>
 
 namespace harap::testing {
 
@@ -112,6 +115,20 @@ Mesh Jittered(Mesh mesh, int n, double amount, unsigned seed) {
   for (Index v = 0; v < mesh.num_vertices(); ++v) {
     for (int d = 0; d < (mesh.planar ? 2 : 3); ++d) mesh.vertices(v, d) += step * offset(rng);
   }
+  return mesh;
+}
+
+Mesh Shuffled(Mesh mesh, unsigned seed, std::vector<Index>* moved_to) {
+  std::vector<Index> to(mesh.num_vertices());
+  std::iota(to.begin(), to.end(), Index{0});
+  std::shuffle(to.begin(), to.end(), std::mt19937(seed));
+  Positions shuffled(mesh.num_vertices(), 3);
+  for (Index v = 0; v < mesh.num_vertices(); ++v) shuffled.row(to[v]) = mesh.vertices.row(v);
+  mesh.vertices = shuffled;
+  for (Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < mesh.simplex_size(); ++a) mesh.elements(e, a) = to[mesh.elements(e, a)];
+  }
+  if (moved_to != nullptr) *moved_to = std::move(to);
   return mesh;
 }
 

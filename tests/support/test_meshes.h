@@ -25,6 +25,10 @@ Mesh TetBox(int nx, int ny, int nz, int tets_per_cube = 6);
 /// obtuse angles and negative cotangent weights, still valid for amount < ~0.25.
 Mesh Jittered(Mesh mesh, int n, double amount, unsigned seed);
 
+/// The mesh with its vertices in a deterministic random order: input vertex v becomes
+/// (*moved_to)[v] if given; the elements keep their order and the order of their corners.
+Mesh Shuffled(Mesh mesh, unsigned seed, std::vector<Index>* moved_to = nullptr);
+
 /// A closed, subdivided icosahedron of unit radius (`subdivisions` = 0 gives 12 vertices).
 Mesh Icosphere(int subdivisions);
 
