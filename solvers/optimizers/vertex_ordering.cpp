@@ -72,19 +72,18 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   const double scale = extent.maxCoeff() > 0.0 ? ((1 << 21) - 1) / extent.maxCoeff() : 0.0;
   // The loops below are independent per vertex / element (the sorts are parallel already): in
   // parallel, the same permutation.
-  const auto for_each = [](Index count, auto&& body) { ForEach(count, body); };
   std::vector<uint64_t> keys(n);
-  for_each(n, [&](Index v) {
+  ForEach(n, [&](Index v) {
     const Eigen::RowVector3d q = (mesh.vertices.row(v) - lo) * scale;
     keys[v] = Spread(static_cast<uint64_t>(q(0))) | Spread(static_cast<uint64_t>(q(1))) << 1 |
               Spread(static_cast<uint64_t>(q(2))) << 2;
   });
   ordering.old_vertex = StableOrderByKey(keys);  // ties broken by input index: deterministic
   ordering.new_vertex.resize(n);
-  for_each(n, [&](Index k) { ordering.new_vertex[ordering.old_vertex[k]] = k; });
+  ForEach(n, [&](Index k) { ordering.new_vertex[ordering.old_vertex[k]] = k; });
   ordering.mesh.planar = mesh.planar;
   ordering.mesh.vertices.resize(n, 3);
-  for_each(n, [&](Index k) {
+  ForEach(n, [&](Index k) {
     ordering.mesh.vertices.row(k) = mesh.vertices.row(ordering.old_vertex[k]);
   });
 
@@ -93,7 +92,7 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   // Elements by their smallest new vertex index, ties in input order: a counting sort (the keys
   // are < n).
   std::vector<Index> smallest(m);
-  for_each(m, [&](Index e) {
+  ForEach(m, [&](Index e) {
     Index s = n;
     for (int a = 0; a < size; ++a) s = std::min(s, ordering.new_vertex[mesh.elements(e, a)]);
     smallest[e] = s;
@@ -105,7 +104,7 @@ MeshOrdering LocalityOrdering(const Mesh& mesh) {
   for (Index e = 0; e < m; ++e) ordering.old_element[start[smallest[e]]++] = e;
   ordering.new_element.resize(m);
   ordering.mesh.elements.resize(m, size);
-  for_each(m, [&](Index k) {
+  ForEach(m, [&](Index k) {
     const Index e = ordering.old_element[k];
     ordering.new_element[e] = k;
     for (int a = 0; a < size; ++a)
