@@ -37,6 +37,9 @@
 #include "runner/experiment.h"
 #include "runner/process.h"
 #include "runner/runner.h"
+#ifdef HARAP_HAVE_CHOLMOD
+#include "solvers/linear/cholmod_solver.h"
+#endif
 
 namespace {
 
@@ -362,6 +365,11 @@ CLI::App* AddReportCommand(CLI::App& app, ReportArguments& report_args) {
 
 int main(int argc, char** argv) {
   SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
+#ifdef HARAP_HAVE_CHOLMOD
+  // Nothing in this process has called BLAS yet and nothing else will: OpenBLAS's idle workers,
+  // started when it loaded, would only spin beside the run's threads (docs/solvers.md).
+  CholmodSolver::StopIdleNativeThreads();
+#endif
   CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
   app.require_subcommand(1);
 

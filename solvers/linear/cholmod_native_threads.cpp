@@ -8,6 +8,8 @@
 
 #include <mutex>
 
+#include "solvers/linear/cholmod_solver.h"
+
 namespace harap {
 namespace {
 
@@ -20,6 +22,8 @@ struct NativeThreadControls {
   SetInt omp_set_dynamic = nullptr;
   SetInt omp_set_num_threads = nullptr;
   SetInt openblas_set_num_threads = nullptr;
+  // OpenBLAS's own blas_thread_shutdown_ (what its fork handler calls): joins the idle workers.
+  GetInt blas_thread_shutdown = nullptr;
   // As the environment set it, read before harap changed anything: native_threads = 0 restores
   // it.
   int default_blas_threads = 0;
@@ -53,11 +57,27 @@ struct NativeThreadControls {
       openblas_set_num_threads = nullptr;
     } else {
       default_blas_threads = applied_blas_threads = openblas_get_num_threads();
+      blas_thread_shutdown = get("blas_thread_shutdown_");
     }
   }
 };
 
 }  // namespace
+
+void CholmodSolver::StopIdleNativeThreads() {
+  NativeThreadControls& controls = NativeThreadControls::Get();
+  if (controls.openblas_set_num_threads == nullptr || controls.blas_thread_shutdown == nullptr) {
+    return;
+  }
+  const std::lock_guard lock(controls.blas_mutex);
+  // One thread first: openblas_set_num_threads starts the workers again when none run, so after
+  // this a one-thread factorization (applied_blas_threads already 1) never calls it.
+  if (controls.applied_blas_threads != 1) {
+    controls.openblas_set_num_threads(1);
+    controls.applied_blas_threads = 1;
+  }
+  controls.blas_thread_shutdown();
+}
 
 ScopedNativeThreads::ScopedNativeThreads(int threads) {
   NativeThreadControls& controls = NativeThreadControls::Get();

@@ -146,6 +146,55 @@ TEST_CASE("cholmod: native_threads caps CHOLMOD's OpenMP and BLAS threads, resul
   CHECK(RelativeDifference(environment, one) < 1e-12);
 }
 
+TEST_CASE("cholmod: StopIdleNativeThreads joins OpenBLAS's idle workers, more threads restart them",
+          "[solvers][cholmod]") {
+  const auto registry = LinearSolverRegistry();
+  HARAP_REQUIRE_CHOLMOD(registry);
+  using GetInt = int (*)();
+  const auto openblas_get_num_threads =
+      reinterpret_cast<GetInt>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  if (!openblas_get_num_threads || !dlsym(RTLD_DEFAULT, "blas_thread_shutdown_")) {
+    WARN("the BLAS here is not OpenBLAS: nothing to stop");
+    CholmodSolver::StopIdleNativeThreads();  // does nothing, and must not fail
+    return;
+  }
+  const Context context;
+  const SparseMatrix a = PinnedGridLaplacian(120, 120, 21);
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 29);
+  // On a thread of its own, whose OpenMP threads end with it: what stays is OpenBLAS's.
+  const auto solve = [&](int native_threads) {
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    std::thread worker([&] {
+      auto solver =
+          MakeSolver(registry, "cholmod",
+                     "mode = \"supernodal\"\nnative_threads = " + std::to_string(native_threads));
+      solver->Factorize(a, context);
+      CHECK(solver->Solve(b, x, context).success());
+    });
+    worker.join();
+    return x;
+  };
+  const Eigen::MatrixXd one = solve(1);  // TBB's workers, which stay, exist from here on
+  const Eigen::MatrixXd two = solve(2);  // OpenBLAS now has two threads: one worker
+  REQUIRE(openblas_get_num_threads() == 2);
+  const long with_worker = ThreadCount();
+  CholmodSolver::StopIdleNativeThreads();
+  CHECK(openblas_get_num_threads() == 1);
+  CHECK(ThreadCount() == with_worker - 1);
+  // One-thread factorizations leave OpenBLAS alone (no worker started again) ...
+  const Eigen::MatrixXd one_again = solve(1);
+  CHECK(ThreadCount() == with_worker - 1);
+  // ... and one with more threads starts them again and computes the same.
+  const Eigen::MatrixXd two_again = solve(2);
+  CHECK(openblas_get_num_threads() == 2);
+  CHECK(ThreadCount() == with_worker);
+  CHECK(RelativeResidual(a, b, one) < 1e-10);
+  CHECK(RelativeDifference(two, one) < 1e-12);
+  CHECK(RelativeDifference(two_again, two) == 0);
+  CHECK(RelativeDifference(one_again, one) == 0);
+  CholmodSolver::StopIdleNativeThreads();
+}
+
 TEST_CASE("cholmod: every mode × ordering gives the same solution", "[solvers][cholmod]") {
   const auto registry = LinearSolverRegistry();
   HARAP_REQUIRE_CHOLMOD(registry);
