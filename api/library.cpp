@@ -8,6 +8,9 @@
 #include "io/builtin_meshes.h"
 #include "io/mesh_repair.h"
 #include "solvers/optimizers/registration.h"
+#ifdef HARAP_HAVE_CHOLMOD
+#include "solvers/linear/cholmod_solver.h"
+#endif
 
 namespace harap {
 
@@ -91,6 +94,12 @@ EnergyEvaluation EvaluateEnergy(const Registries& registries, const Mesh& rest, 
   });
   result.per_element = energy->rotation_site() == RotationSite::kElement;
   return result;
+}
+
+void StopIdleNativeThreads() {
+#ifdef HARAP_HAVE_CHOLMOD
+  CholmodSolver::StopIdleNativeThreads();
+#endif
 }
 
 }  // namespace harap

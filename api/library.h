@@ -58,4 +58,10 @@ struct EnergyEvaluation {
 EnergyEvaluation EvaluateEnergy(const Registries& registries, const Mesh& rest, const Positions& u,
                                 const ConfigNode& config, int threads);
 
+/// For a program that owns its process (the `harap` command), called before anything uses BLAS:
+/// joins the idle worker threads of the BLAS behind CHOLMOD, which otherwise spin beside the
+/// run's threads (CholmodSolver::StopIdleNativeThreads; docs/solvers.md, "Why native_threads =
+/// 1"). Not for a library inside a host program, which may be using the same BLAS.
+void StopIdleNativeThreads();
+
 }  // namespace harap

@@ -17,6 +17,7 @@
 #include "api/builtins.h"
 #include "api/component_factory.h"
 #include "api/deform.h"
+#include "api/library.h"
 #include "cli/cli_output.h"
 #include "cli/drag_command.h"
 #include "cli/handles_command.h"
@@ -37,9 +38,6 @@
 #include "runner/experiment.h"
 #include "runner/process.h"
 #include "runner/runner.h"
-#ifdef HARAP_HAVE_CHOLMOD
-#include "solvers/linear/cholmod_solver.h"
-#endif
 
 namespace {
 
@@ -365,11 +363,9 @@ CLI::App* AddReportCommand(CLI::App& app, ReportArguments& report_args) {
 
 int main(int argc, char** argv) {
   SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
-#ifdef HARAP_HAVE_CHOLMOD
   // Nothing in this process has called BLAS yet and nothing else will: OpenBLAS's idle workers,
   // started when it loaded, would only spin beside the run's threads (docs/solvers.md).
-  CholmodSolver::StopIdleNativeThreads();
-#endif
+  StopIdleNativeThreads();
   CLI::App app{"harap: hierarchical As-Rigid-As-Possible deformation of large meshes"};
   app.require_subcommand(1);
 
