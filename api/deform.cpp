@@ -32,9 +32,8 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
   outcome.solver = factory.solver_name();
   outcome.resolved_config = config.ToToml();
 
-  Context context = Context::WithThreads(options.threads);
+  Context context = options.MakeContext();
   outcome.threads = context.threads();
-  context.phase_callback = options.phase;
   context.iteration_callback = [&](const IterationSummary& summary) {
     outcome.trace.push_back(
         {summary.seconds, summary.energy, summary.level, summary.inverted_elements});

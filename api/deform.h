@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "api/run_options.h"
 #include "framework/config.h"
 #include "framework/optimizer.h"
 #include "framework/registries.h"
@@ -24,14 +25,10 @@ struct TraceEntry {
       -1;  ///< ADMM optimizers: det F < 0 after the iteration (−1: not counted)
 };
 
-struct DeformOptions {
-  int threads = 0;  ///< 0: all hardware threads.
-  /// Called for every iteration (after the trace is recorded), e.g. for a progress display;
-  /// returning kStop ends the run after that iteration (e.g. on Ctrl-C).
-  IterationCallback progress;
-  /// Receives the phases of the run (checking the mesh, the optimizer's hierarchy, precompute
-  /// and factorization per level); see Context::phase_callback. May be empty.
-  PhaseCallback phase;
+/// The threads and callbacks (RunOptions: `progress` is called after the iteration is recorded in
+/// the trace; the phases are checking the mesh, the optimizer's hierarchy, precompute and
+/// factorization per level), and:
+struct DeformOptions : RunOptions {
   /// Compute the extreme eigenvalues of every solved level's reduced global-step matrix (A and
   /// its Jacobi scaling; Spectra, see solvers/spectral_bounds.h). The matrices are copied during
   /// the run and analysed after it, so the run's timings do not include the analysis.

@@ -134,10 +134,8 @@ RegisterOutcome RunRegister(const Registries& registries, const Mesh& source,
   }
   outcome.resolved_config = config.ToToml();
 
-  Context context = Context::WithThreads(options.threads);
+  Context context = options.MakeContext();
   outcome.threads = context.threads();
-  context.phase_callback = options.phase;
-  context.iteration_callback = options.progress;
   context.ReportPhase("building the target's search tree");
   Stopwatch clock;
   const std::unique_ptr<ClosestPointSearch> search =

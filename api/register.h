@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "api/run_options.h"
 #include "framework/closest_points.h"
 #include "framework/config.h"
 #include "framework/context.h"
@@ -37,11 +38,8 @@ RegistrationTarget ReadRegistrationTarget(const std::filesystem::path& file);
 /// `#` comments and blank lines skipped. Throws InputError naming the file and line.
 Constraints ReadLandmarks(const std::filesystem::path& file);
 
-struct RegisterOptions {
-  int threads = 0;  ///< 0: all hardware threads.
-  /// Every local/global iteration (level, energy, ...); kStop ends the run (e.g. on Ctrl-C).
-  IterationCallback progress;
-  PhaseCallback phase;
+/// The threads and callbacks (RunOptions: `progress` gets every local/global iteration), and:
+struct RegisterOptions : RunOptions {
   Constraints landmarks;          ///< source vertex → target point (ReadLandmarks)
   std::vector<double> stiffness;  ///< per source element, or empty
 };

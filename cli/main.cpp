@@ -89,11 +89,7 @@ int Deform(const DeformArguments& args) {
   DeformOptions options;
   options.threads = args.threads;
   options.diagnostics = args.diagnostics;
-  options.phase = progress.AsPhaseCallback();
-  options.progress = [&](const IterationSummary& s) {
-    progress.Iteration(s);
-    return InterruptGuard::Requested() ? CallbackAction::kStop : CallbackAction::kContinue;
-  };
+  progress.Follow(options, InterruptGuard::Requested);
   DeformOutcome outcome = RunDeform(registries, scenario, config, options);
   outcome.interrupted = InterruptGuard::Requested();
 

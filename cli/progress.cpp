@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 namespace harap {
 
@@ -89,6 +90,14 @@ void ProgressDisplay::Finish() {
 PhaseCallback ProgressDisplay::AsPhaseCallback() {
   if (!options_.enabled) return {};
   return [this](std::string_view phase, double fraction) { Phase(phase, fraction); };
+}
+
+void ProgressDisplay::Follow(RunOptions& options, std::function<bool()> stop) {
+  options.phase = AsPhaseCallback();
+  options.progress = [this, stop = std::move(stop)](const IterationSummary& summary) {
+    Iteration(summary);
+    return stop() ? CallbackAction::kStop : CallbackAction::kContinue;
+  };
 }
 
 void ProgressDisplay::SweepStarted(int total, int skipped) {

@@ -6,12 +6,14 @@
 
 #include <condition_variable>
 #include <cstdio>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <string_view>
 #include <thread>
 #include <vector>
 
+#include "api/run_options.h"
 #include "framework/context.h"
 #include "runner/runner.h"
 
@@ -58,6 +60,9 @@ class ProgressDisplay final : public SweepObserver {
 
   /// A Context::phase_callback that forwards to Phase().
   PhaseCallback AsPhaseCallback();
+  /// Shows a one-shot run (deform, register): its phases and iterations go to this display, and
+  /// the run stops after the current iteration once `stop()` says so (e.g. after Ctrl-C).
+  void Follow(RunOptions& options, std::function<bool()> stop);
 
   // SweepObserver
   void SweepStarted(int total, int skipped) override;

@@ -92,11 +92,7 @@ inline int RunRegisterCommand(const RegisterCommandArguments& a) {
   options.threads = a.threads;
   if (!a.landmarks.empty()) options.landmarks = ReadLandmarks(a.landmarks);
   const InterruptGuard interrupt;
-  options.phase = progress.AsPhaseCallback();
-  options.progress = [&](const IterationSummary& s) {
-    progress.Iteration(s);
-    return InterruptGuard::Requested() ? CallbackAction::kStop : CallbackAction::kContinue;
-  };
+  progress.Follow(options, InterruptGuard::Requested);
   RegisterOutcome outcome = RunRegister(MakeBuiltinRegistries(), source, target, config, options);
   outcome.interrupted = InterruptGuard::Requested();
   progress.Phase("writing the results");

@@ -3,13 +3,6 @@
 
 namespace harap {
 
-SpokesAndRimsEnergy::Options SpokesAndRimsEnergy::Options::FromConfig(OptionReader node) {
-  Options options;
-  options.weights = WeightOptions::FromConfig(node, options.weights);
-  node.RejectUnknownKeys();
-  return options;
-}
-
 void SpokesAndRimsEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                                   double& constant) const {
   AddSpokesAndRimsFace(face, 1.0, a_values, coefficients, constant);

@@ -17,18 +17,15 @@ namespace harap {
 /// One rotation per vertex; every edge of every incident face (spokes and rims) enters the
 /// vertex's cell. A = 3·L with L the cotangent Laplacian (each face edge is seen by the three
 /// rotations of its face). Triangle meshes only. Degenerate triangles get zero weight.
-class SpokesAndRimsEnergy final : public CotangentArapEnergy {
+class SpokesAndRimsEnergy final : public WeightedCotangentEnergy<SpokesAndRimsEnergy> {
  public:
   static constexpr std::string_view kName = "spokes_and_rims";
+  static constexpr WeightOptions kDefaultWeights{WeightScheme::kCotangent,
+                                                 WeightScheme::kAsInputLevel, 0.01};
+  /// Per-face sums: a negative edge weight does not take the energy out of its form.
+  static constexpr bool kNegativeWeightsBreakSquares = false;
 
-  struct Options {
-    /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
-    WeightOptions weights{WeightScheme::kCotangent, WeightScheme::kAsInputLevel, 0.01};
-    static Options FromConfig(OptionReader node);
-  };
-
-  explicit SpokesAndRimsEnergy(const Options& options)
-      : CotangentArapEnergy(kName, options.weights, /*negative_weights_break_squares=*/false) {}
+  explicit SpokesAndRimsEnergy(const Options& options) : WeightedCotangentEnergy(options) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

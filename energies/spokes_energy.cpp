@@ -3,13 +3,6 @@
 
 namespace harap {
 
-SpokesEnergy::Options SpokesEnergy::Options::FromConfig(OptionReader node) {
-  Options options;
-  options.weights = WeightOptions::FromConfig(node, options.weights);
-  node.RejectUnknownKeys();
-  return options;
-}
-
 void SpokesEnergy::AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,
                            double& constant) const {
   // Each face contributes ½cot of each corner to the weight w_bc of the opposite edge; the edge

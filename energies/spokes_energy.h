@@ -17,22 +17,19 @@ namespace harap {
 ///
 /// One rotation per vertex over the edges of its 1-ring (the spokes). A = 2·L with L the
 /// cotangent Laplacian (each edge is seen by the rotations of both ends). Triangle meshes only.
-class SpokesEnergy final : public CotangentArapEnergy {
+class SpokesEnergy final : public WeightedCotangentEnergy<SpokesEnergy> {
  public:
   static constexpr std::string_view kName = "spokes";
+  /// Intrinsic Delaunay weights on every level: the raw cotangent weights of obtuse angles make
+  /// the spokes energy unbounded below (docs/energies.md, "Weight schemes"), and the coarse
+  /// levels of a hierarchy keep non-negative weights even when `weights = "cotan"` reproduces the
+  /// published definition on the input mesh.
+  static constexpr WeightOptions kDefaultWeights{WeightScheme::kIntrinsicDelaunay,
+                                                 WeightScheme::kIntrinsicDelaunay, 0.01};
+  /// Each edge is its own square.
+  static constexpr bool kNegativeWeightsBreakSquares = true;
 
-  struct Options {
-    /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
-    /// Default intrinsic_delaunay on every level: the raw cotangent weights of obtuse angles
-    /// make the spokes energy unbounded below (docs/energies.md, "Weight schemes"), and the
-    /// coarse levels of a hierarchy keep non-negative weights even when `weights = "cotan"`
-    /// reproduces the published definition on the input mesh.
-    WeightOptions weights{WeightScheme::kIntrinsicDelaunay, WeightScheme::kIntrinsicDelaunay, 0.01};
-    static Options FromConfig(OptionReader node);
-  };
-
-  explicit SpokesEnergy(const Options& options)
-      : CotangentArapEnergy(kName, options.weights, /*negative_weights_break_squares=*/true) {}
+  explicit SpokesEnergy(const Options& options) : WeightedCotangentEnergy(options) {}
 
  private:
   void AddFace(const Face& face, double* a_values, Eigen::Vector3d* coefficients,

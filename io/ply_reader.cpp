@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -50,25 +51,38 @@ bool ParsePlyType(std::string_view name, PlyType& type) {
   return false;
 }
 
-size_t PlyTypeSize(PlyType type) {
+/// Calls f(T{}) with T the C++ type that stores a value of `type`: the one map from PLY types to
+/// C++ types, from which their sizes and the reading of their bytes follow.
+template <class F>
+auto WithPlyScalar(PlyType type, F&& f) {
   switch (type) {
     case PlyType::kInt8:
+      return f(int8_t{});
     case PlyType::kUInt8:
-      return 1;
+      return f(uint8_t{});
     case PlyType::kInt16:
+      return f(int16_t{});
     case PlyType::kUInt16:
-      return 2;
+      return f(uint16_t{});
     case PlyType::kInt32:
+      return f(int32_t{});
     case PlyType::kUInt32:
+      return f(uint32_t{});
     case PlyType::kFloat32:
-      return 4;
+      return f(float{});
     case PlyType::kFloat64:
-      return 8;
+      return f(double{});
   }
-  return 0;
+  throw InternalError("unknown PLY type");
 }
 
-bool IsIntegerType(PlyType type) { return type != PlyType::kFloat32 && type != PlyType::kFloat64; }
+size_t PlyTypeSize(PlyType type) {
+  return WithPlyScalar(type, [](auto scalar) { return sizeof(scalar); });
+}
+
+bool IsIntegerType(PlyType type) {
+  return WithPlyScalar(type, [](auto scalar) { return std::is_integral_v<decltype(scalar)>; });
+}
 
 struct PlyProperty {
   std::string name;
@@ -201,14 +215,7 @@ class PlyBodyReader {
     return true;
   }
   bool ReadDouble(PlyType type, double& value) {
-    if (binary_) {
-      int64_t integer = 0;
-      if (type == PlyType::kFloat32 || type == PlyType::kFloat64)
-        return ReadBinaryFloat(type, value);
-      if (!ReadBinary(type, integer)) return false;
-      value = static_cast<double>(integer);
-      return true;
-    }
+    if (binary_) return ReadBinary(type, value);
     const std::string_view token = NextToken();
     if (token.empty()) return false;
     if (!ParseDouble(token, value)) {
@@ -265,38 +272,18 @@ class PlyBodyReader {
     std::memcpy(&value, bytes, sizeof(T));
     return value;
   }
-  bool ReadBinary(PlyType type, int64_t& value) {
+  // Reads a binary value of `type` into `value` (an integer into int64_t: integer types only;
+  // any type into double: exact for every integer type).
+  template <class Value>
+  bool ReadBinary(PlyType type, Value& value) {
     unsigned char bytes[8];
     if (!Load(type, bytes)) return false;
-    switch (type) {
-      case PlyType::kInt8:
-        value = static_cast<int8_t>(bytes[0]);
-        break;
-      case PlyType::kUInt8:
-        value = bytes[0];
-        break;
-      case PlyType::kInt16:
-        value = As<int16_t>(bytes);
-        break;
-      case PlyType::kUInt16:
-        value = As<uint16_t>(bytes);
-        break;
-      case PlyType::kInt32:
-        value = As<int32_t>(bytes);
-        break;
-      case PlyType::kUInt32:
-        value = As<uint32_t>(bytes);
-        break;
-      case PlyType::kFloat32:
-      case PlyType::kFloat64:
-        HARAP_CHECK(false, "integer read of a floating-point PLY property");
-    }
-    return true;
-  }
-  bool ReadBinaryFloat(PlyType type, double& value) {
-    unsigned char bytes[8];
-    if (!Load(type, bytes)) return false;
-    value = type == PlyType::kFloat32 ? As<float>(bytes) : As<double>(bytes);
+    WithPlyScalar(type, [&](auto scalar) {
+      using T = decltype(scalar);
+      HARAP_CHECK(std::is_floating_point_v<Value> || std::is_integral_v<T>,
+                  "integer read of a floating-point PLY property");
+      value = static_cast<Value>(As<T>(bytes));
+    });
     return true;
   }
 

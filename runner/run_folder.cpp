@@ -17,16 +17,20 @@ std::string ReadText(const std::filesystem::path& file) {
   return buffer.str();
 }
 
+nlohmann::json ReadJson(const std::filesystem::path& file) {
+  try {
+    return nlohmann::json::parse(ReadText(file));
+  } catch (const nlohmann::json::exception& error) {
+    throw InputError(fmt::format("{}: {}", file.string(), error.what()));
+  }
+}
+
 nlohmann::json ReadPlan(const std::filesystem::path& dir) {
   const std::filesystem::path plan_file = dir / "experiment.json";
   if (!std::filesystem::exists(plan_file)) {
     throw InputError(fmt::format("{}: no experiment.json (not a harap run folder)", dir.string()));
   }
-  try {
-    return nlohmann::json::parse(ReadText(plan_file));
-  } catch (const nlohmann::json::exception& error) {
-    throw InputError(fmt::format("{}: {}", plan_file.string(), error.what()));
-  }
+  return ReadJson(plan_file);
 }
 
 }  // namespace harap::runner_internal

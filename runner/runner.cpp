@@ -50,8 +50,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using runner_internal::ReadPlan;
-using runner_internal::ReadText;
+using namespace runner_internal;
 using Clock = std::chrono::steady_clock;
 
 // "PID@HOST": what makes a temporary file's name unique among the processes of every host
@@ -658,12 +657,7 @@ MergeSummary MergeResults(const fs::path& dir) {
       ++summary.missing;
       continue;
     }
-    json report;
-    try {
-      report = json::parse(ReadText(report_file));
-    } catch (const json::exception& error) {
-      throw InputError(fmt::format("{}: {}", report_file.string(), error.what()));
-    }
+    const json report = ReadJson(report_file);
     (report["run"]["status"] == "ok" ? summary.succeeded : summary.failed)++;
     rows[run["index"].get<int>()] = CsvRow(report, grid_keys);
   }

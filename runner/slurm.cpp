@@ -40,8 +40,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using runner_internal::ReadPlan;
-using runner_internal::ReadText;
+using namespace runner_internal;
 
 bool OnPath(const std::string& program) {
   const char* path = std::getenv("PATH");
@@ -81,12 +80,7 @@ const char* kInstallAdvice =
 
 json ReadSubmissions(const fs::path& dir) {
   const fs::path file = dir / "slurm" / "submissions.json";
-  if (!fs::exists(file)) return json();
-  try {
-    return json::parse(ReadText(file));
-  } catch (const json::exception& error) {
-    throw InputError(fmt::format("{}: {}", file.string(), error.what()));
-  }
+  return fs::exists(file) ? ReadJson(file) : json();
 }
 
 // Per planned run of the folder's experiment.json: {index, id, name, status, error}.

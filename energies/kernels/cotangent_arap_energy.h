@@ -92,4 +92,28 @@ class CotangentArapEnergy : public CoupledQuadraticEnergy {
   EnergyWeights weights_;
 };
 
+/// The energies whose only options are their weights (spokes, spokes_and_rims): `Options` holds
+/// the weight options with the energy's defaults (Derived::kDefaultWeights), FromConfig reads them
+/// and rejects every other key, and the constructor hands them to CotangentArapEnergy with
+/// Derived::kNegativeWeightsBreakSquares. The energy itself adds its name, those two constants
+/// and AddFace.
+template <class Derived>
+class WeightedCotangentEnergy : public CotangentArapEnergy {
+ public:
+  struct Options {
+    /// `weights`, `coarse_weights`, `min_cotangent` (docs/energies.md, "Weight schemes").
+    WeightOptions weights = Derived::kDefaultWeights;
+    static Options FromConfig(OptionReader node) {
+      Options options;
+      options.weights = WeightOptions::FromConfig(node, options.weights);
+      node.RejectUnknownKeys();
+      return options;
+    }
+  };
+
+  explicit WeightedCotangentEnergy(const Options& options)
+      : CotangentArapEnergy(Derived::kName, options.weights,
+                            Derived::kNegativeWeightsBreakSquares) {}
+};
+
 }  // namespace harap

@@ -231,13 +231,7 @@ SolveSummary ConjugateGradientSolver::SolveGathered(const double* b, double* x,
       })[0];
     }
     ++summary.iterations;
-    if (!convergence.Update(update[0])) {
-      summary.outcome = SolveOutcome::kFailed;
-      summary.message = iterative::DivergenceMessage(
-          "cg", summary.iterations,
-          "the matrix is not positive definite or the right-hand side is not finite");
-      break;
-    }
+    if (!iterative::RecordCgResiduals(convergence, update[0], "cg", summary)) break;
     if (!convergence.any_active()) break;
     ColumnValues beta{};
     for (int c = 0; c < K; ++c) {

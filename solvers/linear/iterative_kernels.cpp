@@ -65,6 +65,16 @@ std::string DivergenceMessage(std::string_view solver, int iteration, std::strin
       solver, iteration, ColumnConvergence::kDivergenceFactor, cause);
 }
 
+bool RecordCgResiduals(ColumnConvergence& convergence, const ColumnValues& squared_residual,
+                       std::string_view solver, SolveSummary& summary) {
+  if (convergence.Update(squared_residual)) return true;
+  summary.outcome = SolveOutcome::kFailed;
+  summary.message =
+      DivergenceMessage(solver, summary.iterations,
+                        "the matrix is not positive definite or the right-hand side is not finite");
+  return false;
+}
+
 SparseMatrix CompressedCopy(const SparseMatrix& a) {
   SparseMatrix copy = a;
   copy.makeCompressed();

@@ -227,6 +227,12 @@ SparseMatrix CompressedCopy(const SparseMatrix& a);
 /// The message for an iteration that diverged (residual grew by kDivergenceFactor, or NaN).
 std::string DivergenceMessage(std::string_view solver, int iteration, std::string_view cause);
 
+/// The end of a conjugate-gradient step (cg, multigrid's preconditioned CG): records the new
+/// ‖r_c‖² in `convergence`; if the iteration diverged, marks `summary` failed with `solver`'s
+/// divergence message and returns false.
+bool RecordCgResiduals(ColumnConvergence& convergence, const ColumnValues& squared_residual,
+                       std::string_view solver, SolveSummary& summary);
+
 /// The body of every iterative SolveImpl(): runs solve_block(first, std::integral_constant<int,
 /// K>{}) for the column blocks [first, first + K) of b and x (K = 3 except for the last block)
 /// and merges what the blocks report: iterations and residual are maxima over blocks, the first

@@ -297,11 +297,7 @@ SolveSummary MultigridSolver::SolveColumns(const Eigen::Ref<const Eigen::MatrixX
       r_.col(c) -= alpha[c] * q_.col(c);
     }
     ++summary.iterations;
-    if (!convergence.Update(ColumnDots(r_, r_, k))) {
-      summary.outcome = SolveOutcome::kFailed;
-      summary.message = iterative::DivergenceMessage(
-          "multigrid", summary.iterations,
-          "the matrix is not positive definite or the right-hand side is not finite");
+    if (!iterative::RecordCgResiduals(convergence, ColumnDots(r_, r_, k), "multigrid", summary)) {
       break;
     }
     if (!convergence.any_active()) break;
