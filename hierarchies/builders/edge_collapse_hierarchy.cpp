@@ -347,8 +347,7 @@ class Decimation final : private OpenMesh::Decimater::Observer {
 std::vector<Index> OctreeLevelCounts(const Mesh& mesh, const EdgeCollapseHierarchy::Options& ours,
                                      const Context& context) {
   OctreeHierarchy::Options options;
-  options.min_vertices = ours.min_vertices;
-  options.max_levels = ours.max_levels;
+  static_cast<LevelLimits&>(options) = ours;
   const MeshHierarchy octree = OctreeHierarchy(options).Build(mesh, context);
   std::vector<Index> counts;
   for (int l = 1; l < octree.num_levels(); ++l) {
@@ -428,7 +427,10 @@ MeshHierarchy EdgeCollapseHierarchy::Build(const Mesh& mesh, const Context& cont
   auto next_target = [&](std::size_t remaining) -> std::size_t {
     if (options_.max_levels > 0 && hierarchy.num_levels() >= options_.max_levels) return 0;
     if (hierarchy.levels.back().mesh.num_vertices() <= options_.min_vertices) return 0;
-    if (options_.ratio > 0.0) return std::size_t(std::ceil(options_.ratio * double(remaining)));
+    if (options_.ratio > 0.0) {
+      const std::size_t target = std::size_t(std::ceil(options_.ratio * double(remaining)));
+      return options_.KeepsLevel(Index(target)) ? target : 0;
+    }
     const std::size_t level = std::size_t(hierarchy.num_levels());  // the one to build
     return level <= octree_counts.size() ? std::size_t(octree_counts[level - 1]) : 0;
   };

@@ -11,13 +11,18 @@ namespace {
 
 constexpr Range kMinVerticesRange = Range::AtLeast(0);
 constexpr Range kMaxLevelsRange = Range::AtLeast(0);
+constexpr EnumNames<LevelLimits::Coarsest, 2> kCoarsestNames = {
+    {{LevelLimits::Coarsest::kAtMost, "at_most"}, {LevelLimits::Coarsest::kAtLeast, "at_least"}}};
 
 }  // namespace
 
 void LevelLimits::ReadLimits(OptionReader node) {
   min_vertices =
       node.Get("min_vertices", min_vertices,
-               "stop once the coarsest level has at most this many vertices", kMinVerticesRange);
+               "bound on the coarsest level's vertices, as `coarsest` says", kMinVerticesRange);
+  coarsest = node.GetEnum("coarsest", coarsest, kCoarsestNames,
+                          "at_most: coarsen until a level has at most min_vertices vertices; "
+                          "at_least: add no level with fewer (the paper's Sec. 7)");
   max_levels =
       node.Get("max_levels", max_levels,
                "at most this many levels, the input included (0 = no limit)", kMaxLevelsRange);
@@ -33,6 +38,13 @@ void ThrowIfInvalidOptions(std::string_view hierarchy, const std::vector<std::st
     throw ConfigError(
         fmt::format("invalid {} hierarchy options: {}", hierarchy, fmt::join(problems, "; ")));
   }
+}
+
+void DropCoarsestLevel(MeshHierarchy& hierarchy) {
+  HARAP_CHECK(hierarchy.num_levels() > 1, "the input level cannot be dropped");
+  hierarchy.levels.pop_back();
+  hierarchy.levels.back().coarse_vertex.clear();
+  hierarchy.levels.back().in_cluster.clear();
 }
 
 MeshHierarchy InputLevelOnly(const Mesh& mesh) {

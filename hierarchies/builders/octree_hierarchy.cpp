@@ -278,6 +278,10 @@ class Builder {
       }
       if (next_shift >= grid_.max_bits) break;
       if (!AddCoarseLevel(next_shift)) break;
+      if (!options_.KeepsLevel(hierarchy_.levels.back().mesh.num_vertices())) {
+        DropCoarsestLevel(hierarchy_);
+        break;
+      }
       shift = next_shift;
     }
   }

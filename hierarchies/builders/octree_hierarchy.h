@@ -64,8 +64,9 @@ namespace harap {
 ///   on a line (three cells in a row: a zero-area triangle) or in a plane (four cells: a flat
 ///   tetrahedron), which the means of distinct clusters almost never do.
 ///
-/// Building stops when the coarsest level has at most `min_vertices` vertices, when no shift
-/// reduces it any more or a coarser level would have no element, or after `max_levels` levels.
+/// Building stops when the coarsest level has at most `min_vertices` vertices (with `coarsest =
+/// at_least`: before a level with fewer would be added), when no shift reduces it any more or a
+/// coarser level would have no element, or after `max_levels` levels.
 ///
 /// Build() is const and thread-safe; it runs in the context's task arena and its result does not
 /// depend on the thread count. Its cost: docs/benchmarks.md ("Hierarchy construction").

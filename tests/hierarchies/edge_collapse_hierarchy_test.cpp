@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <map>
 #include <numeric>
 #include <set>
@@ -250,6 +251,19 @@ TEST_CASE("edge_collapse: by default the octree's vertex counts, else the ratio"
       CHECK(LevelCounts(h) == LevelCounts(reference));
     }
   }
+  SECTION("coarsest = at_least: the octree's counts, and no ratio level below the bound") {
+    EdgeCollapseHierarchy::Options options = WithMinVertices(750);
+    options.coarsest = LevelLimits::Coarsest::kAtLeast;
+    OctreeHierarchy::Options octree;
+    octree.coarsest = LevelLimits::Coarsest::kAtLeast;
+    const MeshHierarchy reference = OctreeHierarchy(octree).Build(mesh, Context());
+    CHECK(LevelCounts(BuildEdgeCollapse(mesh, options)) == LevelCounts(reference));
+    options.ratio = 0.25;
+    const MeshHierarchy h = BuildEdgeCollapse(mesh, options);
+    REQUIRE(h.num_levels() >= 2);
+    CHECK(h.levels.back().mesh.num_vertices() >= 750);
+    CHECK(std::ceil(0.25 * h.levels.back().mesh.num_vertices()) < 750);
+  }
   SECTION("max_levels limits both") {
     EdgeCollapseHierarchy::Options options = WithMinVertices(40);
     options.max_levels = 3;
@@ -410,7 +424,7 @@ TEST_CASE("edge_collapse: options from config", "[hierarchies][edge_collapse]") 
       keys.push_back(option.key);
     }
     CHECK(options.max_aspect_ratio == 20.0);
-    CHECK(keys == std::vector<std::string>{"ratio", "min_vertices", "max_levels",
+    CHECK(keys == std::vector<std::string>{"ratio", "min_vertices", "coarsest", "max_levels",
                                            "max_normal_deviation", "max_aspect_ratio"});
   }
   SECTION("values are read") {

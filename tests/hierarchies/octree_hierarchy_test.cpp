@@ -453,6 +453,27 @@ TEST_CASE("octree: min_vertices and max_levels stop the hierarchy", "[hierarchie
     CHECK(BuildOctree(mesh, WithMinVertices(10242)).num_levels() == 1);
     CHECK(BuildOctree(Icosphere(2), OctreeHierarchy::Options{}).num_levels() == 1);
   }
+  SECTION("coarsest = at_least keeps every level at or above min_vertices (the paper's rule)") {
+    for (int min_vertices : {50, 750, 3000}) {
+      const MeshHierarchy at_most = BuildOctree(mesh, WithMinVertices(min_vertices));
+      OctreeHierarchy::Options options = WithMinVertices(min_vertices);
+      options.coarsest = LevelLimits::Coarsest::kAtLeast;
+      const MeshHierarchy at_least = BuildOctree(mesh, options);
+      INFO("min_vertices " << min_vertices << ", levels " << at_least.num_levels());
+      CheckStructure(mesh, at_least);
+      CHECK(at_least.levels.back().mesh.num_vertices() >= min_vertices);
+      CHECK(at_least.levels.back().coarse_vertex.empty());
+      // The same levels, without the one at_most adds below the bound.
+      REQUIRE(at_least.num_levels() == at_most.num_levels() - 1);
+      for (int l = 0; l < at_least.num_levels(); ++l) {
+        CHECK(at_least.levels[l].mesh.num_vertices() == at_most.levels[l].mesh.num_vertices());
+      }
+    }
+    // A first coarse level below the bound leaves the input alone.
+    OctreeHierarchy::Options options = WithMinVertices(10000);
+    options.coarsest = LevelLimits::Coarsest::kAtLeast;
+    CHECK(BuildOctree(mesh, options).num_levels() == 1);
+  }
   SECTION("min_vertices 0 coarsens until nothing is left to merge") {
     const MeshHierarchy h = BuildOctree(mesh, WithMinVertices(0));
     CheckStructure(mesh, h);
@@ -539,24 +560,26 @@ TEST_CASE("octree: options from config", "[hierarchies][octree]") {
     for (const auto& option : registries.hierarchies.DescribeOptions("octree")) {
       keys.push_back(option.key);
     }
+    CHECK(options.coarsest == LevelLimits::Coarsest::kAtMost);
     CHECK(keys == std::vector<std::string>{"topology_aware", "coarse_positions", "min_vertices",
-                                           "max_levels"});
+                                           "coarsest", "max_levels"});
   }
   SECTION("values are read") {
     const std::string table =
         "topology_aware = false\ncoarse_positions = \"quantized\"\nmin_vertices = 100\n"
-        "max_levels = 4\n";
+        "coarsest = \"at_least\"\nmax_levels = 4\n";
     const auto options =
         OctreeHierarchy::Options::FromConfig(OptionReader(ConfigNode::Parse(table, "test")));
     const ConfigNode config = ConfigNode::Parse("[hierarchy]\ntype = \"octree\"\n" + table, "test");
     CHECK_FALSE(options.topology_aware);
     CHECK(options.coarse_positions == OctreeHierarchy::CoarsePositions::kQuantized);
     CHECK(options.min_vertices == 100);
+    CHECK(options.coarsest == LevelLimits::Coarsest::kAtLeast);
     CHECK(options.max_levels == 4);
     auto hierarchy = registries.hierarchies.Create(config.Child("hierarchy"), "octree");
     const MeshHierarchy h = hierarchy->Build(Icosphere(4), Context());
     CHECK(h.num_levels() <= 4);
-    CHECK(h.levels.back().mesh.num_vertices() <= 100);
+    CHECK(h.levels.back().mesh.num_vertices() >= 100);
   }
   SECTION("unknown keys and bad values are rejected") {
     auto create = [&](const std::string& table) {
@@ -580,6 +603,8 @@ TEST_CASE("octree: options from config", "[hierarchies][octree]") {
                Contains("centroid") && Contains("mean") && Contains("quantized"));
     CHECK_THAT(error("min_vertices = -1\n"), Contains("min_vertices"));
     CHECK_THAT(error("max_levels = -2\n"), Contains("max_levels"));
+    CHECK_THAT(error("coarsest = \"above\"\n"),
+               Contains("above") && Contains("at_most") && Contains("at_least"));
     CHECK_THROWS_AS(create("topology_aware = \"yes\"\n"), ConfigError);
     CHECK_THROWS_AS(create("min_vertices = 1.5\n"), ConfigError);
     OctreeHierarchy::Options bad;
