@@ -58,10 +58,11 @@ struct EnergyEvaluation {
 EnergyEvaluation EvaluateEnergy(const Registries& registries, const Mesh& rest, const Positions& u,
                                 const ConfigNode& config, int threads);
 
-/// For a program that owns its process (the `harap` command), called before anything uses BLAS:
-/// joins the idle worker threads of the BLAS behind CHOLMOD, which otherwise spin beside the
-/// run's threads (CholmodSolver::StopIdleNativeThreads; docs/solvers.md, "Why native_threads =
-/// 1"). Not for a library inside a host program, which may be using the same BLAS.
+/// For a program that owns its process (the `harap` command), called at its start, before
+/// anything uses BLAS: joins the idle worker threads of the BLAS behind CHOLMOD, which otherwise
+/// spin beside the run's threads (CholmodSolver::StopIdleNativeThreads; docs/solvers.md, "Why
+/// native_threads = 1"). Must not run while any thread is inside BLAS (a factorization, or a host
+/// program using the same BLAS).
 void StopIdleNativeThreads();
 
 }  // namespace harap

@@ -94,9 +94,10 @@ std::vector<std::string> RunWarnings(const RunWarningInput& input) {
   if (input.hierarchical && result.levels.size() == 1 && result.levels.front().level == 0) {
     const Index vertices = result.levels.front().vertices;
     warnings.push_back(fmt::format(
-        "the hierarchy has a single level: the mesh ({} vertices) is already at or below the "
-        "hierarchy's coarsest size (hierarchy.min_vertices, 750 by default), so this ran as "
-        "classic ARAP on one level. Lower it, e.g. --set hierarchy.min_vertices={}{}",
+        "the hierarchy has a single level: the mesh ({} vertices) is too small for a coarser "
+        "level under hierarchy.min_vertices (750 by default; no level is made from a mesh at or "
+        "below it, nor, with hierarchy.coarsest = \"at_least\", a level below it), so this ran "
+        "as classic ARAP on one level. Lower it, e.g. --set hierarchy.min_vertices={}{}",
         vertices, std::max<Index>(4, vertices / 8),
         triangles ? ", or refine the mesh (scenario `refine = 1` or 2)" : ""));
   }

@@ -25,10 +25,11 @@ namespace harap {
 /// so the levels are nested.
 ///
 ///   - Vertex counts: by default those of the `octree` hierarchy (default options, with this
-///     hierarchy's `min_vertices` and `max_levels`) for the same mesh, so the two hierarchies can
-///     be compared level by level (the octree's build is part of this hierarchy's build time,
-///     a few percent of it at most). With `ratio` > 0 instead, level l+1 gets ⌈ratio · n_l⌉
-///     vertices until a level has at most `min_vertices`. When no legal collapse is left before
+///     hierarchy's `min_vertices`, `coarsest` and `max_levels`) for the same mesh, so the two
+///     hierarchies can be compared level by level (the octree's build is part of this
+///     hierarchy's build time, a few percent of it at most). With `ratio` > 0 instead, level l+1
+///     gets ⌈ratio · n_l⌉ vertices until a level has at most `min_vertices` (with `coarsest =
+///     at_least`: until the next target would be below it). When no legal collapse is left before
 ///     a target (e.g. closed components stop at 4 vertices, flat parts at the aspect-ratio
 ///     bound), the mesh reached so far is the last level.
 ///   - Coarse rest positions: OpenMesh collapses halfedges v0 → v1, and v1 keeps its position.
@@ -70,8 +71,8 @@ class EdgeCollapseHierarchy final : public Hierarchy {
     /// 0: the octree's level vertex counts. In (0, 1): each level keeps ⌈ratio · n⌉ of the n
     /// vertices of the level below.
     double ratio = 0.0;
-    // min_vertices, max_levels: LevelLimits; with ratio 0, min_vertices is passed to the octree
-    // that gives the counts.
+    // min_vertices, coarsest, max_levels: LevelLimits; with ratio 0, all three are passed to the
+    // octree that gives the counts.
     /// Largest angle (degrees, in (0, 180]) by which a collapse may turn the normal of a
     /// remaining face (OpenMesh's ModNormalFlippingT; its default 90 forbids fold-overs; 180
     /// allows everything but exactly reversed normals).

@@ -43,8 +43,8 @@ void ThrowIfInvalidOptions(std::string_view hierarchy, const std::vector<std::st
 void DropCoarsestLevel(MeshHierarchy& hierarchy) {
   HARAP_CHECK(hierarchy.num_levels() > 1, "the input level cannot be dropped");
   hierarchy.levels.pop_back();
-  hierarchy.levels.back().coarse_vertex.clear();
-  hierarchy.levels.back().in_cluster.clear();
+  hierarchy.levels.back().coarse_vertex = {};  // and their memory
+  hierarchy.levels.back().in_cluster = {};
 }
 
 MeshHierarchy InputLevelOnly(const Mesh& mesh) {

@@ -85,7 +85,7 @@ class OctreeHierarchy final : public Hierarchy {
     bool topology_aware = true;
     /// Rest positions of coarse vertices; see the class comment for the measured choice.
     CoarsePositions coarse_positions = CoarsePositions::kMean;
-    // min_vertices, max_levels: LevelLimits.
+    // min_vertices, coarsest, max_levels: LevelLimits.
 
     /// Reads the options and rejects unknown keys and invalid values (ConfigError).
     static Options FromConfig(OptionReader node);

@@ -245,12 +245,14 @@ class CholmodSolver final : public LinearSolver {
   static std::string_view ToString(RefactorChoice choice);
 
   /// Stops the idle worker threads of the BLAS behind CHOLMOD (OpenBLAS) and sets it to one
-  /// thread, which is what Options::native_threads = 1 (the default) uses. OpenBLAS starts one
-  /// worker per core when the process loads, and an idle worker spins in sched_yield for about
-  /// 0.1 s (OpenBLAS's thread timeout) before it sleeps, taking a core from the run's threads;
-  /// a factorization with native_threads > 1 makes OpenBLAS start them again. Only for a program
-  /// that owns its process (the command line): a host program may be inside the same OpenBLAS on
-  /// another thread. Does nothing with another BLAS. docs/solvers.md, "Why native_threads = 1".
+  /// thread, which is what Options::native_threads = 1 (the default) uses. OpenBLAS starts a
+  /// worker per core but one when the process loads, and an idle worker spins in sched_yield for
+  /// about 0.1 s (OpenBLAS's thread timeout) before it sleeps, taking a core from the run's
+  /// threads; a factorization with native_threads > 1, or 0 where the environment's count is
+  /// above 1, makes OpenBLAS start all of them again. Must not run while any thread is inside
+  /// BLAS (a factorization, a host program's own BLAS calls): only for a program that owns its
+  /// process, at its start (the command line). Does nothing with another BLAS. docs/solvers.md,
+  /// "Why native_threads = 1".
   static void StopIdleNativeThreads();
 
  private:
