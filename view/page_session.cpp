@@ -64,8 +64,13 @@ struct PageSession::Group {
   }
 };
 
-PageSession::PageSession(const Registries& registries, const ViewSource& source, Send send)
-    : registries_(registries), source_(source), send_(std::move(send)), config_(source.run_config) {
+PageSession::PageSession(const Registries& registries, const ViewSource& source, Send send,
+                         const PageOptions& options)
+    : registries_(registries),
+      source_(source),
+      send_(std::move(send)),
+      options_(options),
+      config_(source.run_config) {
   for (const ScenarioHandle& handle : source_.scenario.handles) {
     Group group;
     group.name = handle.name;
@@ -95,13 +100,15 @@ void PageSession::SendError(const std::string& message, std::optional<int64_t> i
 
 void PageSession::Start() {
   const Mesh& mesh = source_.scenario.mesh;
-  if (mesh.num_vertices() > source_.display_vertices) {
+  const Index budget = options_.display_vertices > 0
+                           ? std::min(options_.display_vertices, source_.display_vertices)
+                           : source_.display_vertices;
+  if (mesh.num_vertices() > budget) {
     SendText(Json{{"type", "status"},
-                  {"stage", fmt::format("decimating the display to at most {} vertices",
-                                        source_.display_vertices)}}
+                  {"stage", fmt::format("decimating the display to at most {} vertices", budget)}}
                  .dump());
   }
-  display_ = MakeDisplayMesh(mesh, source_.display_vertices);
+  display_ = MakeDisplayMesh(mesh, budget);
   {
     // The mesh first, so the page draws while the session is set up.
     std::string frame;

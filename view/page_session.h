@@ -53,7 +53,9 @@ DisplayMesh MakeDisplayMesh(const Mesh& mesh, Index budget);
 class PageSession {
  public:
   using Send = std::function<void(Outgoing)>;
-  PageSession(const Registries& registries, const ViewSource& source, Send send);
+  /// `options`: what the page asked for when it connected (ParsePageQuery).
+  PageSession(const Registries& registries, const ViewSource& source, Send send,
+              const PageOptions& options = {});
   ~PageSession();
 
   /// Builds the session (hierarchy, precomputation, the scenario's handles), sending progress,
@@ -93,6 +95,7 @@ class PageSession {
   const Registries& registries_;
   const ViewSource& source_;
   Send send_;
+  PageOptions options_;
   ConfigNode config_;
   std::unique_ptr<ConfiguredSession> session_;
   std::vector<Group> groups_;

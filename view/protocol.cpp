@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -194,6 +195,40 @@ ParsedMessage ParseClientMessage(std::string_view text, const MessageLimits& lim
   }
   fields.RejectUnknown();
   return parsed;
+}
+
+PageOptions ParsePageQuery(std::string_view query) {
+  PageOptions options;
+  bool display_seen = false;
+  while (!query.empty()) {
+    const size_t end = query.find('&');
+    const std::string_view pair = query.substr(0, end);
+    query = end == std::string_view::npos ? std::string_view() : query.substr(end + 1);
+    const size_t equals = pair.find('=');
+    const std::string_view key = pair.substr(0, equals);
+    const std::string_view value =
+        equals == std::string_view::npos ? std::string_view() : pair.substr(equals + 1);
+    if (key != "display_vertices") {
+      throw InputError(fmt::format(
+          "the page's WebSocket address: unknown parameter '{}'; valid: display_vertices",
+          key.substr(0, 64)));
+    }
+    if (display_seen) {
+      throw InputError("the page's WebSocket address: display_vertices is given twice");
+    }
+    display_seen = true;
+    Index vertices = 0;
+    const auto [rest, error] = std::from_chars(value.data(), value.data() + value.size(), vertices);
+    if (value.empty() || error != std::errc() || rest != value.data() + value.size() ||
+        vertices < kMinDisplayVertices) {
+      throw InputError(fmt::format(
+          "the page's WebSocket address: display_vertices = '{}' is not an integer of at least "
+          "{}",
+          value.substr(0, 64), kMinDisplayVertices));
+    }
+    options.display_vertices = vertices;
+  }
+  return options;
 }
 
 std::string BinaryMessageRefusal(size_t size) {

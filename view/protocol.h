@@ -81,6 +81,21 @@ std::string BinaryMessageRefusal(size_t size);
 /// (so the error answer can name the request); never throws.
 std::optional<int64_t> MessageIdOf(std::string_view text);
 
+/// What a page asks for when it connects, in the query of its WebSocket's address
+/// (`/ws?display_vertices=20000`).
+struct PageOptions {
+  /// Draw at most this many vertices (at least kMinDisplayVertices), or 0: the server's budget
+  /// (ViewSource::display_vertices). The smaller of the two applies. A page drawn by a software
+  /// renderer asks for fewer (web/app.js).
+  Index display_vertices = 0;
+};
+inline constexpr Index kMinDisplayVertices = 100;
+
+/// Parses the query of the WebSocket's address (the part after '?', may be empty): `key=value`
+/// pairs joined by '&'. Throws InputError naming the problem (an unknown key, listing the valid
+/// ones; a repeated key; a value that is not an integer in range) and never anything else.
+PageOptions ParsePageQuery(std::string_view query);
+
 /// Binary frames the server sends (little-endian). Every frame starts with a uint32 kind.
 enum class FrameKind : uint32_t {
   /// kind, num_display_vertices D, num_triangles T, num_mesh_vertices V, float32 rest positions

@@ -101,7 +101,8 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
   PageConnection(tcp::socket socket, Server::Impl& server)
       : ws_(std::move(socket)), server_(server) {}
 
-  void Accept(http::request<http::string_body> request) {
+  void Accept(http::request<http::string_body> request, const PageOptions& options) {
+    options_ = options;
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     // The page's largest message is a few hundred bytes; a larger one closes the connection.
     ws_.read_message_max(1 << 20);
@@ -163,13 +164,15 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
   // The worker: the page's session lives and dies here.
   void Work() {
     {
-      PageSession page(server_.registries, server_.source,
-                       [weak = weak_from_this(), this](Outgoing message) {
-                         net::post(ws_.get_executor(),
-                                   [self = weak.lock(), message = std::move(message)]() mutable {
-                                     if (self) self->Send(std::move(message));
-                                   });
-                       });
+      PageSession page(
+          server_.registries, server_.source,
+          [weak = weak_from_this(), this](Outgoing message) {
+            net::post(ws_.get_executor(),
+                      [self = weak.lock(), message = std::move(message)]() mutable {
+                        if (self) self->Send(std::move(message));
+                      });
+          },
+          options_);
       page.Start();
       for (;;) {
         std::vector<std::string> texts;
@@ -212,6 +215,7 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
 
   websocket::stream<beast::tcp_stream> ws_;
   Server::Impl& server_;
+  PageOptions options_;
   beast::flat_buffer buffer_;
   Inbox inbox_;
   std::thread worker_;
@@ -235,20 +239,33 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
 
  private:
   void Answer() {
-    if (websocket::is_upgrade(request_)) {
-      if (request_.target() == "/ws") {
-        stream_.expires_never();
-        std::make_shared<PageConnection>(stream_.release_socket(), server_)
-            ->Accept(std::move(request_));
-      }
-      return;
-    }
     auto response = std::make_shared<http::response<http::string_body>>();
     response->version(request_.version());
     response->keep_alive(request_.keep_alive());
     response->set(http::field::server, "harap view");
-    std::string path(request_.target());
-    path = path.substr(0, path.find_first_of("?#"));
+    const std::string target(request_.target());
+    std::string path = target.substr(0, target.find_first_of("?#"));
+    if (websocket::is_upgrade(request_)) {
+      if (path != "/ws") return;
+      const size_t query_start = target.find('?');
+      std::string query =
+          query_start == std::string::npos ? std::string() : target.substr(query_start + 1);
+      query = query.substr(0, query.find('#'));
+      try {
+        const PageOptions options = ParsePageQuery(query);
+        stream_.expires_never();
+        std::make_shared<PageConnection>(stream_.release_socket(), server_)
+            ->Accept(std::move(request_), options);
+        return;
+      } catch (const InputError& error) {
+        // Refused before the upgrade: the answer names the problem.
+        response->result(http::status::bad_request);
+        response->set(http::field::content_type, "text/plain");
+        response->body() = std::string(error.what()) + "\n";
+        Write(response);
+        return;
+      }
+    }
     if (path == "/") path = "/index.html";
     const auto it = server_.assets.find(path);
     if (request_.method() != http::verb::get && request_.method() != http::verb::head) {
@@ -265,6 +282,10 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       response->set(http::field::cache_control, "no-cache");
       if (request_.method() == http::verb::get) response->body() = it->second.content;
     }
+    Write(response);
+  }
+
+  void Write(const std::shared_ptr<http::response<http::string_body>>& response) {
     response->prepare_payload();
     http::async_write(stream_, *response,
                       [self = shared_from_this(), response](beast::error_code error, size_t) {

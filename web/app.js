@@ -21,11 +21,16 @@ const energyElement = document.getElementById('energy');
 const solveInfoElement = document.getElementById('solve-info');
 const editInfoElement = document.getElementById('edit-info');
 const errorsElement = document.getElementById('errors');
+function showError(text) {
+  errorsElement.insertAdjacentHTML('afterbegin', '<li></li>');
+  errorsElement.firstChild.textContent = text;
+}
 
 // What the page shows and what a test or a benchmark reads (window.harapView).
 const state = {
   ready: false, mesh: null, groups: [], energy: null, lastSolve: null, framesDrawn: 0,
-  errors: [], timings: { preview: [], full: [], edit: [], previewSolve: [], render: [], frame: [] },
+  errors: [], timings: { preview: [], full: [], edit: [], previewSolve: [], editServer: [], render: [],
+    frame: [] },
   scenarioToml: null,
 };
 window.harapView = state;
@@ -40,7 +45,8 @@ function softwareRenderer() {
   const name = info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : '';
   return /swiftshader|llvmpipe|software/i.test(name);
 }
-const renderer = new THREE.WebGLRenderer({ antialias: !softwareRenderer(),
+const software = softwareRenderer();
+const renderer = new THREE.WebGLRenderer({ antialias: !software,
   preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 renderer.setSize(window.innerWidth, window.innerHeight);
@@ -58,8 +64,20 @@ const gizmo = new TransformControls(camera, renderer.domElement);
 scene.add(gizmo.getHelper());
 const pivot = new THREE.Object3D();
 scene.add(pivot);
+// A software renderer pays for every pixel on the server's cores: while a handle or the view is
+// dragged it draws at kSoftwareDragPixelRatio of the resolution, and at full resolution again
+// once the drag ends (docs/view.md, large meshes).
+const kSoftwareDragPixelRatio = 0.5;
+let lowResolution = false;
+function setDragResolution(dragging) {
+  if (!software || lowResolution === dragging) return;
+  lowResolution = dragging;
+  renderer.setPixelRatio(dragging ? kSoftwareDragPixelRatio : window.devicePixelRatio);
+  requestRender();
+}
 gizmo.addEventListener('dragging-changed', (event) => {
   if (orbit) orbit.enabled = !event.value;
+  setDragResolution(event.value);
   if (!event.value) moveReleased();
 });
 gizmo.addEventListener('objectChange', () => moveChanged());
@@ -118,8 +136,26 @@ function showTrace(trace) {
     document.getElementById('plot'));
 }
 
+// How many vertices the page draws. A software renderer draws a frame of a large mesh in hundreds
+// of milliseconds on the cores the server solves on, so there the page asks the server for a
+// display of kSoftwareDisplayVertices (docs/view.md, large meshes); the page's address can ask
+// for another count (`?display=50000`) or for the server's own budget (`?display=all`).
+const kSoftwareDisplayVertices = 20000;
+const kMinDisplayVertices = 100;  // the server's minimum (view/protocol.h, PageOptions)
+function displayRequest() {
+  const asked = new URLSearchParams(location.search).get('display');
+  if (asked === 'all') return null;
+  if (asked !== null) {
+    if (/^[0-9]+$/.test(asked) && Number(asked) >= kMinDisplayVertices) return Number(asked);
+    showError(`the page's address: display=${asked} is neither 'all' nor a vertex count of at ` +
+      `least ${kMinDisplayVertices}; the default applies`);
+  }
+  return software ? kSoftwareDisplayVertices : null;
+}
+const displayVertices = displayRequest();
 // The WebSocket to this page's own session.
-const socket = new WebSocket(`ws://${location.host}/ws`);
+const socket = new WebSocket(`ws://${location.host}/ws` +
+  (displayVertices === null ? '' : `?display_vertices=${displayVertices}`));
 socket.binaryType = 'arraybuffer';
 let nextId = 1;
 const sentAt = new Map();  // id -> {kind, time}
@@ -215,19 +251,27 @@ function receiveMessage(message) {
       editInfoElement.textContent = `handle edit ${(1000 * message.seconds).toFixed(0)} ms` +
         (routes.length ? ` (routes ${routes.join(', ')})` : '');
       state.lastEdit = message;
+      state.timings.editServer.push(1000 * message.seconds);
       break;
     }
-    case 'solved':
-      afterNextDraw(() => solved(message, sent));
+    case 'solved': {
+      // The next preview goes out now, so that the server solves it while this one is drawn.
+      let eventTime = null;
+      if (message.id !== undefined && message.id === previewInFlight) {
+        previewInFlight = null;
+        eventTime = previewEventTime;
+        if (previewPending) sendPreview();
+      }
+      afterNextDraw(() => solved(message, sent, eventTime));
       break;
+    }
     case 'scenario':
       state.scenarioToml = message.toml;
       download(new Blob([message.toml], { type: 'text/plain' }), 'scenario.toml');
       break;
     case 'error':
       state.errors.push(message);
-      errorsElement.insertAdjacentHTML('afterbegin', '<li></li>');
-      errorsElement.firstChild.textContent = message.message;
+      showError(message.message);
       if (message.id === previewInFlight) previewInFlight = null;
       break;
     default:
@@ -262,7 +306,8 @@ function afterNextDraw(callback) {
   requestRender();
 }
 
-function solved(message, sent) {
+// `previewEventTime`: when the drag event this preview answers happened (null: not a preview).
+function solved(message, sent, previewEventTime) {
   state.framesDrawn += 1;
   state.lastSolve = message;
   const now = performance.now();
@@ -271,17 +316,13 @@ function solved(message, sent) {
     energyElement.textContent = message.energy === null ? '–' : message.energy.toPrecision(10);
     showTrace(message.trace);
     if (sent) state.timings.full.push(now - sent.time);
-  } else if (dragEventTime !== null && message.id === previewInFlight) {
+  } else if (previewEventTime !== null) {
     state.timings.preview.push(now - previewEventTime);
     state.timings.previewSolve.push(1000 * message.seconds);
   }
   solveInfoElement.textContent = `${message.mode} ${(1000 * message.seconds).toFixed(0)} ms, ` +
     `${message.total_iterations} iterations`;
   if (message.id !== undefined) sentAt.delete(message.id);
-  if (message.id === previewInFlight) {
-    previewInFlight = null;
-    if (previewPending) sendPreview();
-  }
 }
 
 function setChoices(choices) {
@@ -327,6 +368,8 @@ function buildMesh(positions, index) {
   camera.position.copy(sphere.center).add(side.normalize().multiplyScalar(3.6 * sphere.radius));
   orbit = new OrbitControls(camera, renderer.domElement);
   orbit.addEventListener('change', () => requestRender());
+  orbit.addEventListener('start', () => setDragResolution(true));
+  orbit.addEventListener('end', () => setDragResolution(false));
   orbit.target.copy(sphere.center);
   camera.near = sphere.radius / 100;
   camera.far = sphere.radius * 100;

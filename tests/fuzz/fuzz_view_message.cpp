@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The messages a page sends to `harap view`'s server: any bytes, parsed and validated against a
-// small session (100 vertices, 3 handle groups). A bad message must be an InputError (the page
-// gets it as an error message), never a crash or another exception.
+// small session (100 vertices, 3 handle groups), and as the query of the page's WebSocket address.
+// A bad message must be an InputError (the page gets it as an error message; a bad query is
+// refused with it), never a crash or another exception.
 #include "tests/fuzz/fuzz_target.h"
 #include "view/protocol.h"
 
@@ -25,6 +26,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   } catch (const harap::InputError&) {
     // The expected answer to a malformed message.
+  }
+  // The same bytes as the query of the page's WebSocket address.
+  try {
+    const harap::view::PageOptions options = harap::view::ParsePageQuery(text);
+    HARAP_CHECK(options.display_vertices == 0 ||
+                    options.display_vertices >= harap::view::kMinDisplayVertices,
+                "display budget in range");
+  } catch (const harap::InputError&) {
   }
   (void)harap::view::MessageIdOf(text);
   (void)harap::view::BinaryMessageRefusal(size);

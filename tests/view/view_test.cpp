@@ -109,8 +109,9 @@ struct Page {
   std::vector<Outgoing> sent;
   std::unique_ptr<PageSession> page;
 
-  /// `right_weight`: the right column's handle weight (finite: soft).
-  explicit Page(double right_weight = Constraints::kHardWeight) {
+  /// `right_weight`: the right column's handle weight (finite: soft). `options`: what the page
+  /// asked for when it connected.
+  explicit Page(double right_weight = Constraints::kHardWeight, const PageOptions& options = {}) {
     Mesh mesh = Grid(20, 20);
     std::vector<Index> left, right;
     for (Index v = 0; v < mesh.num_vertices(); ++v) {
@@ -133,8 +134,8 @@ struct Page {
     WriteMesh(mesh_file, mesh.vertices, mesh.elements);
     source.mesh_toml = fmt::format("mesh = \"{}\"\n", mesh_file.string());
     source.threads = 1;
-    page = std::make_unique<PageSession>(registries, source,
-                                         [this](Outgoing message) { sent.push_back(message); });
+    page = std::make_unique<PageSession>(
+        registries, source, [this](Outgoing message) { sent.push_back(message); }, options);
     page->Start();
   }
   std::vector<Json> Texts() const {
@@ -307,6 +308,55 @@ TEST_CASE("the display of a large mesh: decimated to the budget, onto mesh verti
       CHECK((b - a).cross(c - a).dot(a + b + c) > -1e-12);
     }
   }
+}
+
+std::string QueryRefusal(const std::string& query) {
+  try {
+    ParsePageQuery(query);
+  } catch (const InputError& error) {
+    return error.what();
+  }
+  return "accepted";
+}
+
+TEST_CASE("the page's WebSocket address: its query is parsed and checked", "[view]") {
+  CHECK(ParsePageQuery("").display_vertices == 0);
+  CHECK(ParsePageQuery("display_vertices=20000").display_vertices == 20000);
+  CHECK(ParsePageQuery("display_vertices=100").display_vertices == 100);
+  CHECK_THAT(QueryRefusal("display=5"),
+             Catch::Contains("unknown parameter 'display'; valid: display_vertices"));
+  CHECK_THAT(QueryRefusal("display_vertices=20000&x"), Catch::Contains("unknown parameter 'x'"));
+  CHECK_THAT(QueryRefusal("display_vertices=200&display_vertices=300"),
+             Catch::Contains("given twice"));
+  for (const char* value : {"", "99", "-5", "2e4", "20000abc", "nan", "99999999999999999999"}) {
+    CAPTURE(value);
+    CHECK_THAT(QueryRefusal(fmt::format("display_vertices={}", value)),
+               Catch::Contains("is not an integer of at least 100"));
+  }
+  CHECK_THAT(QueryRefusal("display_vertices"), Catch::Contains("is not an integer"));
+  // A long garbage key is cut in the message.
+  CHECK(QueryRefusal(std::string(10000, 'k')).size() < 200);
+}
+
+TEST_CASE("a page's display: the smaller of its own request and the server's budget", "[view]") {
+  PageOptions options;
+  options.display_vertices = 150;  // the grid has 400 vertices, the server's budget is 200000
+  Page small(Constraints::kHardWeight, options);
+  // The page hears that the display is decimated, then gets the mesh frame.
+  REQUIRE(small.sent.size() >= 2);
+  CHECK_THAT(small.sent[0].data, Catch::Contains("decimating the display to at most 150"));
+  const Outgoing& mesh_frame = small.sent[1];
+  REQUIRE(mesh_frame.binary);
+  const uint32_t drawn = U32(mesh_frame.data, 4);
+  CHECK(drawn <= 150);
+  CHECK(drawn > 150 / 4);
+  CHECK(U32(mesh_frame.data, 12) == 400);  // the session still solves every vertex
+  CHECK(small.Last("mesh")["display_vertices"] == drawn);
+  CHECK(small.Last("solved")["mode"] == "full");
+
+  options.display_vertices = 100000;  // more than the mesh: all of it
+  Page large(Constraints::kHardWeight, options);
+  CHECK(U32(large.sent.front().data, 4) == 400);
 }
 
 TEST_CASE("the surface of a tetrahedral mesh: boundary faces, outwards", "[view]") {

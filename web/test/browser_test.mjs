@@ -3,7 +3,7 @@
 // puppeteer-core; nothing downloads a browser). Starts the server itself on a free port.
 //
 //   node web/test/browser_test.mjs HARAP_EXECUTABLE SCENARIO.toml [--screenshot FILE]
-//        [--benchmark DRAGS] [--tolerance T] [--display-vertices N]
+//        [--benchmark DRAGS] [--tolerance T] [--display-vertices N] [--page-display N|all]
 //
 // The test: the page loads and solves; a handle dragged with synthesized mouse events moves the
 // mesh through preview frames and a full solve on release; the energy the page shows equals
@@ -13,6 +13,7 @@
 // --benchmark N: N drags, then the page's own timers as JSON (docs/results.md).
 // Exits 77 (ctest: skipped) when Chromium is absent.
 import { spawn, spawnSync } from 'node:child_process';
+import http from 'node:http';
 import { existsSync, mkdtempSync, readFileSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -28,6 +29,7 @@ const screenshotFile = option('--screenshot', null);
 const benchmarkDrags = Number(option('--benchmark', '0'));
 const tolerance = option('--tolerance', '1e-8');
 const displayVertices = option('--display-vertices', null);
+const pageDisplay = option('--page-display', null);
 if (!existsSync(chromium)) {
   console.log(`skipped: no Chromium at ${chromium} (Debian: apt-get install chromium; ` +
     '.ci/setup installs it)');
@@ -68,7 +70,7 @@ const waitFor = (fn, arg, timeout = 60000) =>
   page.waitForFunction(fn, { timeout, polling: 20 }, arg);
 
 try {
-  await page.goto(url);
+  await page.goto(pageDisplay === null ? url : `${url}?display=${pageDisplay}`);
   await waitFor(() => window.harapView.ready && window.harapView.lastSolve?.mode === 'full',
     undefined, 120000);
   const first = await page.evaluate(() => ({ energy: window.harapView.energy,
@@ -188,6 +190,42 @@ try {
   check(levels > 1 && clusters > 1 && clusters < drawn / 2,
     `level ${levels - 1} of ${levels} shows ${clusters} clusters of ${drawn} vertices`);
   await page.evaluate(() => window.harapView.setLevel(0));
+
+  // The display a page asks for in its address: fewer vertices drawn, every one solved; a bad
+  // count is named on the page and the default applies.
+  for (const asked of ['150', 'abc']) {
+    const other = await browser.newPage();
+    other.on('pageerror', (error) => check(false, `no page error (${error.message})`));
+    await other.goto(`${url}?display=${asked}`);
+    await other.waitForFunction(() => window.harapView.ready, { timeout: 60000, polling: 20 });
+    const seen = await other.evaluate(() => ({ mesh: window.harapView.mesh,
+      errors: document.getElementById('errors').textContent }));
+    if (asked === '150') {
+      check(seen.mesh.display_vertices <= 150 && seen.mesh.display_vertices > 30 &&
+        seen.mesh.vertices > 150, `?display=150 draws ${seen.mesh.display_vertices} of ` +
+        `${seen.mesh.vertices} vertices`);
+    } else {
+      check(seen.errors.includes('display=abc is neither') && seen.mesh.display_vertices > 150,
+        `?display=abc is named on the page (${seen.errors}) and the default applies`);
+    }
+    await other.close();
+  }
+  // A WebSocket address with a bad query is refused before the upgrade, naming the problem.
+  const refusal = await new Promise((resolve) => {
+    const request = http.request(`${url}ws?display_vertices=abc`, { headers: {
+      Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' } });
+    request.on('response', (response) => {
+      let body = '';
+      response.on('data', (chunk) => { body += chunk; });
+      response.on('end', () => resolve({ status: response.statusCode, body }));
+    });
+    request.on('upgrade', (response, socket) => { socket.destroy(); resolve({ status: 101 }); });
+    request.on('error', (error) => resolve({ status: 0, body: error.message }));
+    request.end();
+  });
+  check(refusal.status === 400 && refusal.body.includes("display_vertices = 'abc' is not an integer"),
+    `a WebSocket address with a bad query is refused (${refusal.status}: ${refusal.body?.trim()})`);
 
   if (benchmarkDrags > 0) {
     await page.evaluate(() => {
