@@ -204,6 +204,7 @@ PageOptions ParsePageQuery(std::string_view query) {
     const size_t end = query.find('&');
     const std::string_view pair = query.substr(0, end);
     query = end == std::string_view::npos ? std::string_view() : query.substr(end + 1);
+    if (pair.empty()) continue;  // "a&&b", a trailing '&': as a browser's URLSearchParams
     const size_t equals = pair.find('=');
     const std::string_view key = pair.substr(0, equals);
     const std::string_view value =
@@ -222,9 +223,8 @@ PageOptions ParsePageQuery(std::string_view query) {
     if (value.empty() || error != std::errc() || rest != value.data() + value.size() ||
         vertices < kMinDisplayVertices) {
       throw InputError(fmt::format(
-          "the page's WebSocket address: display_vertices = '{}' is not an integer of at least "
-          "{}",
-          value.substr(0, 64), kMinDisplayVertices));
+          "the page's WebSocket address: display_vertices = '{}' is not an integer in [{}, {}]",
+          value.substr(0, 64), kMinDisplayVertices, std::numeric_limits<Index>::max()));
     }
     options.display_vertices = vertices;
   }

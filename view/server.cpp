@@ -246,11 +246,20 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
     const std::string target(request_.target());
     std::string path = target.substr(0, target.find_first_of("?#"));
     if (websocket::is_upgrade(request_)) {
-      if (path != "/ws") return;
-      const size_t query_start = target.find('?');
-      std::string query =
-          query_start == std::string::npos ? std::string() : target.substr(query_start + 1);
-      query = query.substr(0, query.find('#'));
+      // A refused upgrade is answered and the connection closed after the answer.
+      response->keep_alive(false);
+      response->set(http::field::content_type, "text/plain");
+      if (path != "/ws") {
+        response->result(http::status::not_found);
+        response->body() = "the page's WebSocket is at /ws\n";
+        Write(response);
+        return;
+      }
+      std::string query;
+      if (path.size() < target.size() && target[path.size()] == '?') {
+        query = target.substr(path.size() + 1);
+        query = query.substr(0, query.find('#'));
+      }
       try {
         const PageOptions options = ParsePageQuery(query);
         stream_.expires_never();
@@ -260,7 +269,6 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection> {
       } catch (const InputError& error) {
         // Refused before the upgrade: the answer names the problem.
         response->result(http::status::bad_request);
-        response->set(http::field::content_type, "text/plain");
         response->body() = std::string(error.what()) + "\n";
         Write(response);
         return;

@@ -46,6 +46,7 @@ function softwareRenderer() {
   return /swiftshader|llvmpipe|software/i.test(name);
 }
 const software = softwareRenderer();
+state.softwareRenderer = software;
 const renderer = new THREE.WebGLRenderer({ antialias: !software,
   preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
@@ -75,6 +76,9 @@ function setDragResolution(dragging) {
   renderer.setPixelRatio(dragging ? kSoftwareDragPixelRatio : window.devicePixelRatio);
   requestRender();
 }
+// For a test: frames drawn at the lowered resolution, and the resolution now.
+state.lowResolutionFrames = 0;
+state.pixelRatio = () => renderer.getPixelRatio();
 gizmo.addEventListener('dragging-changed', (event) => {
   if (orbit) orbit.enabled = !event.value;
   setDragResolution(event.value);
@@ -141,18 +145,23 @@ function showTrace(trace) {
 // display of kSoftwareDisplayVertices (docs/view.md, large meshes); the page's address can ask
 // for another count (`?display=50000`) or for the server's own budget (`?display=all`).
 const kSoftwareDisplayVertices = 20000;
-const kMinDisplayVertices = 100;  // the server's minimum (view/protocol.h, PageOptions)
+// The server's range (view/protocol.h, ParsePageQuery): outside it the server would refuse the
+// connection, and a page cannot read why.
+const kMinDisplayVertices = 100;
+const kMaxDisplayVertices = 2147483647;
 function displayRequest() {
   const asked = new URLSearchParams(location.search).get('display');
   if (asked === 'all') return null;
   if (asked !== null) {
-    if (/^[0-9]+$/.test(asked) && Number(asked) >= kMinDisplayVertices) return Number(asked);
-    showError(`the page's address: display=${asked} is neither 'all' nor a vertex count of at ` +
-      `least ${kMinDisplayVertices}; the default applies`);
+    if (/^[0-9]{1,10}$/.test(asked) && Number(asked) >= kMinDisplayVertices &&
+        Number(asked) <= kMaxDisplayVertices) return Number(asked);
+    showError(`the page's address: display=${asked} is neither 'all' nor a vertex count in ` +
+      `[${kMinDisplayVertices}, ${kMaxDisplayVertices}]; the default applies`);
   }
   return software ? kSoftwareDisplayVertices : null;
 }
 const displayVertices = displayRequest();
+state.displayRequested = displayVertices;
 // The WebSocket to this page's own session.
 const socket = new WebSocket(`ws://${location.host}/ws` +
   (displayVertices === null ? '' : `?display_vertices=${displayVertices}`));
@@ -272,7 +281,10 @@ function receiveMessage(message) {
     case 'error':
       state.errors.push(message);
       showError(message.message);
-      if (message.id === previewInFlight) previewInFlight = null;
+      if (message.id !== undefined && message.id === previewInFlight) {
+        previewInFlight = null;
+        if (previewPending) sendPreview();
+      }
       break;
     default:
       break;
@@ -293,6 +305,7 @@ function requestRender() {
     const start = performance.now();
     renderer.render(scene, camera);
     state.timings.render.push(performance.now() - start);
+    if (lowResolution) state.lowResolutionFrames += 1;
     // The frame rendered here is on the screen when the next animation frame starts.
     const callbacks = drawnCallbacks;
     drawnCallbacks = [];
@@ -367,9 +380,18 @@ function buildMesh(positions, index) {
   camera.up.copy(up);
   camera.position.copy(sphere.center).add(side.normalize().multiplyScalar(3.6 * sphere.radius));
   orbit = new OrbitControls(camera, renderer.domElement);
-  orbit.addEventListener('change', () => requestRender());
-  orbit.addEventListener('start', () => setDragResolution(true));
-  orbit.addEventListener('end', () => setDragResolution(false));
+  // OrbitControls starts and ends on every click and wheel step: the resolution drops only once
+  // the view moves.
+  let orbiting = false;
+  orbit.addEventListener('start', () => { orbiting = true; });
+  orbit.addEventListener('change', () => {
+    if (orbiting) setDragResolution(true);
+    requestRender();
+  });
+  orbit.addEventListener('end', () => {
+    orbiting = false;
+    setDragResolution(false);
+  });
   orbit.target.copy(sphere.center);
   camera.near = sphere.radius / 100;
   camera.far = sphere.radius * 100;

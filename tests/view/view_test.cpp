@@ -328,10 +328,13 @@ TEST_CASE("the page's WebSocket address: its query is parsed and checked", "[vie
   CHECK_THAT(QueryRefusal("display_vertices=20000&x"), Catch::Contains("unknown parameter 'x'"));
   CHECK_THAT(QueryRefusal("display_vertices=200&display_vertices=300"),
              Catch::Contains("given twice"));
-  for (const char* value : {"", "99", "-5", "2e4", "20000abc", "nan", "99999999999999999999"}) {
+  CHECK(ParsePageQuery("&display_vertices=300&&").display_vertices == 300);  // empty pairs
+  CHECK(ParsePageQuery("display_vertices=2147483647").display_vertices == 2147483647);
+  for (const char* value :
+       {"", "99", "-5", "2e4", "20000abc", "nan", "2147483648", "99999999999999999999"}) {
     CAPTURE(value);
     CHECK_THAT(QueryRefusal(fmt::format("display_vertices={}", value)),
-               Catch::Contains("is not an integer of at least 100"));
+               Catch::Contains("is not an integer in [100, 2147483647]"));
   }
   CHECK_THAT(QueryRefusal("display_vertices"), Catch::Contains("is not an integer"));
   // A long garbage key is cut in the message.

@@ -4,6 +4,8 @@
 //
 //   node web/test/browser_test.mjs HARAP_EXECUTABLE SCENARIO.toml [--screenshot FILE]
 //        [--benchmark DRAGS] [--tolerance T] [--display-vertices N] [--page-display N|all]
+// (--display-vertices is the server's budget; a page drawn by a software renderer, as here, asks
+// for at most 20000 vertices unless --page-display says otherwise.)
 //
 // The test: the page loads and solves; a handle dragged with synthesized mouse events moves the
 // mesh through preview frames and a full solve on release; the energy the page shows equals
@@ -103,6 +105,17 @@ try {
   check(moved > 1e-3, `dragging the gizmo moved the mesh (by up to ${moved.toFixed(4)})`);
   check(after.previews >= 1 && after.frames > framesBefore + 1,
     `preview frames streamed while dragging (${after.previews}) and a full solve followed`);
+  // Without a GPU: the display the page asks for, and half resolution only while dragging.
+  const drawing = await page.evaluate(() => ({ software: window.harapView.softwareRenderer,
+    requested: window.harapView.displayRequested, low: window.harapView.lowResolutionFrames,
+    ratio: window.harapView.pixelRatio(), device: window.devicePixelRatio }));
+  if (drawing.software) {
+    check(pageDisplay !== null || drawing.requested === 20000,
+      `a software renderer asks for a display of 20000 vertices (${drawing.requested})`);
+    check(drawing.low >= 1 && drawing.ratio === drawing.device,
+      `a software renderer drew ${drawing.low} frames at half resolution while dragging and ` +
+      `is back at ${drawing.ratio}`);
+  }
 
   // The energy shown against `harap deform` on the scenario the page exports.
   await page.evaluate(() => window.harapView.requestScenario());
