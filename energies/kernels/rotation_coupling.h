@@ -117,9 +117,6 @@ void CoupledRotationDerivative(const RotationCoupling& coupling, const Positions
                                const std::vector<Eigen::Matrix3d>& curvature,
                                Rotations& d_rotations, const Context& context);
 
-/// Shared implementation of the Energy interface for energies that are fully described by
-/// (A, RotationCoupling): concrete energies only build `a_` and `coupling_` in
-/// PrecomputeCoupledForm().
 /// The Options of an energy that has none: the shape Registry::Add<T>() builds from
 /// (T::Options::FromConfig), which still rejects every key, so a typo fails loudly.
 struct NoOptions {
@@ -129,6 +126,9 @@ struct NoOptions {
   }
 };
 
+/// Shared implementation of the Energy interface for energies that are fully described by
+/// (A, RotationCoupling): concrete energies only build `a_` and `coupling_` in
+/// PrecomputeCoupledForm().
 class CoupledQuadraticEnergy : public Energy {
  public:
   /// An energy of this form has no options unless it declares its own `Options`: the weights of
