@@ -73,6 +73,9 @@ struct LevelSetup {
 /// What a driver asks of one level solve. Negative limits take the solver's configured ones.
 struct LevelSolveRequest {
   double tolerance = -1.0;
+  /// The level's second stopping test (LocalGlobalOptions::energy_tolerance); negative: the
+  /// solver's own. Solvers without it ignore it.
+  double energy_tolerance = -1.0;
   int max_iterations = -1;
   /// state.rotations were handed down by the coarser level (an upsampler with
   /// UpsampleOutput::kRotations): start with a global step from them (Eq. 7). Otherwise the

@@ -28,6 +28,10 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
   options.coarse_tolerance =
       node.Get("coarse_tolerance", options.coarse_tolerance,
                "convergence tolerance on the coarse levels (negative: same as tolerance)");
+  options.coarse_energy_tolerance =
+      node.Get("coarse_energy_tolerance", options.coarse_energy_tolerance,
+               "energy_tolerance on the coarse levels (negative: the same as on the finest; 0: "
+               "the displacement test alone)");
   options.level_step = node.Get("level_step", options.level_step,
                                 "solve every k-th level (1: all; the finest and coarsest always)",
                                 Range::AtLeast(1));
@@ -91,6 +95,9 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   request.start_from_rotations = start_from_rotations;
   request.diagonal = diagonal;
   if (level > 0 && coarse_tolerance >= 0.0) request.tolerance = coarse_tolerance;
+  if (level > 0 && coarse_energy_tolerance >= 0.0) {
+    request.energy_tolerance = coarse_energy_tolerance;
+  }
   if (level == 0 && coarse_approximation && num_levels > 1) request.max_iterations = 1;
   request.targets_follow_rotations = targets_follow_rotations;
   request.freeze_targets_after = freeze_targets_after;

@@ -236,6 +236,7 @@ LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveReq
                                           const Context& context) {
   LocalGlobalOptions options = options_;
   if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
+  if (request.energy_tolerance >= 0.0) options.energy_tolerance = request.energy_tolerance;
   if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
   options.freeze_targets_after = request.freeze_targets_after;
   const RotationSite site = energy_->rotation_site();
@@ -409,6 +410,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
     // Newton steps and Anderson's extrapolation need the same map G(u) = global(local(u)) from
     // one iteration to the next (fixed targets) and rotations fitted to u.
     double displacement = 0.0;
+    const bool previous_energy_known = energy_is_fitted;
     if (options.newton > 0 && !targets_move && energy_is_fitted) {
       displacement = NewtonIteration(state, energy, options, squared_diagonal, context, result);
     } else {
@@ -427,6 +429,12 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
       targets_frozen = true;
       result.targets_frozen_at = result.iterations;
     }
+    // The last iteration's relative energy decrease, for energy_tolerance (unknown after a first
+    // global step from handed-down rotations: no energy before it).
+    const double energy_decrease =
+        previous_energy_known ? (previous_energy - energy) /
+                                    std::max(std::abs(energy), std::numeric_limits<double>::min())
+                              : std::numeric_limits<double>::infinity();
     previous_energy = energy;
     if (context.iteration_callback) {
       IterationSummary summary_for_callback{level_, result.iterations, energy, displacement,
@@ -436,7 +444,8 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
         break;
       }
     }
-    if (displacement < options.tolerance) {
+    if (displacement < options.tolerance &&
+        (options.energy_tolerance <= 0.0 || energy_decrease < options.energy_tolerance)) {
       result.converged = true;
       break;
     }
@@ -567,6 +576,12 @@ LocalGlobalOptions ReadLocalGlobalOptions(OptionReader node) {
                                "stop when max squared vertex displacement of a global step / "
                                "squared bounding-box diagonal falls below this (0: never)",
                                Range::AtLeast(0.0));
+  options.energy_tolerance =
+      node.Get("energy_tolerance", options.energy_tolerance,
+               "also require the last iteration to have lowered the energy by less than this "
+               "fraction, (E_prev − E) / E, before the displacement test stops a level (0: the "
+               "displacement test alone, the paper's)",
+               Range::AtLeast(0.0));
   options.max_iterations =
       node.Get("max_iterations", options.max_iterations,
                "cap on local/global iterations (per level)", Range::AtLeast(1));

@@ -128,3 +128,41 @@ TEST_CASE("optimizer options are validated", "[optimizers]") {
   CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"clasic\"\n").MakeOptimizer(),
                     Catch::Contains("classic"));
 }
+
+TEST_CASE("the energy stopping test: a level stops only once an iteration lowers E by little",
+          "[optimizers]") {
+  // A loose displacement tolerance stops the bent tube while its energy still falls; with
+  // energy_tolerance the run goes on until an iteration lowers E by less than that fraction.
+  const Mesh mesh = Tube(24, 16);
+  const DeformationProblem problem = BendTube(mesh, 24, 16);
+  const char* const base = "[optimizer]\ntolerance = 1e-4\nmax_iterations = 5000\n";
+  for (const char* optimizer : {"classic", "hierarchical"}) {
+    DYNAMIC_SECTION(optimizer) {
+      const auto run = [&](double energy_tolerance, EnergyTrace& trace) {
+        TestSetup setup(fmt::format("{}type = \"{}\"\nenergy_tolerance = {}\n", base, optimizer,
+                                    energy_tolerance));
+        return OptimizeWithTrace(setup, problem, trace);
+      };
+      EnergyTrace loose_trace, strict_trace;
+      const OptimizeResult loose = run(0.0, loose_trace);
+      const OptimizeResult strict = run(1e-5, strict_trace);
+      REQUIRE(loose.converged);
+      REQUIRE(strict.converged);
+      const std::vector<double>& finest = strict_trace[0];
+      REQUIRE(finest.size() >= 2);
+      // The finest level stopped on an iteration that lowered the energy by less than 1e-5 ...
+      const double last_decrease =
+          (finest[finest.size() - 2] - finest.back()) / std::abs(finest.back());
+      CHECK(last_decrease < 1e-5);
+      // ... after more iterations than the displacement test alone, at a lower energy.
+      CHECK(strict_trace[0].size() > loose_trace[0].size());
+      CHECK(strict.energy < loose.energy * (1.0 - 1e-4));
+    }
+  }
+}
+
+TEST_CASE("the energy stopping test: a negative energy_tolerance is refused", "[optimizers]") {
+  CHECK_THROWS_WITH(
+      TestSetup("[optimizer]\ntype = \"classic\"\nenergy_tolerance = -1\n").MakeOptimizer(),
+      Catch::Contains("energy_tolerance"));
+}
