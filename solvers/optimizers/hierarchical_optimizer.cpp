@@ -30,8 +30,15 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
                "convergence tolerance on the coarse levels (negative: same as tolerance)");
   options.coarse_energy_tolerance =
       node.Get("coarse_energy_tolerance", options.coarse_energy_tolerance,
-               "energy_tolerance on the coarse levels (negative: the same as on the finest; 0: "
-               "the displacement test alone)");
+               "energy_tolerance on the coarse levels (-1: the same as on the finest; 0: the "
+               "displacement test alone; local_global levels only)",
+               Range::AtLeast(-1.0));
+  if (options.coarse_energy_tolerance >= 0.0 && options.inner != "local_global") {
+    node.Fail("coarse_energy_tolerance",
+              fmt::format("applies to the local_global level solver only, not to inner = \"{}\" "
+                          "(whose tolerance is its own stopping test)",
+                          options.inner));
+  }
   options.level_step = node.Get("level_step", options.level_step,
                                 "solve every k-th level (1: all; the finest and coarsest always)",
                                 Range::AtLeast(1));

@@ -51,9 +51,8 @@ class HierarchicalOptimizer final : public Optimizer {
     bool hierarchical = true;
     /// Tolerance on the coarse levels (l > 0); negative: the same as `tolerance`.
     double coarse_tolerance = -1.0;
-    /// The level solver's energy_tolerance on the coarse levels (l > 0); negative: the same as
-    /// on the finest level. 0 stops the coarse levels by the displacement test alone: their
-    /// solutions are only the finer levels' starts.
+    /// The level solver's energy_tolerance on the coarse levels (l > 0; local_global only); -1:
+    /// the same as on the finest level. 0 stops the coarse levels by the displacement test alone.
     double coarse_energy_tolerance = -1.0;
     /// Solve every k-th level below the coarsest (1: all levels; Fig. 14 "every second level":
     /// 2). The finest and coarsest levels are always solved; skipped levels are only up-sampled.

@@ -373,6 +373,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
   int energy_increases = 0;
   bool targets_frozen = false;
   double previous_energy = energy;
+  double energy_scale = std::abs(energy);  // the largest energy seen on the level
   // Whether `energy` is E(u, R(u)) of the current positions (not so before a first global step
   // from handed-down rotations): the safeguard of Anderson acceleration compares against it.
   bool energy_is_fitted = !start_with_global_step;
@@ -429,12 +430,16 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
       targets_frozen = true;
       result.targets_frozen_at = result.iterations;
     }
-    // The last iteration's relative energy decrease, for energy_tolerance (unknown after a first
-    // global step from handed-down rotations: no energy before it).
-    const double energy_decrease =
-        previous_energy_known ? (previous_energy - energy) /
-                                    std::max(std::abs(energy), std::numeric_limits<double>::min())
-                              : std::numeric_limits<double>::infinity();
+    // The last iteration's relative energy change, for energy_tolerance (unknown after a first
+    // global step from handed-down rotations: no energy before it). An increase (moving coarse
+    // targets) counts by its size. Relative to E, but at least to a millionth of the level's
+    // largest energy, so that a minimum of 0 (targets a rigid motion reaches) still stops.
+    energy_scale = std::max(energy_scale, std::abs(energy));
+    const double energy_change =
+        previous_energy_known
+            ? std::abs(previous_energy - energy) / std::max({std::abs(energy), 1e-6 * energy_scale,
+                                                             std::numeric_limits<double>::min()})
+            : std::numeric_limits<double>::infinity();
     previous_energy = energy;
     if (context.iteration_callback) {
       IterationSummary summary_for_callback{level_, result.iterations, energy, displacement,
@@ -445,7 +450,7 @@ LocalGlobalSolver::RunResult LocalGlobalSolver::Iterate(
       }
     }
     if (displacement < options.tolerance &&
-        (options.energy_tolerance <= 0.0 || energy_decrease < options.energy_tolerance)) {
+        (options.energy_tolerance <= 0.0 || energy_change < options.energy_tolerance)) {
       result.converged = true;
       break;
     }
@@ -578,8 +583,8 @@ LocalGlobalOptions ReadLocalGlobalOptions(OptionReader node) {
                                Range::AtLeast(0.0));
   options.energy_tolerance =
       node.Get("energy_tolerance", options.energy_tolerance,
-               "also require the last iteration to have lowered the energy by less than this "
-               "fraction, (E_prev − E) / E, before the displacement test stops a level (0: the "
+               "also require the last iteration to have changed the energy by less than this "
+               "fraction, |E_prev − E| / E, before the displacement test stops a level (0: the "
                "displacement test alone, the paper's)",
                Range::AtLeast(0.0));
   options.max_iterations =

@@ -24,7 +24,8 @@ struct LocalGlobalOptions {
   /// Section 5.1; 1e-6 in its experiments). 0 runs to max_iterations.
   double tolerance = 1e-6;
   /// With a value > 0, the displacement test alone does not stop the level: the last iteration
-  /// must also have lowered the energy by less than this fraction, (E_prev − E) / E. The
+  /// must also have changed the energy by less than this fraction, |E_prev − E| / E (E at least a
+  /// millionth of the level's largest energy, so that a minimum of 0 still stops). The
   /// displacement test stops where a step moves little, which on a slowly converging level can be
   /// while the energy still falls by a fraction of a percent per iteration (docs/results.md,
   /// Fig. 11). 0 (the default): the displacement test alone, the paper's.
