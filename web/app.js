@@ -264,13 +264,7 @@ function receiveMessage(message) {
       break;
     }
     case 'solved': {
-      // The next preview goes out now, so that the server solves it while this one is drawn.
-      let eventTime = null;
-      if (message.id !== undefined && message.id === previewInFlight) {
-        previewInFlight = null;
-        eventTime = previewEventTime;
-        if (previewPending) sendPreview();
-      }
+      const eventTime = previewAnswered(message.id);
       afterNextDraw(() => solved(message, sent, eventTime));
       break;
     }
@@ -281,10 +275,7 @@ function receiveMessage(message) {
     case 'error':
       state.errors.push(message);
       showError(message.message);
-      if (message.id !== undefined && message.id === previewInFlight) {
-        previewInFlight = null;
-        if (previewPending) sendPreview();
-      }
+      previewAnswered(message.id);
       break;
     default:
       break;
@@ -319,8 +310,8 @@ function afterNextDraw(callback) {
   requestRender();
 }
 
-// `previewEventTime`: when the drag event this preview answers happened (null: not a preview).
-function solved(message, sent, previewEventTime) {
+// `eventTime`: when the drag event this preview answers happened (null: not a preview).
+function solved(message, sent, eventTime) {
   state.framesDrawn += 1;
   state.lastSolve = message;
   const now = performance.now();
@@ -329,8 +320,8 @@ function solved(message, sent, previewEventTime) {
     energyElement.textContent = message.energy === null ? '–' : message.energy.toPrecision(10);
     showTrace(message.trace);
     if (sent) state.timings.full.push(now - sent.time);
-  } else if (previewEventTime !== null) {
-    state.timings.preview.push(now - previewEventTime);
+  } else if (eventTime !== null) {
+    state.timings.preview.push(now - eventTime);
     state.timings.previewSolve.push(1000 * message.seconds);
   }
   solveInfoElement.textContent = `${message.mode} ${(1000 * message.seconds).toFixed(0)} ms, ` +
@@ -516,6 +507,16 @@ function moveChanged() {
   if (!previewPending) dragEventTime = performance.now();
   previewPending = true;
   if (previewInFlight === null) sendPreview();
+}
+// An answer (solve or error) to message `id`: if it is the preview in flight, the next one goes
+// out now, so that the server solves it while this one is drawn. Returns the drag event time of
+// the answered preview (null if `id` is not the preview in flight).
+function previewAnswered(id) {
+  if (id === undefined || id !== previewInFlight) return null;
+  previewInFlight = null;
+  const eventTime = previewEventTime;
+  if (previewPending) sendPreview();
+  return eventTime;
 }
 function sendPreview() {
   previewPending = false;
