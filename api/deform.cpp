@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/component_factory.h"
+#include "api/huge_pages.h"
 #include "api/run_warnings.h"
 #include "framework/error.h"
 
@@ -239,6 +240,7 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                        {"solve", r.timings.solve},
                        {"total", r.timings.total}};
   report["peak_memory_bytes"] = PeakMemoryBytes();
+  report["huge_pages"] = HugePageBacking();
   report["threads"] = outcome.threads;
   report["constraints"] = {
       {"constrained_vertices", r.constraints.constrained_vertices},

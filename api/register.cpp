@@ -11,6 +11,7 @@
 
 #include "api/component_factory.h"
 #include "api/deform.h"
+#include "api/huge_pages.h"
 #include "framework/error.h"
 #include "io/file_reading.h"
 #include "io/mesh_io.h"
@@ -264,6 +265,7 @@ std::string RegisterReportJson(const std::string& source_name, const Mesh& sourc
                    {"total", run.timings.total + outcome.target_seconds}}},
                  {"notes", run.notes},
                  {"peak_memory_bytes", PeakMemoryBytes()},
+                 {"huge_pages", HugePageBacking()},
                  {"config", outcome.resolved_config}};
   if (answer != nullptr) {
     const AnswerErrors& e = answer->errors;

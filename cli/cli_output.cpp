@@ -12,6 +12,7 @@
 
 #include "api/builtins.h"
 #include "api/component_factory.h"
+#include "api/huge_pages.h"
 #include "api/library.h"
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
@@ -89,7 +90,8 @@ void PrintDeformSummary(const Scenario& scenario, const DeformOutcome& outcome) 
   fmt::print("energy      {:.9e}\n", r.energy);
   for (const auto& [name, value] : r.measures) fmt::print("{:<11} {:.9e}\n", name, value);
   fmt::print("time [s]    {}\n", TimingsLine(r.timings));
-  fmt::print("memory      {:.1f} MiB peak\n", PeakMemoryBytes() / (1024.0 * 1024.0));
+  fmt::print("memory      {:.1f} MiB peak (huge pages: {})\n",
+             PeakMemoryBytes() / (1024.0 * 1024.0), HugePageBacking());
   for (const auto& note : scenario.notes) fmt::print("note        {}\n", note);
   for (size_t k = 0; k < r.levels.size(); ++k) {
     const LevelResult& level = r.levels[k];

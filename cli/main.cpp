@@ -3,7 +3,6 @@
 // `harap register SOURCE TARGET`, `harap known-answer SCENARIO`, `harap run CONFIG.toml`
 // (experiment sweeps) and `harap report DIR`.
 #include <fmt/format.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -25,6 +24,7 @@
 #include "cli/known_answer_command.h"
 #include "cli/output_checks.h"
 #include "cli/piece_flags.h"
+#include "cli/process_settings.h"
 #include "cli/progress.h"
 #include "cli/register_command.h"
 #include "cli/scenario_command.h"
@@ -237,29 +237,6 @@ int Report(const ReportArguments& args) {
   return 0;
 }
 
-// OpenBLAS and libgomp (both used inside CHOLMOD) handle failed allocations badly: OpenBLAS's
-// worker threads retry forever when their 128 MiB work buffer cannot be allocated (the process
-// then hangs at exit), and libgomp ends the process ("libgomp: Thread creation failed") when it
-// cannot create a thread. Allocations really fail only under an address-space limit
-// (`ulimit -v`); there harap runs both single-threaded, so that running out of memory ends in
-// harap's own error message: it re-executes itself once with OPENBLAS_NUM_THREADS=1 and
-// OMP_THREAD_LIMIT=1 (CHOLMOD asks for 4 OpenMP threads with num_threads(), which only the
-// thread limit caps; values the user set are kept). TBB's threads, which do harap's own parallel
-// work, are unaffected. Measured in docs/robustness.md.
-void SingleThreadedNativeLibrariesUnderMemoryLimit(char** argv) {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return;
-  if (std::getenv("HARAP_REEXECUTED_FOR_MEMORY_LIMIT") != nullptr) return;
-  if (std::getenv("OPENBLAS_NUM_THREADS") != nullptr &&
-      std::getenv("OMP_THREAD_LIMIT") != nullptr) {
-    return;
-  }
-  setenv("HARAP_REEXECUTED_FOR_MEMORY_LIMIT", "1", 1);
-  setenv("OPENBLAS_NUM_THREADS", "1", 0);
-  setenv("OMP_THREAD_LIMIT", "1", 0);
-  execv("/proc/self/exe", argv);  // returns only if it failed: carry on as we are
-}
-
 CLI::App* AddDeformCommand(CLI::App& app, DeformArguments& args) {
   auto* deform = app.add_subcommand("deform", "deform a mesh as a scenario file describes");
   deform->add_option("scenario", args.scenario, "scenario TOML file")->required();
@@ -358,7 +335,7 @@ CLI::App* AddReportCommand(CLI::App& app, ReportArguments& report_args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  SingleThreadedNativeLibrariesUnderMemoryLimit(argv);
+  RestartWithProcessSettings(argv);
   // Nothing in this process has called BLAS yet and nothing else will: OpenBLAS's idle workers,
   // started when it loaded, would only spin beside the run's threads (docs/solvers.md).
   StopIdleNativeThreads();

@@ -18,25 +18,32 @@ using iterative::ForRows;
 using iterative::kRowGrain;
 using iterative::SumRows;
 
-/// Greedy colouring in row order: each row takes the smallest colour none of its neighbours
-/// has. Uses at most (max degree + 1) colours: 7 on the armadillo and the buddha, 6 on the cow.
-std::vector<int> GreedyColoring(const SparseMatrix& a, int& num_colors) {
+/// Greedy colouring of the groups of `group_rows` consecutive rows (the last group may be
+/// shorter), in order: each group takes the smallest colour that no group coupled to it (by a
+/// non-zero between their rows) has. Groups of one row colour the matrix graph: at most
+/// (max degree + 1) colours, 7 on the armadillo and the buddha, 6 on the cow.
+std::vector<int> GreedyColoring(const SparseMatrix& a, Index group_rows, int& num_colors) {
   const Index n = static_cast<Index>(a.rows());
-  std::vector<int> color(n, -1);
-  std::vector<Index> taken_by;  // taken_by[c] == i: colour c is used by a neighbour of row i
+  const Index groups = (n + group_rows - 1) / group_rows;
+  std::vector<int> color(groups, -1);
+  std::vector<Index> taken_by;  // taken_by[c] == g: colour c is used by a neighbour of group g
   num_colors = 0;
-  for (Index i = 0; i < n; ++i) {
-    for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
-      const int c = color[it.row()];
-      if (c >= 0) taken_by[c] = i;
+  for (Index g = 0; g < groups; ++g) {
+    const Index end = std::min(n, (g + 1) * group_rows);
+    for (Index i = g * group_rows; i < end; ++i) {
+      for (SparseMatrix::InnerIterator it(a, i); it; ++it) {
+        const Index neighbour = static_cast<Index>(it.row()) / group_rows;
+        const int c = neighbour != g ? color[neighbour] : -1;
+        if (c >= 0) taken_by[c] = g;
+      }
     }
     int c = 0;
-    while (c < num_colors && taken_by[c] == i) ++c;
+    while (c < num_colors && taken_by[c] == g) ++c;
     if (c == num_colors) {
       ++num_colors;
       taken_by.push_back(-1);
     }
-    color[i] = c;
+    color[g] = c;
   }
   return color;
 }
@@ -45,9 +52,10 @@ constexpr EnumNames<GaussSeidelSolver::Sweep, 2> kSweepNames = {{
     {GaussSeidelSolver::Sweep::kForward, "forward"},
     {GaussSeidelSolver::Sweep::kSymmetric, "symmetric"},
 }};
-constexpr EnumNames<GaussSeidelSolver::Ordering, 2> kOrderingNames = {{
+constexpr EnumNames<GaussSeidelSolver::Ordering, 3> kOrderingNames = {{
     {GaussSeidelSolver::Ordering::kColored, "colored"},
     {GaussSeidelSolver::Ordering::kNatural, "natural"},
+    {GaussSeidelSolver::Ordering::kBlocks, "blocks"},
 }};
 
 }  // namespace
@@ -60,7 +68,12 @@ GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(OptionReader n
     options.ordering =
         node.GetEnum("ordering", options.ordering, kOrderingNames,
                      "colored = rows grouped by a greedy graph colouring, each colour updated in "
-                     "parallel; natural = rows in order, sequential");
+                     "parallel; natural = rows in order, sequential; blocks = runs of "
+                     "block_rows consecutive rows swept in order, the blocks coloured so that "
+                     "blocks of one colour run in parallel (keeps the rows' memory locality)");
+    options.block_rows =
+        node.Get("block_rows", options.block_rows, "rows per block of the blocks ordering",
+                 Range::Closed(1, 1 << 24));
     options.relaxation = node.Get("relaxation", options.relaxation,
                                   "over-relaxation factor ω: 1 = Gauss–Seidel, > 1 = SOR (which "
                                   "diverges outside (0, 2))",
@@ -72,20 +85,22 @@ void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& c
   const SparseMatrix a = iterative::CompressedCopy(a_in);
   const Eigen::VectorXd diagonal = solver_checks::PositiveDiagonal(a, "gauss_seidel");
 
-  // Sweep order: by colour, and by row within a colour (keeps the rows' memory locality).
+  // Sweep order: by colour, and by row within a colour (keeps the rows' memory locality). Each
+  // ordering is a colouring of groups of consecutive rows: single rows (colored), blocks of
+  // block_rows (blocks), or one group of all rows (natural).
+  block_rows_ = 1;
+  if (options_.ordering == Ordering::kBlocks) block_rows_ = options_.block_rows;
+  if (options_.ordering == Ordering::kNatural) block_rows_ = std::max<Index>(rows(), 1);
   order_.resize(rows());
   color_begin_.assign(1, 0);
-  if (options_.ordering == Ordering::kColored && rows() > 0) {
+  if (rows() > 0) {
     int num_colors = 0;
-    const std::vector<int> color = GreedyColoring(a, num_colors);
+    const std::vector<int> color = GreedyColoring(a, block_rows_, num_colors);
     color_begin_.assign(num_colors + 1, 0);
-    for (Index i = 0; i < rows(); ++i) ++color_begin_[color[i] + 1];
+    for (Index i = 0; i < rows(); ++i) ++color_begin_[color[i / block_rows_] + 1];
     for (int c = 0; c < num_colors; ++c) color_begin_[c + 1] += color_begin_[c];
     std::vector<Index> next(color_begin_.begin(), color_begin_.end() - 1);
-    for (Index i = 0; i < rows(); ++i) order_[next[color[i]]++] = i;
-  } else {
-    for (Index i = 0; i < rows(); ++i) order_[i] = i;
-    color_begin_.push_back(rows());
+    for (Index i = 0; i < rows(); ++i) order_[next[color[i / block_rows_]]++] = i;
   }
   std::vector<Index> position(rows());
   for (Index k = 0; k < rows(); ++k) position[order_[k]] = k;
@@ -119,55 +134,62 @@ void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& c
 }
 
 template <int K>
-void GaussSeidelSolver::UpdateRows(Index begin, Index end, const double* b, double* x,
-                                   const std::array<bool, 3>& active) const {
+void GaussSeidelSolver::UpdateRow(Index k, const double* b, double* x,
+                                  const std::array<bool, 3>& active) const {
+  double sum[K];
+  for (int c = 0; c < K; ++c) sum[c] = b[k * K + c];
+  for (Index p = offsets_[k]; p < offsets_[k + 1]; ++p) {
+    const double* xj = x + columns_[p] * K;
+    for (int c = 0; c < K; ++c) sum[c] -= values_[p] * xj[c];
+  }
   const double omega = options_.relaxation;
-  for (Index k = begin; k < end; ++k) {
-    double sum[K];
-    for (int c = 0; c < K; ++c) sum[c] = b[k * K + c];
-    for (Index p = offsets_[k]; p < offsets_[k + 1]; ++p) {
-      const double* xj = x + columns_[p] * K;
-      for (int c = 0; c < K; ++c) sum[c] -= values_[p] * xj[c];
-    }
-    for (int c = 0; c < K; ++c) {
-      if (!active[c]) continue;
-      const double gauss_seidel = sum[c] * inverse_diagonal_[k];
-      x[k * K + c] =
-          omega == 1.0 ? gauss_seidel : x[k * K + c] + omega * (gauss_seidel - x[k * K + c]);
-    }
+  for (int c = 0; c < K; ++c) {
+    if (!active[c]) continue;
+    const double gauss_seidel = sum[c] * inverse_diagonal_[k];
+    x[k * K + c] =
+        omega == 1.0 ? gauss_seidel : x[k * K + c] + omega * (gauss_seidel - x[k * K + c]);
   }
 }
 
 template <int K>
 void GaussSeidelSolver::RunSweep(const double* b, double* x, const std::array<bool, 3>& active,
                                  bool backward) const {
-  if (options_.ordering == Ordering::kNatural) {
-    if (!backward) {
-      UpdateRows<K>(0, rows(), b, x, active);
-    } else {
-      for (Index k = rows() - 1; k >= 0; --k) UpdateRows<K>(k, k + 1, b, x, active);
-    }
-    return;
-  }
-  // Rows of one colour are not coupled: any order within a colour (and so any thread split) is
-  // the same Gauss–Seidel step.
-  const int colors = num_colors();
+  // The groups of one colour are not coupled: any order of the groups within a colour (and so
+  // any thread split) is the same Gauss–Seidel step. Within a group the rows run in order
+  // (backward: in reverse).
+  const Index group_grain = std::max<Index>(1, kRowGrain / block_rows_);
   auto run_color = [&](int c) {
-    if (color_begin_[c + 1] - color_begin_[c] <= kRowGrain) {
-      UpdateRows<K>(color_begin_[c], color_begin_[c + 1], b, x, active);
+    const Index begin = color_begin_[c], end = color_begin_[c + 1];
+    auto run_groups = [&](Index first_group, Index last_group) {
+      const Index first = begin + first_group * block_rows_;
+      const Index last = std::min(end, begin + last_group * block_rows_);
+      if (block_rows_ == 1 || !backward) {
+        for (Index k = first; k < last; ++k) UpdateRow<K>(k, b, x, active);
+      } else {
+        for (Index group = last_group - 1; group >= first_group; --group) {
+          const Index group_first = begin + group * block_rows_;
+          for (Index k = std::min(end, group_first + block_rows_) - 1; k >= group_first; --k) {
+            UpdateRow<K>(k, b, x, active);
+          }
+        }
+      }
+    };
+    const Index groups = (end - begin + block_rows_ - 1) / block_rows_;
+    if (groups <= group_grain) {
+      run_groups(0, groups);
       return;
     }
-    tbb::parallel_for(tbb::blocked_range<Index>(color_begin_[c], color_begin_[c + 1], kRowGrain),
-                      [&](const tbb::blocked_range<Index>& range) {
-                        UpdateRows<K>(range.begin(), range.end(), b, x, active);
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Index>(0, groups, group_grain),
+        [&](const tbb::blocked_range<Index>& range) { run_groups(range.begin(), range.end()); });
   };
+  const int colors = num_colors();
   if (!backward) {
     for (int c = 0; c < colors; ++c) run_color(c);
   } else {
-    // With ω = 1 re-running the colour just swept changes nothing (its neighbours are
-    // unchanged): start the backward sweep one colour down.
-    const int last = options_.relaxation == 1.0 ? colors - 2 : colors - 1;
+    // With ω = 1 and single rows, re-running the colour just swept changes nothing (its
+    // neighbours are unchanged): start the backward sweep one colour down.
+    const int last = options_.relaxation == 1.0 && block_rows_ == 1 ? colors - 2 : colors - 1;
     for (int c = last; c >= 0; --c) run_color(c);
   }
 }

@@ -18,8 +18,14 @@ namespace harap {
 /// Orderings: "colored" (default) colours the matrix graph greedily (rows of one colour share no
 /// non-zero, so they are updated in parallel; 6–7 colours on the shared meshes) and sweeps
 /// colour by colour — a valid Gauss–Seidel ordering, just not the natural one; "natural" sweeps
-/// rows 0..n−1 sequentially (the textbook method, one thread). A symmetric sweep is a forward
-/// sweep followed by a backward one (SGS/SSOR: a symmetric iteration; counts as one iteration).
+/// rows 0..n−1 sequentially (the textbook method, one thread); "blocks" cuts the rows into runs
+/// of `block_rows` consecutive rows, colours the graph of the runs (two runs are coupled when a
+/// non-zero joins their rows) and sweeps colour by colour, the runs of one colour in parallel and
+/// the rows of a run in order (multicolour block Gauss–Seidel). On a matrix whose rows follow a
+/// space-filling curve (the optimizers' locality ordering) a run is a patch of the mesh, so a row's
+/// neighbours mostly sit in the same run and in memory next to it, where the row colouring
+/// scatters them across the whole vector. A symmetric sweep is a forward sweep followed by a
+/// backward one (SGS/SSOR: a symmetric iteration; counts as one iteration).
 ///
 /// Factorize() colours the graph and stores the rows colour by colour (off-diagonal entries and
 /// inverse diagonal, permuted so that each colour is contiguous). Solve() runs max_iterations
@@ -33,7 +39,7 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
   static constexpr std::string_view kName = "gauss_seidel";
 
   enum class Sweep { kForward, kSymmetric };
-  enum class Ordering { kColored, kNatural };
+  enum class Ordering { kColored, kNatural, kBlocks };
 
   struct Options {
     /// max_iterations: sweeps per solve (a cap when tolerance > 0). Default 10 forward sweeps
@@ -43,6 +49,9 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
     Ordering ordering = Ordering::kColored;
     /// ω: 1 is Gauss–Seidel, (1, 2) over-relaxes (SOR); must lie in (0, 2).
     double relaxation = 1.0;
+    /// Rows per run of the blocks ordering: a few hundred rows keep a run and its neighbours in
+    /// cache and still leave thousands of runs per colour to share among the threads.
+    Index block_rows = 512;
     /// Without a tolerance, one residual pass after the sweeps catches a diverging iteration
     /// (and gives relative_residual). Not a configuration key: the multigrid solver's smoothers
     /// turn it off, since its CG detects divergence itself and the pass would cost a third of
@@ -56,7 +65,7 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
       : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
-  /// Colours of the last factorized matrix (1 for the natural ordering).
+  /// Colours of the last factorized matrix (1 for the natural ordering; of the runs for blocks).
   int num_colors() const { return static_cast<int>(color_begin_.size()) - 1; }
 
  private:
@@ -68,8 +77,7 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
   template <int K>
   void RunSweep(const double* b, double* x, const std::array<bool, 3>& active, bool backward) const;
   template <int K>
-  void UpdateRows(Index begin, Index end, const double* b, double* x,
-                  const std::array<bool, 3>& active) const;
+  void UpdateRow(Index k, const double* b, double* x, const std::array<bool, 3>& active) const;
   template <int K>
   iterative::ColumnValues SquaredResidual(const double* b, const double* x) const;
 
@@ -77,8 +85,11 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
   // The matrix in sweep order: row k of the stored matrix is row order_[k] of A.
   std::vector<Index> order_;
   std::vector<Index> color_begin_;  ///< Rows [color_begin_[c], color_begin_[c+1]) share colour c.
-  std::vector<Index> offsets_;      ///< Off-diagonal entries of each row (CSR).
-  std::vector<Index> columns_;      ///< In sweep order.
+  /// Rows per coloured group: 1 (colored), block_rows (blocks) or all rows (natural). Within a
+  /// colour the groups are stored in order, each full but the last.
+  Index block_rows_ = 1;
+  std::vector<Index> offsets_;  ///< Off-diagonal entries of each row (CSR).
+  std::vector<Index> columns_;  ///< In sweep order.
   std::vector<double> values_;
   std::vector<double> diagonal_;
   std::vector<double> inverse_diagonal_;

@@ -195,6 +195,7 @@ void MultigridSolver::FactorizeImpl(const SparseMatrix& a, const Context& contex
       GaussSeidelSolver::Options smoother;
       smoother.limits = {options_.smoothing_steps, 0.0};
       smoother.sweep = GaussSeidelSolver::Sweep::kSymmetric;
+      smoother.ordering = GaussSeidelSolver::Ordering::kBlocks;
       smoother.check_without_tolerance = false;
       level.solver = std::make_unique<GaussSeidelSolver>(smoother);
     } else {

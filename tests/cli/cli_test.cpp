@@ -23,6 +23,7 @@
 
 #include "api/builtins.h"
 #include "api/deform.h"
+#include "api/huge_pages.h"
 #include "api/run_warnings.h"
 #include "cli/cli_output.h"
 #include "cli/output_checks.h"
@@ -585,6 +586,52 @@ factor = 10
   INFO(run.output);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.output, Contains("stiffness   middle: factor 10 on") && Contains("slab z"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("huge pages for malloc: GLIBC_TUNABLES gains glibc.malloc.hugetlb=1 only where it helps",
+          "[experiments][cli]") {
+  CHECK(TunableValue("", "glibc.malloc.hugetlb") == std::nullopt);
+  CHECK(TunableValue("glibc.malloc.hugetlb=0", "glibc.malloc.hugetlb") == "0");
+  CHECK(TunableValue("glibc.malloc.arena_max=1:glibc.malloc.hugetlb=2", "glibc.malloc.hugetlb") ==
+        "2");
+  CHECK(TunableValue("glibc.malloc.hugetlbx=1", "glibc.malloc.hugetlb") == std::nullopt);
+  CHECK(TunablesWithHugePages("", "madvise", true) == "glibc.malloc.hugetlb=1");
+  CHECK(TunablesWithHugePages("glibc.malloc.arena_max=1", "madvise", true) ==
+        "glibc.malloc.arena_max=1:glibc.malloc.hugetlb=1");
+  // The user's own value wins, 0 (off) included.
+  CHECK(TunablesWithHugePages("glibc.malloc.hugetlb=0", "madvise", true) == std::nullopt);
+  // Nothing to gain: the kernel gives huge pages to everything, or to nothing; or an old glibc.
+  CHECK(TunablesWithHugePages("", "always", true) == std::nullopt);
+  CHECK(TunablesWithHugePages("", "never", true) == std::nullopt);
+  CHECK(TunablesWithHugePages("", "", true) == std::nullopt);
+  CHECK(TunablesWithHugePages("", "madvise", false) == std::nullopt);
+}
+
+TEST_CASE("harap restarts itself with huge pages for malloc and reports how memory was backed",
+          "[experiments][cli]") {
+  const fs::path dir = TempDir("huge-pages");
+  const fs::path scenario = StripScenario(dir);
+  const std::string mode = TransparentHugePageMode();
+  const bool tunable_helps = mode == "madvise" && MallocHasHugePageTunable();
+  const std::string expected_default = mode == "always" ? "always"
+                                       : tunable_helps  ? "malloc"
+                                                        : "off";
+  const std::string expected_off = mode == "always" ? "always" : "off";
+  for (const auto& [environment, expected] :
+       {std::pair<std::string, std::string>{"env -u GLIBC_TUNABLES", expected_default},
+        {"env GLIBC_TUNABLES=glibc.malloc.hugetlb=0", expected_off}}) {
+    DYNAMIC_SECTION(environment) {
+      const fs::path report_file = dir / "report.json";
+      const CommandResult run = testing::RunCommand(
+          fmt::format("{} {} deform {} --report {}", environment, testing::HarapExecutable(),
+                      scenario.string(), report_file.string()));
+      INFO(run.output);
+      REQUIRE(run.status == 0);
+      CHECK(ReadJson(report_file)["huge_pages"] == expected);
+      CHECK_THAT(run.output, Contains(fmt::format("(huge pages: {})", expected)));
+    }
+  }
   fs::remove_all(dir);
 }
 

@@ -35,6 +35,8 @@ std::vector<Configuration> IterativeConfigurations() {
       {"gauss_seidel", "sweep = \"symmetric\""},
       {"gauss_seidel", "ordering = \"natural\""},
       {"gauss_seidel", "ordering = \"natural\"\nsweep = \"symmetric\""},
+      {"gauss_seidel", "ordering = \"blocks\"\nblock_rows = 64"},
+      {"gauss_seidel", "ordering = \"blocks\"\nblock_rows = 64\nsweep = \"symmetric\""},
       {"gauss_seidel", "relaxation = 1.6"},
       {"gauss_seidel", "relaxation = 1.6\nsweep = \"symmetric\""},
       {"cg", ""},
@@ -246,6 +248,45 @@ TEST_CASE("gauss_seidel: colouring is proper and covers every row", "[solvers]")
   GaussSeidelSolver natural(natural_options);
   natural.Factorize(a, Context());
   CHECK(natural.num_colors() == 1);
+}
+
+TEST_CASE(
+    "gauss_seidel: blocks of one row are the colored sweep, one block of all rows the natural",
+    "[solvers]") {
+  const SparseMatrix a = ReducedArapMatrix(30, 20);  // 560 rows
+  const Eigen::MatrixXd b = RandomRhs(a.rows(), 3, 46);
+  auto sweep = [&](GaussSeidelSolver::Ordering ordering, Index block_rows,
+                   GaussSeidelSolver::Sweep kind, int* colors = nullptr) {
+    GaussSeidelSolver::Options options;
+    options.ordering = ordering;
+    options.block_rows = block_rows;
+    options.sweep = kind;
+    options.limits = {3, 0.0};
+    GaussSeidelSolver solver(options);
+    const Context context;
+    solver.Factorize(a, context);
+    if (colors != nullptr) *colors = solver.num_colors();
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    REQUIRE(solver.Solve(b, x, context).success());
+    return x;
+  };
+  using Ordering = GaussSeidelSolver::Ordering;
+  for (const auto kind :
+       {GaussSeidelSolver::Sweep::kForward, GaussSeidelSolver::Sweep::kSymmetric}) {
+    const Eigen::MatrixXd colored = sweep(Ordering::kColored, 0, kind);
+    const Eigen::MatrixXd natural = sweep(Ordering::kNatural, 0, kind);
+    CHECK((sweep(Ordering::kBlocks, 1, kind).array() == colored.array()).all());
+    CHECK((sweep(Ordering::kBlocks, 560, kind).array() == natural.array()).all());
+    CHECK((sweep(Ordering::kBlocks, 100000, kind).array() == natural.array()).all());
+    // Blocks of 64 rows: a proper colouring of the 9 blocks (a tube's neighbouring blocks share
+    // rows' neighbours, so at least 2 colours), and another Gauss–Seidel order.
+    int colors = 0;
+    const Eigen::MatrixXd blocks = sweep(Ordering::kBlocks, 64, kind, &colors);
+    CHECK(colors >= 2);
+    CHECK(colors <= 9);
+    CHECK((blocks.array() != natural.array()).any());
+    CHECK((blocks.array() != colored.array()).any());
+  }
 }
 
 TEST_CASE("iterative solvers: results do not depend on the thread count", "[solvers]") {
