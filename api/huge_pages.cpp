@@ -13,6 +13,19 @@ namespace harap {
 namespace {
 
 constexpr std::string_view kHugePageTunable = "glibc.malloc.hugetlb";
+constexpr const char* kRequestedMarker = "HARAP_REQUESTED_HUGE_PAGES";
+
+/// GLIBC_TUNABLES as this process was started with it (what glibc read), from
+/// /proc/self/environ: setenv() after start-up changes the process's environment block, not it.
+std::optional<std::string> StartupTunables() {
+  std::ifstream file("/proc/self/environ", std::ios::binary);
+  constexpr std::string_view kPrefix = "GLIBC_TUNABLES=";
+  std::string entry;
+  while (std::getline(file, entry, '\0')) {
+    if (entry.starts_with(kPrefix)) return entry.substr(kPrefix.size());
+  }
+  return std::nullopt;
+}
 
 }  // namespace
 
@@ -62,20 +75,24 @@ std::optional<std::string> TunablesWithHugePages(std::string_view tunables,
 }
 
 bool RequestHugePagesForMalloc() {
+  // Once per chain of restarts, whatever happens to GLIBC_TUNABLES on the way (glibc erases it
+  // for privileged programs, wrappers may scrub it): never a restart loop.
+  if (std::getenv(kRequestedMarker) != nullptr) return false;
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   const auto changed = TunablesWithHugePages(tunables != nullptr ? tunables : "",
                                              TransparentHugePageMode(), MallocHasHugePageTunable());
   if (!changed) return false;
   setenv("GLIBC_TUNABLES", changed->c_str(), 1);
+  setenv(kRequestedMarker, "1", 1);
   return true;
 }
 
 std::string HugePageBacking() {
   const std::string mode = TransparentHugePageMode();
   if (mode == "always") return "always";
-  const char* tunables = std::getenv("GLIBC_TUNABLES");
-  if (mode == "madvise" && MallocHasHugePageTunable() && tunables != nullptr &&
-      TunableValue(tunables, kHugePageTunable) == "1") {
+  const std::optional<std::string> tunables = StartupTunables();
+  if (mode == "madvise" && MallocHasHugePageTunable() && tunables &&
+      TunableValue(*tunables, kHugePageTunable) == "1") {
     return "malloc";
   }
   return "off";

@@ -13,7 +13,7 @@ namespace harap {
 /// threshold (32 MiB at most) from the kernel and gives it back on free. The kernel hands such
 /// memory out in 4 KiB pages, each zeroed and mapped by a page fault on its first write; on
 /// virtual machines a fault costs microseconds, so a large run can spend more time in faults
-/// than in arithmetic (docs/results.md, "Scale and memory"). With 2 MiB transparent huge pages
+/// than in arithmetic (docs/results.md, "Huge pages for malloc"). With 2 MiB transparent huge pages
 /// one fault maps 512 times as much. Kernels in THP mode `madvise` (Debian's default on many
 /// cloud images) give them only to memory that asks: glibc 2.35 and later ask for malloc's memory
 /// when the tunable `glibc.malloc.hugetlb=1` is set in GLIBC_TUNABLES, read once at start-up. The
@@ -41,12 +41,14 @@ std::optional<std::string> TunablesWithHugePages(std::string_view tunables,
 
 /// Sets GLIBC_TUNABLES to TunablesWithHugePages() of its current value, this kernel and this
 /// glibc; true if it changed it. The setting takes effect in a process started after it: the
-/// `harap` command and the benchmarks then re-execute themselves.
+/// `harap` command and the benchmarks then re-execute themselves. It also sets
+/// HARAP_REQUESTED_HUGE_PAGES, and does nothing where that is set, so a chain of restarts asks
+/// once. Processes started later inherit both (harap's own runs, the report scripts, a browser).
 bool RequestHugePagesForMalloc();
 
 /// How this process's malloc'd memory is backed: "always" (the kernel gives every anonymous
-/// mapping huge pages), "malloc" (glibc asks for them: the tunable is set and the kernel is in
-/// `madvise` mode) or "off" (4 KiB pages). Reported with the peak memory.
+/// mapping huge pages), "malloc" (glibc asks for them: the process started with the tunable and
+/// the kernel is in `madvise` mode) or "off" (4 KiB pages). Reported with the peak memory.
 std::string HugePageBacking();
 
 }  // namespace harap

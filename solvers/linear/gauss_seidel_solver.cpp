@@ -18,13 +18,18 @@ using iterative::ForRows;
 using iterative::kRowGrain;
 using iterative::SumRows;
 
+/// Groups of `group_rows` rows that `rows` rows make (the last may be shorter).
+Index GroupCount(Index rows, Index group_rows) {
+  return rows == 0 ? 0 : 1 + (rows - 1) / group_rows;
+}
+
 /// Greedy colouring of the groups of `group_rows` consecutive rows (the last group may be
 /// shorter), in order: each group takes the smallest colour that no group coupled to it (by a
 /// non-zero between their rows) has. Groups of one row colour the matrix graph: at most
 /// (max degree + 1) colours, 7 on the armadillo and the buddha, 6 on the cow.
 std::vector<int> GreedyColoring(const SparseMatrix& a, Index group_rows, int& num_colors) {
   const Index n = static_cast<Index>(a.rows());
-  const Index groups = (n + group_rows - 1) / group_rows;
+  const Index groups = GroupCount(n, group_rows);
   std::vector<int> color(groups, -1);
   std::vector<Index> taken_by;  // taken_by[c] == g: colour c is used by a neighbour of group g
   num_colors = 0;
@@ -88,6 +93,8 @@ void GaussSeidelSolver::FactorizeImpl(const SparseMatrix& a_in, const Context& c
   // Sweep order: by colour, and by row within a colour (keeps the rows' memory locality). Each
   // ordering is a colouring of groups of consecutive rows: single rows (colored), blocks of
   // block_rows (blocks), or one group of all rows (natural).
+  HARAP_CHECK(options_.block_rows >= 1, "gauss_seidel: block_rows is {}, it must be at least 1",
+              options_.block_rows);
   block_rows_ = 1;
   if (options_.ordering == Ordering::kBlocks) block_rows_ = options_.block_rows;
   if (options_.ordering == Ordering::kNatural) block_rows_ = std::max<Index>(rows(), 1);
@@ -174,7 +181,7 @@ void GaussSeidelSolver::RunSweep(const double* b, double* x, const std::array<bo
         }
       }
     };
-    const Index groups = (end - begin + block_rows_ - 1) / block_rows_;
+    const Index groups = GroupCount(end - begin, block_rows_);
     if (groups <= group_grain) {
       run_groups(0, groups);
       return;

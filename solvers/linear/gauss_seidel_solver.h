@@ -18,14 +18,15 @@ namespace harap {
 /// Orderings: "colored" (default) colours the matrix graph greedily (rows of one colour share no
 /// non-zero, so they are updated in parallel; 6–7 colours on the shared meshes) and sweeps
 /// colour by colour — a valid Gauss–Seidel ordering, just not the natural one; "natural" sweeps
-/// rows 0..n−1 sequentially (the textbook method, one thread); "blocks" cuts the rows into runs
-/// of `block_rows` consecutive rows, colours the graph of the runs (two runs are coupled when a
-/// non-zero joins their rows) and sweeps colour by colour, the runs of one colour in parallel and
-/// the rows of a run in order (multicolour block Gauss–Seidel). On a matrix whose rows follow a
-/// space-filling curve (the optimizers' locality ordering) a run is a patch of the mesh, so a row's
-/// neighbours mostly sit in the same run and in memory next to it, where the row colouring
-/// scatters them across the whole vector. A symmetric sweep is a forward sweep followed by a
-/// backward one (SGS/SSOR: a symmetric iteration; counts as one iteration).
+/// rows 0..n−1 sequentially (the textbook method, one thread); "blocks" cuts the rows into
+/// blocks of `block_rows` consecutive rows, colours the graph of the blocks (two blocks are
+/// coupled when a non-zero joins their rows) and sweeps colour by colour, the blocks of one colour
+/// in parallel and the rows of a block in order (multicolour block Gauss–Seidel). On a matrix
+/// whose rows follow a space-filling curve (the optimizers' locality ordering) a block is a patch
+/// of the mesh and the sweep within it is the natural one: the multigrid solver, whose smoother
+/// it is, needs one iteration fewer than with the row colouring (docs/solvers.md, "multigrid").
+/// A symmetric sweep is a forward sweep followed by a backward one (SGS/SSOR: a symmetric
+/// iteration; counts as one iteration).
 ///
 /// Factorize() colours the graph and stores the rows colour by colour (off-diagonal entries and
 /// inverse diagonal, permuted so that each colour is contiguous). Solve() runs max_iterations
@@ -49,8 +50,9 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
     Ordering ordering = Ordering::kColored;
     /// ω: 1 is Gauss–Seidel, (1, 2) over-relaxes (SOR); must lie in (0, 2).
     double relaxation = 1.0;
-    /// Rows per run of the blocks ordering: a few hundred rows keep a run and its neighbours in
-    /// cache and still leave thousands of runs per colour to share among the threads.
+    /// Rows per block of the blocks ordering (not used by the others): a patch of a few hundred
+    /// vertices, which still leaves thousands of blocks per colour on a large mesh to share among
+    /// the threads.
     Index block_rows = 512;
     /// Without a tolerance, one residual pass after the sweeps catches a diverging iteration
     /// (and gives relative_residual). Not a configuration key: the multigrid solver's smoothers
@@ -65,7 +67,8 @@ class GaussSeidelSolver final : public iterative::BlockIterativeSolver<GaussSeid
       : BlockIterativeSolver(kName), options_(options) {}
 
   const Options& options() const { return options_; }
-  /// Colours of the last factorized matrix (1 for the natural ordering; of the runs for blocks).
+  /// Colours of the last factorized matrix (1 for the natural ordering, of the blocks for
+  /// blocks; 0 for an empty matrix).
   int num_colors() const { return static_cast<int>(color_begin_.size()) - 1; }
 
  private:

@@ -113,6 +113,11 @@ MultigridSolver::Options MultigridSolver::Options::FromConfig(OptionReader node)
         options.smoothing_steps = node.Get(
             "smoothing_steps", options.smoothing_steps,
             "smoothing sweeps before and after each coarse correction", Range::Closed(1, 10));
+        options.smoother_block_rows =
+            node.Get("smoother_block_rows", options.smoother_block_rows,
+                     "rows per block of the gauss_seidel smoother's blocks ordering (1: its "
+                     "colored ordering)",
+                     Range::Closed(1, 1 << 24));
         options.prolongation = node.GetEnum(
             "prolongation", options.prolongation, kProlongationNames,
             "constant = an aggregate's value copied to its unknowns; smoothed = that, smoothed by "
@@ -196,6 +201,7 @@ void MultigridSolver::FactorizeImpl(const SparseMatrix& a, const Context& contex
       smoother.limits = {options_.smoothing_steps, 0.0};
       smoother.sweep = GaussSeidelSolver::Sweep::kSymmetric;
       smoother.ordering = GaussSeidelSolver::Ordering::kBlocks;
+      smoother.block_rows = options_.smoother_block_rows;
       smoother.check_without_tolerance = false;
       level.solver = std::make_unique<GaussSeidelSolver>(smoother);
     } else {

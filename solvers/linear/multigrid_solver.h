@@ -51,6 +51,9 @@ class MultigridSolver final : public LinearSolver {
     /// Symmetric Gauss–Seidel sweeps (or Chebyshev steps) before and after each coarse
     /// correction.
     int smoothing_steps = 1;
+    /// Rows per block of the Gauss–Seidel smoother's `blocks` ordering; 1 is its `colored`
+    /// ordering, bit for bit (docs/solvers.md, "gauss_seidel").
+    Index smoother_block_rows = 512;
     /// Smoothed aggregation by default: piecewise constant prolongation needs a number of
     /// iterations that grows with the mesh (docs/solvers.md, "multigrid").
     Prolongation prolongation = Prolongation::kSmoothed;

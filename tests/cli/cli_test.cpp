@@ -613,24 +613,29 @@ TEST_CASE("harap restarts itself with huge pages for malloc and reports how memo
   const fs::path dir = TempDir("huge-pages");
   const fs::path scenario = StripScenario(dir);
   const std::string mode = TransparentHugePageMode();
-  const bool tunable_helps = mode == "madvise" && MallocHasHugePageTunable();
-  const std::string expected_default = mode == "always" ? "always"
-                                       : tunable_helps  ? "malloc"
-                                                        : "off";
-  const std::string expected_off = mode == "always" ? "always" : "off";
-  for (const auto& [environment, expected] :
-       {std::pair<std::string, std::string>{"env -u GLIBC_TUNABLES", expected_default},
-        {"env GLIBC_TUNABLES=glibc.malloc.hugetlb=0", expected_off}}) {
-    DYNAMIC_SECTION(environment) {
-      const fs::path report_file = dir / "report.json";
-      const CommandResult run = testing::RunCommand(
-          fmt::format("{} {} deform {} --report {}", environment, testing::HarapExecutable(),
-                      scenario.string(), report_file.string()));
-      INFO(run.output);
-      REQUIRE(run.status == 0);
-      CHECK(ReadJson(report_file)["huge_pages"] == expected);
-      CHECK_THAT(run.output, Contains(fmt::format("(huge pages: {})", expected)));
-    }
+  auto backing = [&](const std::string& environment) {
+    const fs::path report_file = dir / "report.json";
+    const CommandResult run = testing::RunCommand(fmt::format(
+        "env -u GLIBC_TUNABLES -u HARAP_REQUESTED_HUGE_PAGES {} {} "
+        "deform {} --report {}",
+        environment, testing::HarapExecutable(), scenario.string(), report_file.string()));
+    INFO(run.output);
+    REQUIRE(run.status == 0);
+    const std::string reported = ReadJson(report_file)["huge_pages"];
+    CHECK_THAT(run.output, Contains(fmt::format("(huge pages: {})", reported)));
+    return reported;
+  };
+  if (mode != "madvise" || !MallocHasHugePageTunable()) {
+    // The kernel gives huge pages to everything or to nothing, or glibc has no tunable: nothing
+    // to restart for.
+    WARN("THP mode '" << mode << "': the restart is not exercised on this machine");
+    CHECK(backing("") == (mode == "always" ? "always" : "off"));
+  } else {
+    // Reported from the environment the process started with: only a restart makes it "malloc".
+    CHECK(backing("") == "malloc");
+    // A value the user set wins; the marker of an earlier request stops a second one.
+    CHECK(backing("GLIBC_TUNABLES=glibc.malloc.hugetlb=0") == "off");
+    CHECK(backing("HARAP_REQUESTED_HUGE_PAGES=1") == "off");
   }
   fs::remove_all(dir);
 }

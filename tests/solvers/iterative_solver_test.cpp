@@ -273,8 +273,8 @@ TEST_CASE(
   using Ordering = GaussSeidelSolver::Ordering;
   for (const auto kind :
        {GaussSeidelSolver::Sweep::kForward, GaussSeidelSolver::Sweep::kSymmetric}) {
-    const Eigen::MatrixXd colored = sweep(Ordering::kColored, 0, kind);
-    const Eigen::MatrixXd natural = sweep(Ordering::kNatural, 0, kind);
+    const Eigen::MatrixXd colored = sweep(Ordering::kColored, 1, kind);
+    const Eigen::MatrixXd natural = sweep(Ordering::kNatural, 1, kind);
     CHECK((sweep(Ordering::kBlocks, 1, kind).array() == colored.array()).all());
     CHECK((sweep(Ordering::kBlocks, 560, kind).array() == natural.array()).all());
     CHECK((sweep(Ordering::kBlocks, 100000, kind).array() == natural.array()).all());
@@ -287,6 +287,63 @@ TEST_CASE(
     CHECK((blocks.array() != natural.array()).any());
     CHECK((blocks.array() != colored.array()).any());
   }
+}
+
+TEST_CASE("gauss_seidel: a symmetric sweep from zero is a symmetric operator in every ordering",
+          "[solvers]") {
+  // What the multigrid solver's CG needs of its smoother: S(b) = x after symmetric sweeps from
+  // x = 0 is linear and symmetric, uᵀS(v) = vᵀS(u).
+  const SparseMatrix a = ReducedArapMatrix(30, 20);
+  const Eigen::MatrixXd u = RandomRhs(a.rows(), 1, 47), v = RandomRhs(a.rows(), 1, 48);
+  for (const auto& [ordering, block_rows] :
+       {std::pair{GaussSeidelSolver::Ordering::kBlocks, Index(64)},
+        {GaussSeidelSolver::Ordering::kBlocks, Index(1)},
+        {GaussSeidelSolver::Ordering::kColored, Index(512)},
+        {GaussSeidelSolver::Ordering::kNatural, Index(512)}}) {
+    GaussSeidelSolver::Options options;
+    options.ordering = ordering;
+    options.block_rows = block_rows;
+    options.sweep = GaussSeidelSolver::Sweep::kSymmetric;
+    options.limits = {2, 0.0};
+    GaussSeidelSolver solver(options);
+    const Context context;
+    solver.Factorize(a, context);
+    auto apply = [&](const Eigen::MatrixXd& b) {
+      Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
+      REQUIRE(solver.Solve(b, x, context).success());
+      return x;
+    };
+    const double uv = u.col(0).dot(apply(v).col(0)), vu = v.col(0).dot(apply(u).col(0));
+    INFO("ordering " << static_cast<int>(ordering) << ", block_rows " << block_rows);
+    CHECK(std::abs(uv - vu) <= 1e-12 * std::abs(uv));
+  }
+}
+
+TEST_CASE("gauss_seidel: blocks on an empty and a one-row matrix", "[solvers]") {
+  GaussSeidelSolver::Options options;
+  options.ordering = GaussSeidelSolver::Ordering::kBlocks;
+  options.sweep = GaussSeidelSolver::Sweep::kSymmetric;
+  const Context context;
+  GaussSeidelSolver empty(options);
+  empty.Factorize(SparseMatrix(0, 0), context);
+  CHECK(empty.num_colors() == 0);
+  Eigen::MatrixXd none(0, 3);
+  CHECK(empty.Solve(none, none, context).success());
+  SparseMatrix one(1, 1);
+  one.insert(0, 0) = 2.0;
+  GaussSeidelSolver single(options);
+  single.Factorize(one, context);
+  CHECK(single.num_colors() == 1);
+  Eigen::MatrixXd b(1, 3), x = Eigen::MatrixXd::Zero(1, 3);
+  b << 4.0, -2.0, 1.0;
+  REQUIRE(single.Solve(b, x, context).success());
+  CHECK(x(0, 0) == 2.0);
+  CHECK(x(0, 1) == -1.0);
+  CHECK(x(0, 2) == 0.5);
+  options.block_rows = 0;
+  GaussSeidelSolver zero_rows(options);
+  CHECK_THROWS_WITH(zero_rows.Factorize(one, context),
+                    Catch::Matchers::Contains("block_rows is 0, it must be at least 1"));
 }
 
 TEST_CASE("iterative solvers: results do not depend on the thread count", "[solvers]") {
