@@ -73,9 +73,9 @@ GaussSeidelSolver::Options GaussSeidelSolver::Options::FromConfig(OptionReader n
     options.ordering =
         node.GetEnum("ordering", options.ordering, kOrderingNames,
                      "colored = rows grouped by a greedy graph colouring, each colour updated in "
-                     "parallel; natural = rows in order, sequential; blocks = runs of "
+                     "parallel; natural = rows in order, sequential; blocks = blocks of "
                      "block_rows consecutive rows swept in order, the blocks coloured so that "
-                     "blocks of one colour run in parallel (keeps the rows' memory locality)");
+                     "blocks of one colour run in parallel");
     options.block_rows =
         node.Get("block_rows", options.block_rows, "rows per block of the blocks ordering",
                  Range::Closed(1, 1 << 24));
@@ -162,23 +162,18 @@ template <int K>
 void GaussSeidelSolver::RunSweep(const double* b, double* x, const std::array<bool, 3>& active,
                                  bool backward) const {
   // The groups of one colour are not coupled: any order of the groups within a colour (and so
-  // any thread split) is the same Gauss–Seidel step. Within a group the rows run in order
-  // (backward: in reverse).
+  // any thread split) is the same Gauss–Seidel step. A range of a colour's groups is contiguous,
+  // so running it backward reverses the rows within each group, as a backward sweep must.
   const Index group_grain = std::max<Index>(1, kRowGrain / block_rows_);
   auto run_color = [&](int c) {
     const Index begin = color_begin_[c], end = color_begin_[c + 1];
     auto run_groups = [&](Index first_group, Index last_group) {
       const Index first = begin + first_group * block_rows_;
       const Index last = std::min(end, begin + last_group * block_rows_);
-      if (block_rows_ == 1 || !backward) {
+      if (!backward) {
         for (Index k = first; k < last; ++k) UpdateRow<K>(k, b, x, active);
       } else {
-        for (Index group = last_group - 1; group >= first_group; --group) {
-          const Index group_first = begin + group * block_rows_;
-          for (Index k = std::min(end, group_first + block_rows_) - 1; k >= group_first; --k) {
-            UpdateRow<K>(k, b, x, active);
-          }
-        }
+        for (Index k = last - 1; k >= first; --k) UpdateRow<K>(k, b, x, active);
       }
     };
     const Index groups = GroupCount(end - begin, block_rows_);
