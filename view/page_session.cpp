@@ -65,11 +65,12 @@ struct PageSession::Group {
 };
 
 PageSession::PageSession(const Registries& registries, const ViewSource& source, Send send,
-                         const PageOptions& options)
+                         const PageOptions& options, NewerMessageWaiting newer_message_waiting)
     : registries_(registries),
       source_(source),
       send_(std::move(send)),
       options_(options),
+      newer_message_waiting_(std::move(newer_message_waiting)),
       config_(source.run_config) {
   for (const ScenarioHandle& handle : source_.scenario.handles) {
     Group group;
@@ -309,6 +310,16 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
       SendError(error.what(), parsed[i].id);
     }
   }
+  if (interrupted_solve_) {
+    // The message that stopped the solve was refused (a move of a group that no longer
+    // exists, say), or did not solve: the solve continues from the positions it reached.
+    const std::optional<int64_t> id = *interrupted_solve_;
+    try {
+      Solve(true, id);
+    } catch (const std::exception& error) {
+      SendError(error.what(), id);
+    }
+  }
 }
 
 void PageSession::Apply(const ParsedMessage& parsed) {
@@ -404,15 +415,21 @@ void PageSession::Configure(const ConfigureMessage& configure, std::optional<int
 
 void PageSession::Solve(bool full, std::optional<int64_t> id) {
   DeformationSession& session = session_->session();
+  interrupted_solve_.reset();  // this solve supersedes an interrupted one
   Json trace = Json::array();
   const Clock::time_point start = Clock::now();
   session.set_iteration_callback([&](const IterationSummary& s) {
     trace.push_back({s.seconds, Finite(s.energy), s.level});
-    return CallbackAction::kContinue;
+    // A full solve after a release can take seconds; a drag or an edit the page sent meanwhile
+    // must not wait for it. The session keeps the positions the stop leaves.
+    const bool give_way = full && newer_message_waiting_ && newer_message_waiting_();
+    return give_way ? CallbackAction::kStop : CallbackAction::kContinue;
   });
   const OptimizeResult result = full ? session.Solve() : session.Preview();
   session.set_iteration_callback({});
   const double seconds = SecondsSince(start);
+  const bool interrupted = full && result.stopped_by_callback;
+  if (interrupted) interrupted_solve_ = id;
   SendPositions(result.positions, id.value_or(0));
   Json levels = Json::array();
   for (const LevelResult& level : result.levels)
@@ -423,6 +440,7 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
                    {"iterations", result.iterations},
                    {"total_iterations", result.total_iterations},
                    {"converged", result.converged},
+                   {"interrupted", interrupted},
                    {"seconds", seconds},
                    {"levels", levels},
                    {"trace", trace},

@@ -53,9 +53,14 @@ DisplayMesh MakeDisplayMesh(const Mesh& mesh, Index budget);
 class PageSession {
  public:
   using Send = std::function<void(Outgoing)>;
-  /// `options`: what the page asked for when it connected (ParsePageQuery).
+  /// Whether the page sent a message that makes a running full solve pointless
+  /// (SupersedesFullSolve) or closed: the solve then stops after its current iteration; if the
+  /// message is refused after all, the solve is resumed once the messages are handled.
+  using NewerMessageWaiting = std::function<bool()>;
+  /// `options`: what the page asked for when it connected (ParsePageQuery). Without
+  /// `newer_message_waiting` full solves run to the end.
   PageSession(const Registries& registries, const ViewSource& source, Send send,
-              const PageOptions& options = {});
+              const PageOptions& options = {}, NewerMessageWaiting newer_message_waiting = {});
   ~PageSession();
 
   /// Builds the session (hierarchy, precomputation, the scenario's handles), sending progress,
@@ -65,7 +70,9 @@ class PageSession {
   /// {"type": "error", "message", "id"}. Never throws.
   void HandleText(std::string_view text);
   /// Carries out a batch of text messages that arrived together: of consecutive preview moves
-  /// of one group only the last is solved (the page sees the newest targets sooner).
+  /// of one group only the last is solved (the page sees the newest targets sooner). Then a full
+  /// solve that a message interrupted and no later solve superseded runs again (from where it
+  /// stopped), answering with the interrupted solve's id.
   void HandleTexts(const std::vector<std::string>& texts);
   /// Binary messages are refused with an error message.
   void HandleBinary(size_t size);
@@ -83,6 +90,9 @@ class PageSession {
   /// The session's handles and targets from the groups (first group wins a shared vertex).
   void ApplyGroupsAsHandles();
   Positions HandleTargets() const;
+  /// A preview (`full` false) or a full solve to the tolerance, answered with the positions
+  /// and a "solved" message; a full solve stops early when a newer message waits
+  /// ("interrupted": true), and is owed until another solve starts.
   void Solve(bool full, std::optional<int64_t> id);
   /// Level `level`'s clusters as a FrameKind::kClusters frame.
   void SendClusters(int level);
@@ -96,6 +106,10 @@ class PageSession {
   const ViewSource& source_;
   Send send_;
   PageOptions options_;
+  NewerMessageWaiting newer_message_waiting_;
+  /// The id of a full solve that a newer message interrupted (set: owed, resumed after the
+  /// batch of messages unless another solve starts first).
+  std::optional<std::optional<int64_t>> interrupted_solve_;
   ConfigNode config_;
   std::unique_ptr<ConfiguredSession> session_;
   std::vector<Group> groups_;

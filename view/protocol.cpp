@@ -244,4 +244,13 @@ std::optional<int64_t> MessageIdOf(std::string_view text) {
   return it->get<int64_t>();
 }
 
+bool SupersedesFullSolve(std::string_view text) {
+  const Json object = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (!object.is_object()) return false;
+  const auto it = object.find("type");
+  if (it == object.end() || !it->is_string()) return false;
+  const std::string& type = it->get_ref<const std::string&>();
+  return type == "move" || type == "solve" || type == "configure" || type == "remove_handle";
+}
+
 }  // namespace harap::view

@@ -81,6 +81,12 @@ std::string BinaryMessageRefusal(size_t size);
 /// (so the error answer can name the request); never throws.
 std::optional<int64_t> MessageIdOf(std::string_view text);
 
+/// Whether a text message, once carried out, makes a full solve still running pointless: a move
+/// (its own solve follows), a solve, a configure (the session is built again) or a removed handle
+/// (a full solve follows). Looks at the type only (the message is validated when it is carried
+/// out); false for anything else, text that is not JSON included. Never throws.
+bool SupersedesFullSolve(std::string_view text);
+
 /// What a page asks for when it connects, in the query of its WebSocket's address
 /// (`/ws?display_vertices=20000`).
 struct PageOptions {

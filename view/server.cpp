@@ -117,6 +117,8 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
     std::condition_variable ready;
     std::vector<std::string> texts;
     std::vector<size_t> binary_sizes;
+    /// How many of `texts` supersede a full solve (SupersedesFullSolve): one stops it.
+    size_t superseding = 0;
     bool closed = false;
   };
 
@@ -143,6 +145,7 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
         std::lock_guard lock(self->inbox_.mutex);
         if (self->ws_.got_text()) {
           self->inbox_.texts.push_back(beast::buffers_to_string(self->buffer_.data()));
+          self->inbox_.superseding += SupersedesFullSolve(self->inbox_.texts.back());
         } else {
           self->inbox_.binary_sizes.push_back(self->buffer_.size());
         }
@@ -172,7 +175,13 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
                         if (self) self->Send(std::move(message));
                       });
           },
-          options_);
+          options_,
+          [this] {
+            // Only a message that makes the solve pointless stops it: after an added handle
+            // the solve would be resumed, and the two would share the cores with the page.
+            std::lock_guard lock(inbox_.mutex);
+            return inbox_.closed || inbox_.superseding > 0;
+          });
       page.Start();
       for (;;) {
         std::vector<std::string> texts;
@@ -185,6 +194,7 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
           if (inbox_.closed) break;
           texts.swap(inbox_.texts);
           binary_sizes.swap(inbox_.binary_sizes);
+          inbox_.superseding = 0;
         }
         for (const size_t size : binary_sizes) page.HandleBinary(size);
         if (!texts.empty()) page.HandleTexts(texts);

@@ -313,8 +313,15 @@ function afterNextDraw(callback) {
 // `eventTime`: when the drag event this preview answers happened (null: not a preview).
 function solved(message, sent, eventTime) {
   state.framesDrawn += 1;
-  state.lastSolve = message;
   const now = performance.now();
+  if (message.interrupted) {
+    // A newer message (a drag, an edit) came first; the server resumes this solve after it and
+    // answers with the same id, so its timer keeps running.
+    solveInfoElement.textContent = `full solve interrupted after ${(1000 * message.seconds).toFixed(0)} ms ` +
+      `(${message.total_iterations} iterations), resumed after the newer request`;
+    return;
+  }
+  state.lastSolve = message;
   if (message.mode === 'full') {
     state.energy = message.energy;
     energyElement.textContent = message.energy === null ? '–' : message.energy.toPrecision(10);
@@ -573,6 +580,7 @@ state.setLevel = (level) => {
 state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
   : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
+state.previewInFlight = () => previewInFlight !== null;
 state.requestScenario = () => send({ type: 'scenario' });
 
 function configure() {

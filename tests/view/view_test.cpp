@@ -63,6 +63,21 @@ TEST_CASE("page messages: valid ones parse", "[view]") {
   CHECK(configure.tolerance == 1e-7);
 }
 
+TEST_CASE("page messages: which ones make a running full solve pointless", "[view]") {
+  CHECK(SupersedesFullSolve(R"({"type":"move","group":0,"transform":[],"solve":"full"})"));
+  CHECK(SupersedesFullSolve(R"({"type":"move","group":99})"));  // refused later, still a move
+  CHECK(SupersedesFullSolve(R"({"type":"solve"})"));
+  CHECK(SupersedesFullSolve(R"({"type":"configure","energy":"arap"})"));
+  CHECK(SupersedesFullSolve(R"({"type":"remove_handle","group":1})"));
+  CHECK_FALSE(SupersedesFullSolve(R"({"type":"add_handle","vertex":3,"radius":0.1})"));
+  CHECK_FALSE(SupersedesFullSolve(R"({"type":"level","level":1})"));
+  CHECK_FALSE(SupersedesFullSolve(R"({"type":"scenario"})"));
+  CHECK_FALSE(SupersedesFullSolve(R"({"type":7})"));
+  CHECK_FALSE(SupersedesFullSolve(R"(["move"])"));
+  CHECK_FALSE(SupersedesFullSolve("not json"));
+  CHECK_FALSE(SupersedesFullSolve(""));
+}
+
 TEST_CASE("page messages: malformed ones are refused naming the problem", "[view]") {
   CHECK(Refusal("{") == "message is not valid JSON");
   CHECK(Refusal("[1,2]") == "message is not a JSON object");
@@ -108,6 +123,7 @@ struct Page {
   ViewSource source;
   std::vector<Outgoing> sent;
   std::unique_ptr<PageSession> page;
+  bool newer_message_waiting = false;  ///< what the page session is told while it solves
 
   /// `right_weight`: the right column's handle weight (finite: soft). `options`: what the page
   /// asked for when it connected.
@@ -135,7 +151,8 @@ struct Page {
     source.mesh_toml = fmt::format("mesh = \"{}\"\n", mesh_file.string());
     source.threads = 1;
     page = std::make_unique<PageSession>(
-        registries, source, [this](Outgoing message) { sent.push_back(message); }, options);
+        registries, source, [this](Outgoing message) { sent.push_back(message); }, options,
+        [this] { return newer_message_waiting; });
     page->Start();
   }
   std::vector<Json> Texts() const {
@@ -286,6 +303,58 @@ TEST_CASE("a page's session: a full solve after a preview of the same targets co
   CHECK(preview_solved["iterations"].get<int>() > 1);
   const double energy = direct_solved["energy"];
   CHECK(preview_solved["energy"].get<double>() == Approx(energy).epsilon(1e-6));
+}
+
+TEST_CASE("a page's session: a newer message interrupts a full solve, which resumes after it",
+          "[view]") {
+  const std::string full =
+      R"({"type":"move","group":1,"transform":[0.8,-0.6,0,0.3, 0.6,0.8,0,0, 0,0,1,0],"solve":"full","id":2})";
+  Page interrupted, direct;
+  direct.page->HandleText(full);
+  const Json converged = direct.Last("solved");
+  REQUIRE(converged["converged"] == true);
+  REQUIRE(converged["iterations"].get<int>() > 2);
+
+  // While a message waits, the full solve stops after an iteration; handling the batch resumes
+  // it once, and it stops again as long as something waits.
+  interrupted.newer_message_waiting = true;
+  interrupted.page->HandleText(full);
+  std::vector<Json> solves;
+  for (const Json& text : interrupted.Texts()) {
+    if (text["type"] == "solved" && text.contains("id") && text["id"] == 2) solves.push_back(text);
+  }
+  REQUIRE(solves.size() == 2);
+  for (const Json& solve : solves) {
+    CHECK(solve["interrupted"] == true);
+    CHECK(solve["converged"] == false);
+    CHECK(solve["iterations"].get<int>() < converged["iterations"].get<int>());
+  }
+
+  // The message that stopped it is refused (a group that does not exist): the solve continues
+  // to the tolerance and answers with the interrupted solve's id.
+  interrupted.newer_message_waiting = false;
+  interrupted.page->HandleText(
+      R"({"type":"move","group":7,"transform":[1,0,0,0, 0,1,0,0, 0,0,1,0],"id":3})");
+  CHECK(interrupted.Last("error")["id"] == 3);
+  const Json resumed = interrupted.Last("solved");
+  CHECK(resumed["id"] == 2);
+  CHECK(resumed["interrupted"] == false);
+  CHECK(resumed["converged"] == true);
+  CHECK(resumed["energy"].get<double>() == Approx(converged["energy"].get<double>()).epsilon(1e-6));
+
+  // A move supersedes an interrupted solve: it is not resumed after the move's own solve.
+  interrupted.newer_message_waiting = true;
+  interrupted.page->HandleText(full);
+  interrupted.newer_message_waiting = false;
+  const size_t before = interrupted.Texts().size();
+  interrupted.page->HandleText(
+      R"({"type":"move","group":1,"transform":[1,0,0,0.2, 0,1,0,0, 0,0,1,0],"id":4})");
+  const std::vector<Json> after = interrupted.Texts();
+  int solved_after = 0;
+  for (size_t i = before; i < after.size(); ++i) solved_after += after[i]["type"] == "solved";
+  CHECK(solved_after == 1);
+  CHECK(interrupted.Last("solved")["id"] == 4);
+  CHECK(interrupted.Last("solved")["mode"] == "preview");
 }
 
 TEST_CASE("the display of a large mesh: decimated to the budget, onto mesh vertices", "[view]") {

@@ -79,8 +79,31 @@ try {
     positions: window.harapView.positions(), groups: window.harapView.groups.length }));
   check(first.groups >= 1 && Number.isFinite(first.energy), 'the page loads and solves');
 
+  // The page's first solve starts from the rest pose, as `harap deform` does: on the scenario the
+  // page exports, both solve one problem from one start and end at the same energy.
+  const dir = mkdtempSync(join(tmpdir(), 'harap-view-test-'));
+  async function exportAndDeform() {
+    await page.evaluate(() => { window.harapView.scenarioToml = null; window.harapView.requestScenario(); });
+    await waitFor(() => window.harapView.scenarioToml !== null);
+    writeFileSync(join(dir, 'scenario.toml'), await page.evaluate(() => window.harapView.scenarioToml));
+    const optimizer = await page.evaluate(() => window.harapView.session.optimizer);
+    const deform = spawnSync(harap, ['deform', join(dir, 'scenario.toml'), '--tolerance', tolerance,
+      '--optimizer', optimizer, '--report', join(dir, 'report.json'), '--threads', '2', '-q'],
+    { encoding: 'utf8' });
+    return { status: deform.status, stderr: deform.stderr ?? '', energy: deform.status === 0
+      ? JSON.parse(readFileSync(join(dir, 'report.json'), 'utf8')).energy : null };
+  }
+  const fromRest = await exportAndDeform();
+  const shown = await page.evaluate(() => document.getElementById('energy').textContent);
+  const relative = Math.abs(first.energy - fromRest.energy) / Math.abs(fromRest.energy);
+  check(fromRest.status === 0 && relative < 1e-6 &&
+    Math.abs(Number(shown) - first.energy) <= 1e-9 * first.energy,
+  `energy shown ${shown} equals harap deform's ${fromRest.energy} on the exported scenario ` +
+    `(relative ${relative.toExponential(2)}) ${fromRest.stderr}`);
+
   // Drag the last handle's gizmo centre across the screen.
-  async function drag(dx, dy, steps) {
+  // `waitForFull`: wait for the release's full solve to be drawn.
+  async function drag(dx, dy, steps, waitForFull = true) {
     const framesBefore = await page.evaluate(() => window.harapView.framesDrawn);
     const fullBefore = await page.evaluate(() => window.harapView.timings.full.length);
     const start = await page.evaluate(() => window.harapView.gizmoScreenPosition());
@@ -91,14 +114,13 @@ try {
       await new Promise((resolve) => setTimeout(resolve, 16));
     }
     await page.mouse.up();
-    await waitFor((n) => window.harapView.timings.full.length > n, fullBefore);
+    if (waitForFull) await waitFor((n) => window.harapView.timings.full.length > n, fullBefore);
     return framesBefore;
   }
   const framesBefore = await drag(120, -60, 12);
   const after = await page.evaluate(() => ({ energy: window.harapView.energy,
     positions: window.harapView.positions(), frames: window.harapView.framesDrawn,
-    previews: window.harapView.timings.preview.length,
-    shown: document.getElementById('energy').textContent }));
+    previews: window.harapView.timings.preview.length }));
   let moved = 0;
   for (let i = 0; i < after.positions.length; ++i)
     moved = Math.max(moved, Math.abs(after.positions[i] - first.positions[i]));
@@ -117,23 +139,13 @@ try {
       `is back at ${drawing.ratio}`);
   }
 
-  // The energy shown against `harap deform` on the scenario the page exports.
-  await page.evaluate(() => window.harapView.requestScenario());
-  await waitFor(() => window.harapView.scenarioToml !== null);
-  const toml = await page.evaluate(() => window.harapView.scenarioToml);
-  const dir = mkdtempSync(join(tmpdir(), 'harap-view-test-'));
-  writeFileSync(join(dir, 'scenario.toml'), toml);
-  const optimizer = await page.evaluate(() => window.harapView.session.optimizer);
-  const deform = spawnSync(harap, ['deform', join(dir, 'scenario.toml'), '--tolerance', tolerance,
-    '--optimizer', optimizer,
-    '--report', join(dir, 'report.json'), '--threads', '2', '-q'], { encoding: 'utf8' });
-  check(deform.status === 0, `harap deform runs the exported scenario ${deform.stderr ?? ''}`);
-  if (deform.status === 0) {
-    const library = JSON.parse(readFileSync(join(dir, "report.json"), "utf8")).energy;
-    const relative = Math.abs(after.energy - library) / Math.abs(library);
-    check(relative < 1e-4 && Math.abs(Number(after.shown) - after.energy) <= 1e-9 * after.energy,
-      `energy shown ${after.shown} equals harap deform's ${library} (relative ${relative.toExponential(2)})`);
-  }
+  // The scenario exported after the drag: the targets as a rigid motion per handle (the server
+  // refuses to write targets that are not one), a problem `harap deform` solves. Its energy is
+  // not the page's: the session started from the previous frame, `harap deform` from the rest
+  // pose, and on a real mesh the two runs stop at energies apart by more than the tolerance.
+  const dragged = await exportAndDeform();
+  check(dragged.status === 0, `harap deform runs the scenario exported after the drag ` +
+    `(energy ${dragged.energy}, the page's ${after.energy}) ${dragged.stderr}`);
 
   // Add a handle at a vertex halfway up, then remove it.
   const editsBefore = await page.evaluate(() => window.harapView.timings.edit.length);
@@ -253,7 +265,19 @@ try {
       await page.evaluate((g) => window.harapView.removeHandle(g), n);
       await waitFor((m) => window.harapView.groups.length === m, n);
     }
+    // The last removal's colours may be drawn after its groups arrived.
+    await waitFor(() => window.harapView.timings.edit.length === 10);
+    // Drags started right after a release, while its full solve runs: the first preview drawn.
+    const regrabs = [];
+    for (let d = 0; d < 3; ++d) {
+      await drag(d % 2 ? -40 : 40, 20, 6, /*waitForFull=*/false);
+      await waitFor(() => !window.harapView.previewInFlight());
+      const previews = await page.evaluate(() => window.harapView.timings.preview.length);
+      await drag(d % 2 ? 40 : -40, -20, 6);
+      regrabs.push(await page.evaluate((n) => window.harapView.timings.preview[n], previews));
+    }
     const timings = await page.evaluate(() => window.harapView.timings);
+    timings.regrab = regrabs;
     const median = (values) => {
       const sorted = [...values].sort((a, b) => a - b);
       return sorted.length ? sorted[Math.floor(sorted.length / 2)] : null;
