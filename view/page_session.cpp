@@ -310,14 +310,14 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
       SendError(error.what(), parsed[i].id);
     }
   }
-  if (interrupted_solve_) {
-    // The message that stopped the solve was refused (a move of a group that no longer
-    // exists, say), or did not solve: the solve continues from the positions it reached.
-    const std::optional<int64_t> id = *interrupted_solve_;
+  // The message that stopped a full solve arrives in a later batch. If that message was refused
+  // (a move of a group that no longer exists, say), nothing superseded the solve: it continues
+  // from the positions it reached, once no newer message waits.
+  if (full_solve_owed_ && !(newer_message_waiting_ && newer_message_waiting_())) {
     try {
-      Solve(true, id);
+      Solve(true, owed_solve_id_);
     } catch (const std::exception& error) {
-      SendError(error.what(), id);
+      SendError(error.what(), owed_solve_id_);
     }
   }
 }
@@ -415,13 +415,13 @@ void PageSession::Configure(const ConfigureMessage& configure, std::optional<int
 
 void PageSession::Solve(bool full, std::optional<int64_t> id) {
   DeformationSession& session = session_->session();
-  interrupted_solve_.reset();  // this solve supersedes an interrupted one
+  full_solve_owed_ = false;  // this solve supersedes a stopped one
   Json trace = Json::array();
   const Clock::time_point start = Clock::now();
   session.set_iteration_callback([&](const IterationSummary& s) {
     trace.push_back({s.seconds, Finite(s.energy), s.level});
-    // A full solve after a release can take seconds; a drag or an edit the page sent meanwhile
-    // must not wait for it. The session keeps the positions the stop leaves.
+    // A full solve after a release can take seconds; a drag, a removal or another solve that the
+    // page sent meanwhile must not wait for it. The session keeps the positions the stop leaves.
     const bool give_way = full && newer_message_waiting_ && newer_message_waiting_();
     return give_way ? CallbackAction::kStop : CallbackAction::kContinue;
   });
@@ -429,7 +429,10 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
   session.set_iteration_callback({});
   const double seconds = SecondsSince(start);
   const bool interrupted = full && result.stopped_by_callback;
-  if (interrupted) interrupted_solve_ = id;
+  if (interrupted) {
+    full_solve_owed_ = true;
+    owed_solve_id_ = id;
+  }
   SendPositions(result.positions, id.value_or(0));
   Json levels = Json::array();
   for (const LevelResult& level : result.levels)

@@ -107,9 +107,11 @@ class PageSession {
   Send send_;
   PageOptions options_;
   NewerMessageWaiting newer_message_waiting_;
-  /// The id of a full solve that a newer message interrupted (set: owed, resumed after the
-  /// batch of messages unless another solve starts first).
-  std::optional<std::optional<int64_t>> interrupted_solve_;
+  /// A full solve that a newer message stopped is owed until another solve starts; it is
+  /// resumed, with the id of the message that asked for it, after a batch of messages once
+  /// nothing else waits (the message that stopped it was refused).
+  bool full_solve_owed_ = false;
+  std::optional<int64_t> owed_solve_id_;
   ConfigNode config_;
   std::unique_ptr<ConfiguredSession> session_;
   std::vector<Group> groups_;

@@ -141,14 +141,15 @@ class PageConnection : public std::enable_shared_from_this<PageConnection> {
         self->Close();
         return;
       }
-      {
+      if (self->ws_.got_text()) {
+        std::string text = beast::buffers_to_string(self->buffer_.data());
+        const bool superseding = SupersedesFullSolve(text);
         std::lock_guard lock(self->inbox_.mutex);
-        if (self->ws_.got_text()) {
-          self->inbox_.texts.push_back(beast::buffers_to_string(self->buffer_.data()));
-          self->inbox_.superseding += SupersedesFullSolve(self->inbox_.texts.back());
-        } else {
-          self->inbox_.binary_sizes.push_back(self->buffer_.size());
-        }
+        self->inbox_.texts.push_back(std::move(text));
+        self->inbox_.superseding += superseding;
+      } else {
+        std::lock_guard lock(self->inbox_.mutex);
+        self->inbox_.binary_sizes.push_back(self->buffer_.size());
       }
       self->inbox_.ready.notify_one();
       self->buffer_.consume(self->buffer_.size());

@@ -29,6 +29,7 @@ function showError(text) {
 // What the page shows and what a test or a benchmark reads (window.harapView).
 const state = {
   ready: false, mesh: null, groups: [], energy: null, lastSolve: null, framesDrawn: 0,
+  stoppedSolves: 0,
   errors: [], timings: { preview: [], full: [], edit: [], previewSolve: [], editServer: [], render: [],
     frame: [] },
   scenarioToml: null,
@@ -315,10 +316,12 @@ function solved(message, sent, eventTime) {
   state.framesDrawn += 1;
   const now = performance.now();
   if (message.interrupted) {
-    // A newer message (a drag, an edit) came first; the server resumes this solve after it and
-    // answers with the same id, so its timer keeps running.
-    solveInfoElement.textContent = `full solve interrupted after ${(1000 * message.seconds).toFixed(0)} ms ` +
-      `(${message.total_iterations} iterations), resumed after the newer request`;
+    // A newer move, solve, configure or removal stopped it and solves anew (the server resumes
+    // it only if that message is refused, and then it is not timed).
+    solveInfoElement.textContent = `full solve stopped after ${(1000 * message.seconds).toFixed(0)} ms ` +
+      `(${message.total_iterations} iterations): superseded by a newer request`;
+    if (message.id !== undefined) sentAt.delete(message.id);
+    state.stoppedSolves += 1;
     return;
   }
   state.lastSolve = message;
@@ -534,7 +537,8 @@ function sendPreview() {
 function moveReleased() {
   if (selectedGroup < 0 || settings.previewOnly) return;
   previewPending = false;
-  send({ type: 'move', group: selectedGroup, transform: groupTransform(), solve: 'full' });
+  state.releaseId = send({ type: 'move', group: selectedGroup, transform: groupTransform(),
+    solve: 'full' });
 }
 window.addEventListener('keydown', (event) => {
   if (event.key === 'p') {
@@ -580,7 +584,8 @@ state.setLevel = (level) => {
 state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
   : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
-state.previewInFlight = () => previewInFlight !== null;
+// Whether a preview is on its way or answered but not yet drawn (its timer not yet taken).
+state.previewBusy = () => previewInFlight !== null || renderRequested || drawnCallbacks.length > 0;
 state.requestScenario = () => send({ type: 'scenario' });
 
 function configure() {

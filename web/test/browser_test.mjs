@@ -12,7 +12,9 @@
 // `harap deform`'s on the scenario the page exports; a handle is added and removed; malformed
 // messages are refused with errors while the page keeps working; the screenshot is not blank;
 // the hierarchy level slider colours the coarsest level's clusters.
-// --benchmark N: N drags, then the page's own timers as JSON (docs/results.md).
+// --benchmark N: N drags and five added and removed handles, then the page's own timers as JSON
+// (docs/results.md); then three drags each started right after a release (`regrab`: the first
+// preview drawn while the release's full solve runs; `stopped`: full solves stopped by them).
 // Exits 77 (ctest: skipped) when Chromium is absent.
 import { spawn, spawnSync } from 'node:child_process';
 import http from 'node:http';
@@ -102,10 +104,9 @@ try {
     `(relative ${relative.toExponential(2)}) ${fromRest.stderr}`);
 
   // Drag the last handle's gizmo centre across the screen.
-  // `waitForFull`: wait for the release's full solve to be drawn.
+  // `waitForFull`: wait for the release's own full solve to be drawn.
   async function drag(dx, dy, steps, waitForFull = true) {
     const framesBefore = await page.evaluate(() => window.harapView.framesDrawn);
-    const fullBefore = await page.evaluate(() => window.harapView.timings.full.length);
     const start = await page.evaluate(() => window.harapView.gizmoScreenPosition());
     await page.mouse.move(start.x, start.y);
     await page.mouse.down();
@@ -114,7 +115,11 @@ try {
       await new Promise((resolve) => setTimeout(resolve, 16));
     }
     await page.mouse.up();
-    if (waitForFull) await waitFor((n) => window.harapView.timings.full.length > n, fullBefore);
+    const release = await page.evaluate(() => window.harapView.releaseId);
+    if (waitForFull) {
+      await waitFor((id) => window.harapView.lastSolve?.id === id &&
+        window.harapView.lastSolve.mode === 'full', release);
+    }
     return framesBefore;
   }
   const framesBefore = await drag(120, -60, 12);
@@ -144,8 +149,11 @@ try {
   // not the page's: the session started from the previous frame, `harap deform` from the rest
   // pose, and on a real mesh the two runs stop at energies apart by more than the tolerance.
   const dragged = await exportAndDeform();
-  check(dragged.status === 0, `harap deform runs the scenario exported after the drag ` +
-    `(energy ${dragged.energy}, the page's ${after.energy}) ${dragged.stderr}`);
+  const draggedRelative = Math.abs(after.energy - dragged.energy) / Math.abs(dragged.energy);
+  // Only gross differences (targets the page did not solve for) are caught here.
+  check(dragged.status === 0 && draggedRelative < 0.05, 'harap deform on the scenario exported ' +
+    `after the drag ends near the page's energy: ${dragged.energy} against ${after.energy} ` +
+    `(relative ${draggedRelative.toExponential(2)}) ${dragged.stderr}`);
 
   // Add a handle at a vertex halfway up, then remove it.
   const editsBefore = await page.evaluate(() => window.harapView.timings.edit.length);
@@ -258,7 +266,8 @@ try {
       for (const key of Object.keys(timings)) timings[key] = [];
     });
     for (let d = 0; d < benchmarkDrags; ++d) await drag(d % 2 ? -80 : 80, d % 2 ? 40 : -40, 20);
-    for (let e = 0; e < 5; ++e) {
+    const edits = 5;  // each an added and a removed handle
+    for (let e = 0; e < edits; ++e) {
       const n = await page.evaluate(() => window.harapView.groups.length);
       await page.evaluate(() => window.harapView.addHandle(0));
       await waitFor((m) => window.harapView.groups.length === m + 1, n);
@@ -266,18 +275,20 @@ try {
       await waitFor((m) => window.harapView.groups.length === m, n);
     }
     // The last removal's colours may be drawn after its groups arrived.
-    await waitFor(() => window.harapView.timings.edit.length === 10);
-    // Drags started right after a release, while its full solve runs: the first preview drawn.
-    const regrabs = [];
+    await waitFor((n) => window.harapView.timings.edit.length === n, 2 * edits);
+    const timings = await page.evaluate(() => window.harapView.timings);
+    // Drags started right after a release, while its full solve runs: the first preview drawn,
+    // and how many full solves a newer request stopped.
+    timings.regrab = [];
+    const stoppedBefore = await page.evaluate(() => window.harapView.stoppedSolves);
     for (let d = 0; d < 3; ++d) {
       await drag(d % 2 ? -40 : 40, 20, 6, /*waitForFull=*/false);
-      await waitFor(() => !window.harapView.previewInFlight());
+      await waitFor(() => !window.harapView.previewBusy());
       const previews = await page.evaluate(() => window.harapView.timings.preview.length);
       await drag(d % 2 ? 40 : -40, -20, 6);
-      regrabs.push(await page.evaluate((n) => window.harapView.timings.preview[n], previews));
+      timings.regrab.push(await page.evaluate((n) => window.harapView.timings.preview[n], previews));
     }
-    const timings = await page.evaluate(() => window.harapView.timings);
-    timings.regrab = regrabs;
+    const stopped = await page.evaluate((n) => window.harapView.stoppedSolves - n, stoppedBefore);
     const median = (values) => {
       const sorted = [...values].sort((a, b) => a - b);
       return sorted.length ? sorted[Math.floor(sorted.length / 2)] : null;
@@ -287,6 +298,8 @@ try {
     const summary = { scenario, drags: benchmarkDrags };
     for (const [key, values] of Object.entries(timings))
       summary[`${key}_ms`] = { median: median(values), count: values.length };
+    summary.regrab_ms.values = timings.regrab;
+    summary.full_solves_stopped = stopped;
     console.log(JSON.stringify(summary));
   }
 } catch (error) {
