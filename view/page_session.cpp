@@ -277,14 +277,20 @@ void PageSession::HandleText(std::string_view text) { HandleTexts({std::string(t
 
 void PageSession::HandleTexts(const std::vector<std::string>& texts) {
   std::vector<ParsedMessage> parsed;
+  std::vector<bool> supersedes;  // per parsed message: SupersedesFullSolve
   for (const std::string& text : texts) {
     try {
       parsed.push_back(ParseClientMessage(text, limits()));
+      supersedes.push_back(SupersedesFullSolve(text));
     } catch (const std::exception& error) {
       SendError(error.what(), MessageIdOf(text));
       continue;
     }
   }
+  // later_supersedes[i]: a message after the i-th in this batch makes its full solve pointless.
+  std::vector<bool> later_supersedes(parsed.size(), false);
+  for (size_t i = parsed.size(); i-- > 1;)
+    later_supersedes[i - 1] = later_supersedes[i] || supersedes[i];
   for (size_t i = 0; i < parsed.size(); ++i) {
     const auto* move = std::get_if<MoveMessage>(&parsed[i].message);
     if (move && !move->full && i + 1 < parsed.size()) {
@@ -305,14 +311,17 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
           r && r->group >= now.num_groups)
         throw InputError(
             fmt::format("message 'remove_handle': group {} no longer exists", r->group));
+      superseded_within_batch_ = later_supersedes[i];
       Apply(parsed[i]);
     } catch (const std::exception& error) {
       SendError(error.what(), parsed[i].id);
     }
   }
-  // The message that stopped a full solve arrives in a later batch. If that message was refused
-  // (a move of a group that no longer exists, say), nothing superseded the solve: it continues
-  // from the positions it reached, once no newer message waits.
+  superseded_within_batch_ = false;
+  // A superseding message that stopped a full solve was carried out after it (later in this
+  // batch) or waits for the next batch. If it was refused (a move of a group that no longer
+  // exists, say), nothing superseded the solve: it continues from the positions it reached, once
+  // no superseding message waits.
   if (full_solve_owed_ && !(newer_message_waiting_ && newer_message_waiting_())) {
     try {
       Solve(true, owed_solve_id_);
@@ -422,7 +431,8 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
     trace.push_back({s.seconds, Finite(s.energy), s.level});
     // A full solve after a release can take seconds; a drag, a removal or another solve that the
     // page sent meanwhile must not wait for it. The session keeps the positions the stop leaves.
-    const bool give_way = full && newer_message_waiting_ && newer_message_waiting_();
+    const bool give_way =
+        full && (superseded_within_batch_ || (newer_message_waiting_ && newer_message_waiting_()));
     return give_way ? CallbackAction::kStop : CallbackAction::kContinue;
   });
   const OptimizeResult result = full ? session.Solve() : session.Preview();

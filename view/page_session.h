@@ -70,9 +70,10 @@ class PageSession {
   /// {"type": "error", "message", "id"}. Never throws.
   void HandleText(std::string_view text);
   /// Carries out a batch of text messages that arrived together: of consecutive preview moves
-  /// of one group only the last is solved (the page sees the newest targets sooner). Then a full
-  /// solve that a message interrupted and no later solve superseded runs again (from where it
-  /// stopped), answering with the interrupted solve's id.
+  /// of one group only the last is solved (the page sees the newest targets sooner); a full
+  /// solve followed by a superseding message of the batch stops after one iteration. Then, once
+  /// no superseding message waits, a stopped full solve that no later solve superseded (its
+  /// stopping message was refused) runs again from where it stopped, answering with its own id.
   void HandleTexts(const std::vector<std::string>& texts);
   /// Binary messages are refused with an error message.
   void HandleBinary(size_t size);
@@ -107,11 +108,13 @@ class PageSession {
   Send send_;
   PageOptions options_;
   NewerMessageWaiting newer_message_waiting_;
-  /// A full solve that a newer message stopped is owed until another solve starts; it is
-  /// resumed, with the id of the message that asked for it, after a batch of messages once
-  /// nothing else waits (the message that stopped it was refused).
+  /// A full solve that a superseding message stopped is owed until another solve starts; it is
+  /// resumed, with the id of the message that asked for it, after a batch of messages once no
+  /// superseding message waits (the one that stopped it was refused).
   bool full_solve_owed_ = false;
   std::optional<int64_t> owed_solve_id_;
+  /// While a batch's message is carried out: a later message of the batch supersedes its solve.
+  bool superseded_within_batch_ = false;
   ConfigNode config_;
   std::unique_ptr<ConfiguredSession> session_;
   std::vector<Group> groups_;

@@ -265,6 +265,8 @@ function receiveMessage(message) {
       break;
     }
     case 'solved': {
+      // A stopped solve is not timed, nor its resumption should the server resume it.
+      if (message.interrupted && message.id !== undefined) sentAt.delete(message.id);
       const eventTime = previewAnswered(message.id);
       afterNextDraw(() => solved(message, sent, eventTime));
       break;
@@ -306,8 +308,13 @@ function requestRender() {
 }
 
 // Runs `callback` once the frame with the newest positions is on the screen.
+let pendingDrawCallbacks = 0;
 function afterNextDraw(callback) {
-  drawnCallbacks.push(callback);
+  pendingDrawCallbacks += 1;
+  drawnCallbacks.push(() => {
+    pendingDrawCallbacks -= 1;
+    callback();
+  });
   requestRender();
 }
 
@@ -320,7 +327,6 @@ function solved(message, sent, eventTime) {
     // it only if that message is refused, and then it is not timed).
     solveInfoElement.textContent = `full solve stopped after ${(1000 * message.seconds).toFixed(0)} ms ` +
       `(${message.total_iterations} iterations): superseded by a newer request`;
-    if (message.id !== undefined) sentAt.delete(message.id);
     state.stoppedSolves += 1;
     return;
   }
@@ -585,7 +591,7 @@ state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
   : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
 // Whether a preview is on its way or answered but not yet drawn (its timer not yet taken).
-state.previewBusy = () => previewInFlight !== null || renderRequested || drawnCallbacks.length > 0;
+state.previewBusy = () => previewInFlight !== null || pendingDrawCallbacks > 0;
 state.requestScenario = () => send({ type: 'scenario' });
 
 function configure() {

@@ -356,6 +356,22 @@ TEST_CASE("a page's session: a newer message interrupts a full solve, which resu
   CHECK(solved_after == 1);
   CHECK(interrupted.Last("solved")["id"] == 4);
   CHECK(interrupted.Last("solved")["mode"] == "preview");
+
+  // A superseding message in the same batch: the full solve stops after one iteration, and the
+  // preview after it is the last answer.
+  interrupted.page->HandleTexts(
+      {R"({"type":"move","group":1,"transform":[0.6,-0.8,0,0.1, 0.8,0.6,0,0, 0,0,1,0],"solve":"full","id":5})",
+       R"({"type":"move","group":1,"transform":[1,0,0,0.1, 0,1,0,0, 0,0,1,0],"id":6})"});
+  std::vector<Json> batch;
+  for (const Json& text : interrupted.Texts()) {
+    if (text["type"] == "solved" && text.contains("id") && text["id"] >= 5) batch.push_back(text);
+  }
+  REQUIRE(batch.size() == 2);
+  CHECK(batch[0]["id"] == 5);
+  CHECK(batch[0]["interrupted"] == true);
+  CHECK(batch[0]["iterations"].get<int>() == 1);
+  CHECK(batch[1]["id"] == 6);
+  CHECK(batch[1]["mode"] == "preview");
 }
 
 TEST_CASE("a page's session: a first solve stopped at start resumes when nothing supersedes it",

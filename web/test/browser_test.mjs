@@ -14,7 +14,8 @@
 // the hierarchy level slider colours the coarsest level's clusters.
 // --benchmark N: N drags and five added and removed handles, then the page's own timers as JSON
 // (docs/results.md); then three drags each started right after a release (`regrab`: the first
-// preview drawn while the release's full solve runs; `stopped`: full solves stopped by them).
+// preview drawn while the release's full solve runs, `regrab_ms`; full solves stopped by them,
+// `full_solves_stopped`).
 // Exits 77 (ctest: skipped) when Chromium is absent.
 import { spawn, spawnSync } from 'node:child_process';
 import http from 'node:http';
@@ -267,15 +268,18 @@ try {
     });
     for (let d = 0; d < benchmarkDrags; ++d) await drag(d % 2 ? -80 : 80, d % 2 ? 40 : -40, 20);
     const edits = 5;  // each an added and a removed handle
+    let removal;
     for (let e = 0; e < edits; ++e) {
       const n = await page.evaluate(() => window.harapView.groups.length);
       await page.evaluate(() => window.harapView.addHandle(0));
       await waitFor((m) => window.harapView.groups.length === m + 1, n);
-      await page.evaluate((g) => window.harapView.removeHandle(g), n);
+      removal = await page.evaluate((g) => window.harapView.removeHandle(g), n);
       await waitFor((m) => window.harapView.groups.length === m, n);
     }
-    // The last removal's colours may be drawn after its groups arrived.
+    // The last removal's colours may be drawn after its groups arrived, and its full solve
+    // after them.
     await waitFor((n) => window.harapView.timings.edit.length === n, 2 * edits);
+    await waitFor((id) => window.harapView.lastSolve?.id === id, removal);
     const timings = await page.evaluate(() => window.harapView.timings);
     // Drags started right after a release, while its full solve runs: the first preview drawn,
     // and how many full solves a newer request stopped.
