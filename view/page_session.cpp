@@ -280,8 +280,9 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
   std::vector<bool> supersedes;  // per parsed message: SupersedesFullSolve
   for (const std::string& text : texts) {
     try {
-      parsed.push_back(ParseClientMessage(text, limits()));
+      ParsedMessage message = ParseClientMessage(text, limits());
       supersedes.push_back(SupersedesFullSolve(text));
+      parsed.push_back(std::move(message));
     } catch (const std::exception& error) {
       SendError(error.what(), MessageIdOf(text));
       continue;

@@ -58,7 +58,7 @@ class PageSession {
   /// message is refused after all, the solve is resumed once the messages are handled.
   using NewerMessageWaiting = std::function<bool()>;
   /// `options`: what the page asked for when it connected (ParsePageQuery). Without
-  /// `newer_message_waiting` full solves run to the end.
+  /// `newer_message_waiting` only a superseding message of the same batch stops a full solve.
   PageSession(const Registries& registries, const ViewSource& source, Send send,
               const PageOptions& options = {}, NewerMessageWaiting newer_message_waiting = {});
   ~PageSession();

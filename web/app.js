@@ -590,7 +590,8 @@ state.setLevel = (level) => {
 state.clusterCount = () => (settings.level === 0 ? meshVertexOf.length
   : new Set(clustersOfLevel.get(settings.level) ?? []).size);
 state.removeHandle = (group) => send({ type: 'remove_handle', group });
-// Whether a preview is on its way or answered but not yet drawn (its timer not yet taken).
+// Whether a preview is on its way, or any answer (a preview's included) waits to be drawn and
+// timed.
 state.previewBusy = () => previewInFlight !== null || pendingDrawCallbacks > 0;
 state.requestScenario = () => send({ type: 'scenario' });
 
