@@ -277,21 +277,18 @@ void PageSession::HandleText(std::string_view text) { HandleTexts({std::string(t
 
 void PageSession::HandleTexts(const std::vector<std::string>& texts) {
   std::vector<ParsedMessage> parsed;
-  std::vector<bool> supersedes;  // per parsed message: SupersedesFullSolve
+  // A message before the batch's last superseding one (SupersedesFullSolve) has its full solve
+  // made pointless by it.
+  size_t superseding_end = 0;
   for (const std::string& text : texts) {
     try {
-      ParsedMessage message = ParseClientMessage(text, limits());
-      supersedes.push_back(SupersedesFullSolve(text));
-      parsed.push_back(std::move(message));
+      parsed.push_back(ParseClientMessage(text, limits()));
     } catch (const std::exception& error) {
       SendError(error.what(), MessageIdOf(text));
       continue;
     }
+    if (SupersedesFullSolve(text)) superseding_end = parsed.size() - 1;
   }
-  // later_supersedes[i]: a message after the i-th in this batch makes its full solve pointless.
-  std::vector<bool> later_supersedes(parsed.size(), false);
-  for (size_t i = parsed.size(); i-- > 1;)
-    later_supersedes[i - 1] = later_supersedes[i] || supersedes[i];
   for (size_t i = 0; i < parsed.size(); ++i) {
     const auto* move = std::get_if<MoveMessage>(&parsed[i].message);
     if (move && !move->full && i + 1 < parsed.size()) {
@@ -312,7 +309,7 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
           r && r->group >= now.num_groups)
         throw InputError(
             fmt::format("message 'remove_handle': group {} no longer exists", r->group));
-      superseded_within_batch_ = later_supersedes[i];
+      superseded_within_batch_ = i < superseding_end;
       Apply(parsed[i]);
     } catch (const std::exception& error) {
       SendError(error.what(), parsed[i].id);
@@ -323,7 +320,7 @@ void PageSession::HandleTexts(const std::vector<std::string>& texts) {
   // batch) or waits for the next batch. If it was refused (a move of a group that no longer
   // exists, say), nothing superseded the solve: it continues from the positions it reached, once
   // no superseding message waits.
-  if (full_solve_owed_ && !(newer_message_waiting_ && newer_message_waiting_())) {
+  if (full_solve_owed_ && !SupersedingMessageWaits()) {
     try {
       Solve(true, owed_solve_id_);
     } catch (const std::exception& error) {
@@ -423,6 +420,10 @@ void PageSession::Configure(const ConfigureMessage& configure, std::optional<int
   if (!groups_.empty()) Solve(true, id);
 }
 
+bool PageSession::SupersedingMessageWaits() const {
+  return newer_message_waiting_ && newer_message_waiting_();
+}
+
 void PageSession::Solve(bool full, std::optional<int64_t> id) {
   DeformationSession& session = session_->session();
   full_solve_owed_ = false;  // this solve supersedes a stopped one
@@ -432,8 +433,7 @@ void PageSession::Solve(bool full, std::optional<int64_t> id) {
     trace.push_back({s.seconds, Finite(s.energy), s.level});
     // A full solve after a release can take seconds; a drag, a removal or another solve that the
     // page sent meanwhile must not wait for it. The session keeps the positions the stop leaves.
-    const bool give_way =
-        full && (superseded_within_batch_ || (newer_message_waiting_ && newer_message_waiting_()));
+    const bool give_way = full && (superseded_within_batch_ || SupersedingMessageWaits());
     return give_way ? CallbackAction::kStop : CallbackAction::kContinue;
   });
   const OptimizeResult result = full ? session.Solve() : session.Preview();

@@ -92,9 +92,11 @@ class PageSession {
   void ApplyGroupsAsHandles();
   Positions HandleTargets() const;
   /// A preview (`full` false) or a full solve to the tolerance, answered with the positions
-  /// and a "solved" message; a full solve stops early when a newer message waits
-  /// ("interrupted": true), and is owed until another solve starts.
+  /// and a "solved" message; a full solve stops early when a superseding message waits or
+  /// follows in the batch ("interrupted": true), and is owed until another solve starts.
   void Solve(bool full, std::optional<int64_t> id);
+  /// The server's NewerMessageWaiting, false without one.
+  bool SupersedingMessageWaits() const;
   /// Level `level`'s clusters as a FrameKind::kClusters frame.
   void SendClusters(int level);
   void SendPositions(const Positions& positions, int64_t solve_id);

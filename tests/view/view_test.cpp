@@ -308,7 +308,7 @@ TEST_CASE("a page's session: a full solve after a preview of the same targets co
   CHECK(preview_solved["energy"].get<double>() == Approx(energy).epsilon(1e-6));
 }
 
-TEST_CASE("a page's session: a newer message interrupts a full solve, which resumes after it",
+TEST_CASE("a page's session: a superseding message stops a full solve; refused, it lets it resume",
           "[view]") {
   const std::string full =
       R"({"type":"move","group":1,"transform":[0.8,-0.6,0,0.3, 0.6,0.8,0,0, 0,0,1,0],"solve":"full","id":2})";
