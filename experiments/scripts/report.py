@@ -358,6 +358,80 @@ def what_happened(run, base):
             f"{levels(base)}")
 
 
+def duration(seconds):
+    """Seconds as text with three significant digits, in ms below one second."""
+    return f"{seconds * 1e3:.3g} ms" if seconds < 1.0 else f"{seconds:.3g} s"
+
+
+def time_to_reach(run, energy):
+    """When the run's finest level first had an energy at most `energy` (its trace's clock,
+    seconds from the start, setup included), with the finest-level iterations so far; None if
+    it never did."""
+    for iteration, (t, e) in enumerate(finest_trace(run), start=1):
+        if e <= energy * (1.0 + 1e-12):
+            return t, iteration
+    return None
+
+
+def equal_energy_ratio(run, base):
+    """The run's time to the higher of the two final energies over the baseline's: both reached
+    it, so this compares them at equal energy, whatever their stopping tests did afterwards."""
+    target = max(run["energy"], base["energy"])
+    mine, theirs = time_to_reach(run, target), time_to_reach(base, target)
+    if mine is None or theirs is None or theirs[0] <= 0.0:
+        return None
+    return mine[0] / theirs[0]
+
+
+def why_outside(run, base):
+    """A case outside the bottom-left quadrant, explained from the two runs' reports and traces:
+    what stopped the run where it stopped, and how the two compare at equal energy."""
+    levels, base_levels = run.get("levels", []), base.get("levels", [])
+    if not levels or not base_levels:
+        return "no per-level data"
+    fine, base_fine = levels[0], base_levels[0]
+    energy_change = 100.0 * (run["energy"] / base["energy"] - 1.0)
+    reasons = []
+    if len(levels) == 1:
+        if fine["iterations"] == base_fine["iterations"] and run["energy"] == base["energy"]:
+            return (f"one level (the mesh is the hierarchy's coarsest), so the baseline's own "
+                    f"{fine['iterations']} iterations and energy; only the time differs "
+                    f"({duration(run['timings']['total'])} against "
+                    f"{duration(base['timings']['total'])})")
+        reasons.append(f"one level (the mesh is the hierarchy's coarsest): {fine['iterations']} "
+                       f"iterations against {base_fine['iterations']}, energy "
+                       f"{energy_change:+.2f}%")
+    elif run["energy"] >= base["energy"]:
+        reasons.append(f"the displacement test stopped the finest level after "
+                       f"{fine['iterations']} iteration{'s' if fine['iterations'] != 1 else ''} "
+                       f"from the up-sampled start, the baseline's after "
+                       f"{base_fine['iterations']} from rest, {energy_change:+.2f}% apart")
+    else:
+        reasons.append(f"lower energy ({energy_change:+.2f}%) after {fine['iterations']} "
+                       f"finest-level iterations against {base_fine['iterations']}")
+    slower = run["timings"]["total"] >= base["timings"]["total"]
+    if slower and len(levels) > 1:
+        if "cg>cholmod" in str(fine.get("solver", "")):
+            reasons.append("the finest level iterated (CG), stalled and was factored after all, "
+                           "on the critical path (`adaptive:cg>cholmod`)")
+        else:
+            coarse = sum(level.get("seconds", 0.0) for level in levels[1:])
+            reasons.append(f"slower: the baseline needed only {base_fine['iterations']} "
+                           f"iterations ({duration(base['timings']['total'])}), and the run "
+                           f"spent {duration(run['timings']['hierarchy'])} building the "
+                           f"hierarchy and {duration(coarse)} on its {len(levels) - 1} coarse "
+                           f"level{'s' if len(levels) > 2 else ''} (set-up and solves)")
+    target = max(run["energy"], base["energy"])
+    mine, theirs = time_to_reach(run, target), time_to_reach(base, target)
+    if mine is not None and theirs is not None:
+        reached = ("the run's final energy" if run["energy"] >= base["energy"]
+                   else "the baseline's final energy")
+        reasons.append(f"at equal energy ({reached}): {duration(mine[0])} (finest iteration "
+                       f"{mine[1]}) against {duration(theirs[0])} (iteration {theirs[1]}), "
+                       f"{'faster' if mine[0] < theirs[0] else 'slower'}")
+    return "; ".join(reasons)
+
+
 def quadrant_section(runs, compare, baseline, panel):
     """Fig. 11's quadrant shares per compared value, panel value (tolerance) and size bin, and
     every case outside the bottom-left quadrant with what happened."""
@@ -385,15 +459,33 @@ def quadrant_section(runs, compare, baseline, panel):
         n = len(quadrants)
         shares = [f"{100 * quadrants.count(q) / n:.0f}% ({quadrants.count(q)})" for q in range(4)]
         out.append(f"| {value} | {tolerance} | {bin_label} | {n} | " + " | ".join(shares) + " |")
-    outside = [(r, b) for r, b in pairs if quadrant_of(r, b) != 0]
     out.append("")
+    at_equal_energy = OrderedDict()
+    for run, base in pairs:
+        ratio = equal_energy_ratio(run, base)
+        if ratio is not None:
+            tolerance = run["run"]["parameters"].get(panel, "") if panel else ""
+            at_equal_energy.setdefault((compare_value(run, compare), tolerance), []).append(ratio)
+    if at_equal_energy:
+        out.append(f"At equal energy (each pair timed to the higher of its two final energies, "
+                   f"from the finest level's trace; the stopping test left out), against "
+                   f"`{baseline}`:\n")
+        for (value, tolerance), ratios in sorted(at_equal_energy.items()):
+            faster = sum(1 for ratio in ratios if ratio < 1.0)
+            where = f", {panel.split('.')[-1]} {tolerance}" if panel else ""
+            out.append(f"- {value}{where}: faster in {faster} of {len(ratios)} cases "
+                       f"({100 * faster / len(ratios):.0f}%), median time ratio "
+                       f"{statistics.median(ratios):.3g}")
+        out.append("")
+    outside = [(r, b) for r, b in pairs if quadrant_of(r, b) != 0]
     if outside:
         out.append(f"### Cases outside the bottom-left quadrant ({len(outside)})\n")
         for run, base in outside:
             plan = run["_plan"]
             name, meaning = QUADRANTS[quadrant_of(run, base)]
             out.append(f"- **{plan['scenario']}** ({markdown_escape(run_name(run))}), "
-                       f"{run['mesh']['vertices']:,} vertices, {name} ({meaning}): "
+                       f"{run['mesh']['vertices']:,} vertices, {name} ({meaning}). "
+                       f"Why: {markdown_escape(why_outside(run, base))}. Data: "
                        f"{markdown_escape(what_happened(run, base))}")
         out.append("")
     else:
