@@ -42,8 +42,9 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(OptionReader node) {
       Range::Above(0.0));
   options.max_unresolved = node.Get(
       "max_unresolved", options.max_unresolved,
-      "while it iterates: factor before the next solve once a CG solve left more than this share "
-      "of its correction undone (CG's own estimate, A-norm squared; 1: never)",
+      "while it iterates: factor as soon as a CG solve left more than this share of its "
+      "correction undone (CG's own estimate, A-norm squared), and solve that system again with "
+      "the factor (1: never)",
       Range::Closed(0.0, 1.0));
   options.direct = CholmodSolver::Options::FromConfig(
       node.Child("direct", "table: the cholmod options used when it factors"));
@@ -94,7 +95,6 @@ void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context
   }
   iterated_flops_ = 0.0;
   iterative_solves_ = 0;
-  stalled_ = false;
   // Iterating because it looked cheaper (not because the factor does not fit): if the matrix
   // then serves more solves than expected, factor once the iterations have cost as much as the
   // factorization (below, in Solve()).
@@ -125,7 +125,7 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
                                        Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   HARAP_CHECK(chosen_ != nullptr, "adaptive: Solve() needs a successful Factorize() first");
   if (may_switch_ && (iterated_flops_ >= decision_.estimate.flops ||
-                      iterative_solves_ >= options_.expected_solves || stalled_)) {
+                      iterative_solves_ >= options_.expected_solves)) {
     // Factor (with the kept analysis) and solve directly from here on, as soon as either
     // - the iterations have cost as much arithmetic as the factorization: like renting until the
     //   rent paid equals the price, this costs at most about twice what the better choice made
@@ -134,25 +134,35 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     //   flops alone underrates CG: its sparse products run at a fraction of the factorization's
     //   dense-kernel speed, and its inexact steps cost the caller extra global steps, each with
     //   its own local step (dragon-lift refined to 1.75M/7M vertices iterated 17/38 steps at
-    //   level 0 before the flops caught up; docs/solvers.md, "Per-level choice"); or
-    // - the last CG solve left more than max_unresolved of its correction undone: its steps are
-    //   too inexact for the premise (dragon-lift's second step, from 437K vertices up).
-    may_switch_ = false;
-    direct_->Factorize(iterative_->matrix(), context);
-    chosen_ = direct_.get();
-    iterative_.reset();
-    switched_ = true;
-    ReportChoice(chosen(), false);  // the level's solves were not all direct
+    //   level 0 before the flops caught up; docs/solvers.md, "Per-level choice").
+    SwitchToDirect(context);
   }
-  const SolveSummary summary = chosen_->Solve(b, x, context);
-  if (chosen_ == iterative_.get()) {
-    ++iterative_solves_;
-    const double n = static_cast<double>(b.rows());
-    const double nnz = static_cast<double>(iterative_->matrix().nonZeros());
-    iterated_flops_ += summary.iterations * static_cast<double>(b.cols()) * (2.0 * nnz + 12.0 * n);
-    stalled_ = iterative_->unresolved_fraction() > options_.max_unresolved;
+  SolveSummary summary = chosen_->Solve(b, x, context);
+  if (chosen_ != iterative_.get()) return summary;
+  ++iterative_solves_;
+  const double n = static_cast<double>(b.rows());
+  const double nnz = static_cast<double>(iterative_->matrix().nonZeros());
+  iterated_flops_ += summary.iterations * static_cast<double>(b.cols()) * (2.0 * nnz + 12.0 * n);
+  if (may_switch_ && summary.success() &&
+      iterative_->unresolved_fraction() > options_.max_unresolved) {
+    // The CG solve left most of its correction undone (dragon-lift's second step from 437K
+    // vertices up): a step that inexact would cost the caller several more global steps for its
+    // smooth part. Factor now and solve this system again directly.
+    SwitchToDirect(context);
+    const int cg_iterations = summary.iterations;
+    summary = chosen_->Solve(b, x, context);
+    summary.iterations += cg_iterations;
   }
   return summary;
+}
+
+void AdaptiveSolver::SwitchToDirect(const Context& context) {
+  may_switch_ = false;
+  direct_->Factorize(iterative_->matrix(), context);
+  chosen_ = direct_.get();
+  iterative_.reset();
+  switched_ = true;
+  ReportChoice(chosen(), false);  // the level's solves were not all direct
 }
 
 bool AdaptiveSolver::is_direct() const { return chosen_ != nullptr && chosen_->is_direct(); }

@@ -38,9 +38,10 @@ namespace harap {
 /// solves than expected, it factors after all and solves directly from then on (chosen() =
 /// "cg>cholmod"): before the solve at which the CG iterations so far have cost flops(L) (at
 /// most about twice the arithmetic of the better choice in hindsight, the ski-rental argument,
-/// however wrong expected_solves was), or before solve number expected_solves + 1 (the premise
-/// of the choice no longer holds), or after a CG solve that left more than max_unresolved of its
-/// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first.
+/// however wrong expected_solves was), before solve number expected_solves + 1 (the premise of
+/// the choice no longer holds), or within a CG solve that left more than max_unresolved of its
+/// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first:
+/// that system is then solved again with the factor, so the caller never gets the inexact step.
 /// The last two see what the arithmetic count does not: CG's inexact steps cost the caller extra
 /// global steps, and where the up-sampled start misses smooth components of the solution
 /// (dragon-lift from 437K vertices up: a second step as large as the first, its CG terms
@@ -63,8 +64,8 @@ class AdaptiveSolver final : public LinearSolver {
     /// Global steps (3-column solves) the matrix is expected to serve: hierarchical levels take
     /// 5–15 on armadillo-bend at tolerance 1e-6 (docs/results.md), classic runs 20–200.
     double expected_solves = 10.0;
-    /// Factor before the next solve once a CG solve left more than this share of its
-    /// correction (A-norm squared) undone; 1 never does.
+    /// Factor as soon as a CG solve left more than this share of its correction (A-norm
+    /// squared) undone, and solve that system again with the factor; 1 never does.
     double max_unresolved = 0.5;
     CholmodSolver::Options direct;
     ConjugateGradientSolver::Options iterative;
@@ -106,6 +107,9 @@ class AdaptiveSolver final : public LinearSolver {
   RefactorSummary RefactorImpl(const SparseMatrix& a, const std::vector<Index>& changed_rows,
                                const Context& context) override;
 
+  /// Factors `iterative_`'s matrix with the kept analysis and solves directly from now on.
+  void SwitchToDirect(const Context& context);
+
   Options options_;
   bool prepared_for_refactor_ = false;
   std::unique_ptr<CholmodSolver> direct_;
@@ -116,7 +120,6 @@ class AdaptiveSolver final : public LinearSolver {
   bool switched_ = false;
   double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
   int iterative_solves_ = 0;     // CG solves since Factorize()
-  bool stalled_ = false;         // the last CG solve left more than max_unresolved undone
 };
 
 }  // namespace harap
