@@ -73,6 +73,9 @@ struct LevelSetup {
 /// What a driver asks of one level solve. Negative limits take the solver's configured ones.
 struct LevelSolveRequest {
   double tolerance = -1.0;
+  /// Multiplies the tolerance in effect (`tolerance`, or the solver's own if that is negative):
+  /// the coarse levels' `coarse_tolerance_factor`.
+  double tolerance_factor = 1.0;
   /// The level's second stopping test (LocalGlobalOptions::energy_tolerance); negative: the
   /// solver's own. Solvers without it ignore it.
   double energy_tolerance = -1.0;

@@ -306,6 +306,7 @@ LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveReque
   }
   AdmmOptions options = options_;
   if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
+  options.tolerance *= request.tolerance_factor;
   if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
   // The targets are placed once (ADMM keeps no rotations to follow).
   const bool have_rotations = state.rotations.size() == f_.size();

@@ -27,7 +27,13 @@ HierarchicalOptimizer::Options HierarchicalOptimizer::Options::FromConfig(
   options.level_solver = level_solvers.Create(options.inner, node);
   options.coarse_tolerance =
       node.Get("coarse_tolerance", options.coarse_tolerance,
-               "convergence tolerance on the coarse levels (negative: same as tolerance)");
+               "convergence tolerance on the coarse levels (negative: tolerance × "
+               "coarse_tolerance_factor)");
+  options.coarse_tolerance_factor =
+      node.Get("coarse_tolerance_factor", options.coarse_tolerance_factor,
+               "the coarse levels' tolerance as a multiple of the finest level's, unless "
+               "coarse_tolerance is set (below 1: better converged starts for the finer levels)",
+               Range::Above(0.0));
   options.coarse_energy_tolerance =
       node.Get("coarse_energy_tolerance", options.coarse_energy_tolerance,
                "energy_tolerance on the coarse levels (-1: the same as on the finest; 0: the "
@@ -102,6 +108,7 @@ LevelSolveRequest HierarchicalOptimizer::Options::Request(int level, int num_lev
   request.start_from_rotations = start_from_rotations;
   request.diagonal = diagonal;
   if (level > 0 && coarse_tolerance >= 0.0) request.tolerance = coarse_tolerance;
+  if (level > 0 && coarse_tolerance < 0.0) request.tolerance_factor = coarse_tolerance_factor;
   if (level > 0 && coarse_energy_tolerance >= 0.0) {
     request.energy_tolerance = coarse_energy_tolerance;
   }

@@ -49,8 +49,13 @@ class HierarchicalOptimizer final : public Optimizer {
     /// false: a one-level run on the input mesh (`classic`, `admm_pd`, `wrapd`); no hierarchy,
     /// the options below do not apply (their defaults hold).
     bool hierarchical = true;
-    /// Tolerance on the coarse levels (l > 0); negative: the same as `tolerance`.
+    /// Tolerance on the coarse levels (l > 0); negative: `tolerance` × coarse_tolerance_factor.
     double coarse_tolerance = -1.0;
+    /// The coarse levels stop at this multiple of the finest level's tolerance (of a session's
+    /// per-solve one too), unless coarse_tolerance is set (it wins, also over a preset's factor).
+    /// Below 1 the coarse levels, which are cheap, hand down a better converged start, and the
+    /// finest level stops nearer a minimum (docs/solvers.md, "Presets").
+    double coarse_tolerance_factor = 1.0;
     /// The level solver's energy_tolerance on the coarse levels (l > 0; local_global only); -1:
     /// the same as on the finest level. 0 stops the coarse levels by the displacement test alone.
     double coarse_energy_tolerance = -1.0;

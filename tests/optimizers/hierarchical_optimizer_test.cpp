@@ -65,6 +65,38 @@ TEST_CASE("hierarchical: setting finer levels up in the background changes no re
   }
 }
 
+TEST_CASE("hierarchical: coarse_tolerance_factor scales the finest tolerance on the coarse levels",
+          "[optimizers]") {
+  LongBentTube tube;
+  const auto run = [&](const std::string& options) {
+    TestSetup setup("[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-5\n" + options +
+                    "\n[hierarchy]\nmin_vertices = 200\n");
+    return setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context());
+  };
+  const OptimizeResult plain = run("");
+  const OptimizeResult factor = run("coarse_tolerance_factor = 0.1");
+  const OptimizeResult absolute = run("coarse_tolerance = 1e-6");
+  REQUIRE(plain.levels.size() >= 3);
+  REQUIRE(factor.levels.size() == plain.levels.size());
+  REQUIRE(absolute.levels.size() == plain.levels.size());
+  int plain_coarse = 0, factor_coarse = 0;
+  for (size_t l = 0; l < plain.levels.size(); ++l) {
+    // The same solve as the absolute coarse tolerance it stands for, level by level.
+    CHECK(factor.levels[l].iterations == absolute.levels[l].iterations);
+    CHECK(factor.levels[l].energy == absolute.levels[l].energy);
+    if (l > 0) {
+      plain_coarse += plain.levels[l].iterations;
+      factor_coarse += factor.levels[l].iterations;
+    }
+  }
+  CHECK(factor_coarse > plain_coarse);  // the coarse levels converge further
+  CHECK(factor.energy < plain.energy);
+  // A coarse_tolerance set wins over the factor.
+  const OptimizeResult both = run("coarse_tolerance = 1e-5\ncoarse_tolerance_factor = 0.1");
+  CHECK(both.energy == plain.energy);
+  CHECK(both.iterations == plain.iterations);
+}
+
 TEST_CASE("hierarchical: a stop requested on a coarse level still finishes the finest level",
           "[optimizers]") {
   LongBentTube tube;
@@ -168,6 +200,9 @@ TEST_CASE("hierarchical options are validated", "[optimizers]") {
   CHECK_THROWS_WITH(
       TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevel_step = 0\n").MakeOptimizer(),
       Catch::Contains("level_step"));
+  CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\ncoarse_tolerance_factor = 0\n")
+                        .MakeOptimizer(),
+                    Catch::Contains("coarse_tolerance_factor"));
   CHECK_THROWS_WITH(TestSetup("[optimizer]\ntype = \"hierarchical\"\nlevels = 2\n").MakeOptimizer(),
                     Catch::Contains("level_step") && Catch::Contains("levels"));
   // The option's former name says what it is called now, and where it was written.
