@@ -29,6 +29,7 @@
 #include "api/builtins.h"
 #include "api/component_factory.h"
 #include "api/known_answer.h"
+#include "api/presets.h"
 #include "api/register.h"
 #include "framework/config.h"
 #include "framework/error.h"
@@ -422,14 +423,20 @@ class ExperimentParser {
     return Literal(node);
   }
 
-  // Checks that a dotted run-config key names one of the five run tables.
+  // Checks that a dotted run-config key names one of the five run tables, or is `preset` (a
+  // named option set below the run's other options, api/presets.h; not for registrations).
   void CheckRunKey(const std::string& key, const toml::node& where) const {
+    if (key == "preset" && !experiment_.known_answers.enabled) {
+      if (!where.is_string()) Fail(where, "'preset' must be a string naming a preset");
+      return;
+    }
     const std::string table = key.substr(0, key.find('.'));
     const std::vector<std::string> tables = RunTables();
     if (key.find('.') == std::string::npos ||
         std::find(tables.begin(), tables.end(), table) == tables.end()) {
-      Fail(where, fmt::format("'{}' is not a run option; use TABLE.KEY with TABLE one of {}", key,
-                              fmt::join(tables, ", ")));
+      Fail(where, fmt::format("'{}' is not a run option; use TABLE.KEY with TABLE one of {}{}", key,
+                              fmt::join(tables, ", "),
+                              experiment_.known_answers.enabled ? "" : ", or preset"));
     }
   }
 
@@ -772,8 +779,9 @@ class ExperimentParser {
 
   void Validate(const Registries& registries, const ExperimentRun& run) const {
     // Line numbers in the messages would refer to the generated run config, not to the file.
-    const ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
+    ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
+      ApplyPreset(config, "");  // as `harap deform --config` applies a config's preset key
       if (experiment_.known_answers.enabled) {
         CheckRegisterConfig(registries, config);
       } else {

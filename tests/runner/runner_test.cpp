@@ -18,6 +18,8 @@
 #include <set>
 #include <sstream>
 
+#include "api/presets.h"
+#include "framework/config.h"
 #include "framework/error.h"
 #include "io/mesh_writers.h"
 #include "runner/experiment.h"
@@ -181,6 +183,35 @@ solver.check_residual = [false]
   CHECK(smaller.runs[0].id == experiment.runs[12 + 6 + 3].id);
 }
 
+TEST_CASE("Experiment: a variant names a preset; its run config keeps the name",
+          "[experiments][runner]") {
+  Workspace workspace("preset");
+  const Experiment experiment = workspace.Load(R"([scenarios]
+files = ["cylinder.toml"]
+[[variant]]
+name = "fast"
+preset = "fast"
+[[variant]]
+name = "fast, fixed coarse tolerance"
+preset = "fast"
+optimizer.coarse_tolerance = 1e-7
+)");
+  REQUIRE(experiment.runs.size() == 2);
+  for (const ExperimentRun& run : experiment.runs) {
+    ConfigNode config = ConfigNode::Parse(run.config_toml, "run");
+    CHECK(OptionReader(config).Get("preset", std::string(), "") == "fast");
+    // What `harap deform --config` then makes of it: the preset below the variant's settings.
+    ApplyPreset(config, "");
+    CHECK(OptionReader(config.Child("solver").Child("level_0")).Get("type", std::string(), "") ==
+          "adaptive");
+  }
+  const SweepSummary summary = workspace.Run(experiment, "out");
+  CHECK(summary.failed == 0);
+  const auto report = nlohmann::json::parse(
+      ReadText(workspace.dir / "out" / "runs" / (experiment.runs[1].id + ".json")));
+  CHECK(report["levels"][0]["solver"].get<std::string>().starts_with("adaptive"));
+}
+
 TEST_CASE("Experiment: config errors name the problem before any run", "[experiments][runner]") {
   Workspace workspace("errors");
   CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n"
@@ -202,6 +233,12 @@ TEST_CASE("Experiment: config errors name the problem before any run", "[experim
   CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n[run]\n"
                                    "thread = 1\n"),
                     Catch::Contains("unknown key 'thread'") && Catch::Contains("threads"));
+  CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n[[variant]]\n"
+                                   "name = \"a\"\npreset = \"fastest\"\n"),
+                    Catch::Contains("unknown preset 'fastest'") && Catch::Contains("fast"));
+  CHECK_THROWS_WITH(workspace.Load("[scenarios]\nfiles = [\"cylinder.toml\"]\n[[variant]]\n"
+                                   "name = \"a\"\npreset = 1\n"),
+                    Catch::Contains("'preset' must be a string"));
   CHECK_THROWS_AS(ParseShard("2/2"), ConfigError);
   CHECK_THROWS_AS(ParseShard("1"), ConfigError);
   CHECK_THROWS_AS(ParseShard("-1/3"), ConfigError);
