@@ -9,6 +9,7 @@
 #include "api/component_factory.h"
 #include "cli/piece_flags.h"
 #include "framework/error.h"
+#include "solvers/optimizers/hierarchical_optimizer.h"
 
 using namespace harap;
 
@@ -34,6 +35,8 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
   // Fixed coarse targets, so that Anderson acceleration takes effect on the coarse levels.
   CHECK_FALSE(OptionReader(config.Child("optimizer")).Get("targets_follow_rotations", true, ""));
   CHECK(OptionReader(config.Child("optimizer")).Get("anderson", 0, "") == 5);
+  // Coarse levels stopped at 0.3 × the tolerance: a better converged start for the finest.
+  CHECK(OptionReader(config.Child("optimizer")).Get("coarse_tolerance_factor", 1.0, "") == 0.3);
   // The factory then gives level 0 the adaptive solver and the other levels [solver]'s.
   const Registries registries = MakeBuiltinRegistries();
   const RegistryComponentFactory factory(registries, flags.BuildConfig());
@@ -45,9 +48,17 @@ TEST_CASE("preset fast: the hierarchical optimizer with the adaptive solver on l
 TEST_CASE("presets sit below the config, the flags and --set", "[experiments][preset]") {
   PieceFlags flags;
   flags.preset = "fast";
-  flags.settings = {"solver.level_0.expected_solves=9"};
+  flags.settings = {"solver.level_0.expected_solves=9", "optimizer.coarse_tolerance=1e-7"};
   CHECK(OptionReader(flags.BuildConfig().Child("solver").Child("level_0"))
             .Get("expected_solves", 0.0, "") == 9.0);
+  // A coarse_tolerance set wins over the preset's coarse_tolerance_factor (still set, unused).
+  const Registries fixed_registries = MakeBuiltinRegistries();
+  ConfigNode fixed = flags.BuildConfig().Child("optimizer");
+  fixed.Remove("type");  // the factory's key, not the optimizer's
+  const auto options = HierarchicalOptimizer::Options::FromConfig(OptionReader(fixed),
+                                                                  fixed_registries.level_solvers);
+  CHECK(options.Request(1, 3, true, 1.0).tolerance == 1e-7);
+  CHECK(options.Request(1, 3, true, 1.0).tolerance_factor == 1.0);
   // Another optimizer: the hierarchical-only settings are left out (classic would reject them).
   flags.settings.clear();
   flags.optimizer = "classic";
@@ -66,6 +77,7 @@ TEST_CASE("presets sit below the config, the flags and --set", "[experiments][pr
   flags.settings = {"optimizer.inner=\"admm_pd\""};
   const ConfigNode admm = flags.BuildConfig();
   CHECK_FALSE(admm.Child("optimizer").Has("anderson"));
+  CHECK_FALSE(admm.Child("optimizer").Has("coarse_tolerance_factor"));
   CHECK_FALSE(OptionReader(admm.Child("optimizer")).Get("targets_follow_rotations", true, ""));
 }
 
