@@ -360,7 +360,7 @@ def what_happened(run, base):
 
 def duration(seconds):
     """Seconds as text with three significant digits, in ms below one second."""
-    return f"{seconds * 1e3:.3g} ms" if seconds < 1.0 else f"{seconds:.3g} s"
+    return f"{seconds * 1e3:.3g} ms" if seconds < 0.9995 else f"{seconds:.3g} s"
 
 
 def time_to_reach(run, energy):
