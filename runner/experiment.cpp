@@ -425,9 +425,15 @@ class ExperimentParser {
 
   // Checks that a dotted run-config key names one of the five run tables, or is `preset` (a
   // named option set below the run's other options, api/presets.h; not for registrations).
+  // `where` is the value: a variant's, or a [grid] array of them.
   void CheckRunKey(const std::string& key, const toml::node& where) const {
     if (key == "preset" && !experiment_.known_answers.enabled) {
-      if (!where.is_string()) Fail(where, "'preset' must be a string naming a preset");
+      const toml::array* values = where.as_array();
+      const bool strings =
+          values ? std::all_of(values->begin(), values->end(),
+                               [](const toml::node& value) { return value.is_string(); })
+                 : where.is_string();
+      if (!strings) Fail(where, "'preset' must be a string naming a preset");
       return;
     }
     const std::string table = key.substr(0, key.find('.'));
@@ -636,7 +642,9 @@ class ExperimentParser {
         for (size_t c = 0; c < combinations; ++c) {
           ExperimentRun run = MakeRun(s, variant, axes, c, base_text);
           if (validated.insert(run.config_toml).second) Validate(registries, run);
-          const uint64_t hash = Fnv1a(identities_[s] + "\n" + run.config_toml);
+          // The id follows what the run does: a preset's settings, not only its name, so that
+          // a run folder made before a preset changed runs it again.
+          const uint64_t hash = Fnv1a(identities_[s] + "\n" + WithPresetApplied(run.config_toml));
           run.id = fmt::format("{}-{:08x}", experiment_.scenarios[s].name,
                                static_cast<uint32_t>(hash ^ (hash >> 32)));
           if (!ids.insert(run.id).second) {
@@ -775,6 +783,12 @@ class ExperimentParser {
         "comparable: harap report compares their times, iterations and pictures but gives no "
         "energy ratio between them",
         energies.size(), fmt::join(parts, "; ")));
+  }
+
+  // The run config as `harap deform --config` resolves its `preset` key (unchanged without one).
+  static std::string WithPresetApplied(const std::string& config_toml) {
+    ConfigNode config = ConfigNode::Parse(config_toml, "resolved run config");
+    return ApplyPreset(config, "").empty() ? config_toml : config.ToToml();
   }
 
   void Validate(const Registries& registries, const ExperimentRun& run) const {

@@ -210,6 +210,12 @@ optimizer.coarse_tolerance = 1e-7
   const auto report = nlohmann::json::parse(
       ReadText(workspace.dir / "out" / "runs" / (experiment.runs[1].id + ".json")));
   CHECK(report["levels"][0]["solver"].get<std::string>().starts_with("adaptive"));
+  // A [grid] of presets: one run each.
+  const Experiment grid = workspace.Load(
+      "[scenarios]\nfiles = [\"cylinder.toml\"]\n[grid]\npreset = [\"fast\", \"hierarchical\"]\n");
+  REQUIRE(grid.runs.size() == 2);
+  CHECK(grid.runs[0].label == "preset=fast");
+  CHECK(grid.runs[0].id != grid.runs[1].id);
 }
 
 TEST_CASE("Experiment: config errors name the problem before any run", "[experiments][runner]") {
@@ -227,6 +233,7 @@ TEST_CASE("Experiment: config errors name the problem before any run", "[experim
       {cylinder + "[[variant]]\nname = \"a\"\npreset = \"fastest\"\n",
        {"unknown preset 'fastest'", "fast"}},
       {cylinder + "[[variant]]\nname = \"a\"\npreset = 1\n", {"'preset' must be a string"}},
+      {cylinder + "[grid]\npreset = [\"fast\", 2]\n", {"'preset' must be a string"}},
   };
   for (const auto& [config, says] : errors) {
     INFO(config);
