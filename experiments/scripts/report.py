@@ -368,7 +368,7 @@ def time_to_reach(run, energy):
     seconds from the start, setup included), with the finest-level iterations so far; None if
     it never did."""
     for iteration, (t, e) in enumerate(finest_trace(run), start=1):
-        if e <= energy * (1.0 + 1e-12):
+        if e <= energy + 1e-12 * abs(energy):  # a run reaches its own final energy
             return t, iteration
     return None
 
@@ -402,10 +402,15 @@ def why_outside(run, base):
                        f"iterations against {base_fine['iterations']}, energy "
                        f"{energy_change:+.2f}%")
     elif run["energy"] >= base["energy"]:
-        reasons.append(f"the displacement test stopped the finest level after "
-                       f"{fine['iterations']} iteration{'s' if fine['iterations'] != 1 else ''} "
-                       f"from the up-sampled start, the baseline's after "
-                       f"{base_fine['iterations']} from rest, {energy_change:+.2f}% apart")
+        plural = "s" if fine["iterations"] != 1 else ""
+        if fine.get("converged", True):
+            stop = (f"the finest level's convergence test held after {fine['iterations']} "
+                    f"iteration{plural} from the up-sampled start")
+        else:
+            stop = (f"the finest level stopped unconverged after {fine['iterations']} "
+                    f"iteration{plural} (an iteration cap, a time budget or a stop)")
+        reasons.append(f"{stop}, the baseline's after {base_fine['iterations']}, "
+                       f"{energy_change:+.2f}% apart")
     else:
         reasons.append(f"lower energy ({energy_change:+.2f}%) after {fine['iterations']} "
                        f"finest-level iterations against {base_fine['iterations']}")
@@ -461,9 +466,12 @@ def quadrant_section(runs, compare, baseline, panel):
         out.append(f"| {value} | {tolerance} | {bin_label} | {n} | " + " | ".join(shares) + " |")
     out.append("")
     at_equal_energy = OrderedDict()
+    untimed = 0  # pairs without a finest-level trace to read the time from
     for run, base in pairs:
         ratio = equal_energy_ratio(run, base)
-        if ratio is not None:
+        if ratio is None:
+            untimed += 1
+        else:
             tolerance = run["run"]["parameters"].get(panel, "") if panel else ""
             at_equal_energy.setdefault((compare_value(run, compare), tolerance), []).append(ratio)
     if at_equal_energy:
@@ -476,6 +484,8 @@ def quadrant_section(runs, compare, baseline, panel):
             out.append(f"- {value}{where}: faster in {faster} of {len(ratios)} cases "
                        f"({100 * faster / len(ratios):.0f}%), median time ratio "
                        f"{statistics.median(ratios):.3g}")
+        if untimed:
+            out.append(f"- {untimed} pairs left out: a run without a finest-level trace")
         out.append("")
     outside = [(r, b) for r, b in pairs if quadrant_of(r, b) != 0]
     if outside:

@@ -39,8 +39,8 @@ def test_an_early_stop_at_a_higher_energy_is_compared_where_both_reached_it(repo
     hierarchical = run([(1.1, 0.6)], [(1, 0.3), (12, 0.1)], hierarchy=0.05)
     assert report.quadrant_of(hierarchical, classic) == 2  # top-left
     why = report.why_outside(hierarchical, classic)
-    assert "stopped the finest level after 1 iteration from the up-sampled start" in why
-    assert "the baseline's after 4 from rest, +10.00% apart" in why
+    assert "convergence test held after 1 iteration from the up-sampled start" in why
+    assert "the baseline's after 4, +10.00% apart" in why
     assert "600 ms (finest iteration 1) against 900 ms (iteration 3), faster" in why
     assert report.equal_energy_ratio(hierarchical, classic) == pytest.approx(0.6 / 0.9)
 
@@ -59,6 +59,22 @@ def test_a_slower_lower_run_names_the_hierarchy_cost_or_the_solver_switch(report
     why = report.why_outside(switched, classic)
     assert "stalled and was factored after all, on the critical path" in why
     assert "25 s (finest iteration 2) against 18 s (iteration 1), slower" in why
+
+
+def test_an_unconverged_stop_and_a_missing_trace_are_said(report):
+    classic = run([(3.0, 0.5), (1.0, 1.2)], [(2, 1.2)])
+    capped = run([(1.5, 0.4)], [(1, 0.3), (5, 0.1)])
+    capped["levels"][0]["converged"] = False
+    assert "stopped unconverged after 1 iteration" in report.why_outside(capped, classic)
+    untraced = dict(capped, trace=[])
+    assert report.equal_energy_ratio(untraced, classic) is None
+    assert "at equal energy" not in report.why_outside(untraced, classic)
+
+
+def test_negative_energies_are_reached(report):
+    classic = run([(-1.0, 0.5), (-2.0, 1.0)], [(2, 1.0)])
+    hierarchical = run([(-1.5, 0.3)], [(1, 0.2), (4, 0.05)])
+    assert report.equal_energy_ratio(hierarchical, classic) == pytest.approx(0.3 / 1.0)
 
 
 def test_a_single_level_run_is_the_baseline_itself(report):
