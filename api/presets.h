@@ -22,7 +22,7 @@ struct Preset {
   /// or the config chose another).
   std::vector<std::pair<std::string, std::string>> hierarchical_settings;
   /// Set only when, besides, the hierarchical optimizer's level solver (`optimizer.inner`) is
-  /// local_global, the default: options only that level solver reads.
+  /// local_global, the default: options only that level solver reads, or measured with it only.
   std::vector<std::pair<std::string, std::string>> local_global_settings;
 };
 

@@ -41,7 +41,10 @@ namespace harap {
 /// however wrong expected_solves was), before solve number expected_solves + 1 (the premise of
 /// the choice no longer holds), or within a CG solve that left more than max_unresolved of its
 /// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first:
-/// that system is then solved again with the factor, so the caller never gets the inexact step.
+/// that system is then solved again with the factor, so the caller does not get the inexact
+/// step. Iterating because the factor exceeds the memory budget (or choose = "iterative"), it
+/// never switches. A stalled step that would have been the level's last costs a factorization
+/// the earlier rule (switch before the next solve) did not pay.
 /// The last two see what the arithmetic count does not: CG's inexact steps cost the caller extra
 /// global steps, and where the up-sampled start misses smooth components of the solution
 /// (dragon-lift from 437K vertices up: a second step as large as the first, its CG terms

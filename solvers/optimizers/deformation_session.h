@@ -60,7 +60,7 @@ struct SessionOptions {
 /// Per-solve limits; negative values take the optimizer's configured ones.
 struct SessionSolveOptions {
   /// Convergence tolerance of every level (the coarse levels' `coarse_tolerance`, if configured,
-  /// still applies to them).
+  /// still applies to them; else `coarse_tolerance_factor` times this one).
   double tolerance = -1.0;
   int max_iterations = -1;  ///< Per level.
   /// Wall-time budget of the whole solve in seconds (0: none). When it runs out on a coarse level

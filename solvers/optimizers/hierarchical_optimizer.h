@@ -22,7 +22,8 @@ namespace harap {
 ///   up-sample to the next finer level (Section 5.1) and solve again, down to the input mesh.
 ///   `inner` chooses the level solver: `local_global` (the paper's), or the ADMM solvers
 ///   `admm_pd` / `wrapd` (the paper's "hierarchical WRAPD", Section 7), energy `elements` only.
-///   With an ADMM level solver `tolerance`, `max_iterations` and `coarse_tolerance` take the ADMM
+///   With an ADMM level solver `tolerance`, `max_iterations`, `coarse_tolerance` and
+///   `coarse_tolerance_factor` (a multiple of that tolerance) take the ADMM
 ///   meanings (relative energy change, see admm_elements.h); targets_follow_rotations and
 ///   freeze_targets_after do not apply (targets are placed once per level).
 /// - `classic` [Sorkine & Alexa 2007], `admm_pd` [Overby et al. 2017] and `wrapd` [Brown &

@@ -74,25 +74,21 @@ TEST_CASE("hierarchical: coarse_tolerance_factor scales the finest tolerance on 
     return setup.MakeOptimizer()->Optimize(tube.problem, setup.factory, Context());
   };
   const OptimizeResult plain = run("");
-  const OptimizeResult factor = run("coarse_tolerance_factor = 0.1");
-  const OptimizeResult absolute = run("coarse_tolerance = 1e-6");
+  // 0.5 × 1e-5 is 5e-6 to the last bit (a power of two), so the two runs must agree exactly.
+  const OptimizeResult factor = run("coarse_tolerance_factor = 0.5");
+  const OptimizeResult absolute = run("coarse_tolerance = 5e-6");
   REQUIRE(plain.levels.size() >= 3);
   REQUIRE(factor.levels.size() == plain.levels.size());
   REQUIRE(absolute.levels.size() == plain.levels.size());
-  int plain_coarse = 0, factor_coarse = 0;
   for (size_t l = 0; l < plain.levels.size(); ++l) {
     // The same solve as the absolute coarse tolerance it stands for, level by level.
     CHECK(factor.levels[l].iterations == absolute.levels[l].iterations);
     CHECK(factor.levels[l].energy == absolute.levels[l].energy);
-    if (l > 0) {
-      plain_coarse += plain.levels[l].iterations;
-      factor_coarse += factor.levels[l].iterations;
-    }
   }
-  CHECK(factor_coarse > plain_coarse);  // the coarse levels converge further
-  CHECK(factor.energy < plain.energy);
+  // The coarsest level starts alike in both runs and stops later with the tighter tolerance.
+  CHECK(factor.levels.back().iterations > plain.levels.back().iterations);
   // A coarse_tolerance set wins over the factor.
-  const OptimizeResult both = run("coarse_tolerance = 1e-5\ncoarse_tolerance_factor = 0.1");
+  const OptimizeResult both = run("coarse_tolerance = 1e-5\ncoarse_tolerance_factor = 0.5");
   CHECK(both.energy == plain.energy);
   CHECK(both.iterations == plain.iterations);
 }

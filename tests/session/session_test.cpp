@@ -39,6 +39,35 @@ TEST_CASE("session: the first solve equals the one-shot optimizer", "[session]")
   }
 }
 
+TEST_CASE("session: coarse_tolerance_factor scales a per-solve tolerance on the coarse levels",
+          "[session]") {
+  SmallBentTube tube;
+  const std::string hierarchy = "max_iterations = 500\n[hierarchy]\nmin_vertices = 60\n";
+  // The one-shot reference: the per-solve tolerance and its coarse multiple spelled out.
+  TestSetup reference_setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-5\ncoarse_tolerance = 5e-6\n" +
+      hierarchy);
+  const OptimizeResult reference = reference_setup.MakeOptimizer()->Optimize(
+      tube.problem, reference_setup.factory, Context::WithThreads(2));
+  TestSetup setup(
+      "[optimizer]\ntype = \"hierarchical\"\ntolerance = 1e-3\n"
+      "coarse_tolerance_factor = 0.5\n" +
+      hierarchy);
+  auto configured = Session(setup, tube.mesh);
+  DeformationSession& session = configured->session();
+  session.SetHandles(tube.problem.constraints.indices, tube.problem.constraints.targets);
+  SessionSolveOptions options;
+  options.tolerance = 1e-5;
+  const OptimizeResult result = session.Solve(options);
+  REQUIRE(result.levels.size() == reference.levels.size());
+  REQUIRE(result.levels.size() >= 3);
+  for (size_t l = 0; l < result.levels.size(); ++l) {
+    INFO("level " << result.levels[l].level);
+    CHECK(result.levels[l].iterations == reference.levels[l].iterations);
+  }
+  CHECK(Close(result.energy, reference.energy, 1e-10));
+}
+
 TEST_CASE("session: after adding and removing handles a solve equals a fresh session's",
           "[session]") {
   SmallBentTube tube;
