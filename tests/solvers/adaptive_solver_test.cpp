@@ -190,6 +190,15 @@ TEST_CASE("adaptive: factors after all once a CG solve left most of its correcti
       CHECK(adaptive.Solve(b, x, context).iterations == 0);
     }
   }
+  // Iterating because the factor exceeds the memory budget: a stalled step is kept, no switch.
+  {
+    AdaptiveSolver over_budget(Parse("max_factor_megabytes = 0.001"));
+    over_budget.Factorize(a, context);
+    REQUIRE(over_budget.chosen() == "cg");
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    for (int k = 0; k < 2; ++k) CHECK(over_budget.Solve(b, x, context).iterations == 20);
+    CHECK(over_budget.chosen() == "cg");
+  }
   // A start that misses only a rough part: 20 iterations resolve it, no switch.
   AdaptiveSolver adaptive(Parse("expected_solves = 3"));
   adaptive.Factorize(a, context);
