@@ -95,6 +95,7 @@ void AdaptiveSolver::FactorizeImpl(const SparseMatrix& a, const Context& context
   }
   iterated_flops_ = 0.0;
   iterative_solves_ = 0;
+  stalled_ = false;
   // Iterating because it looked cheaper (not because the factor does not fit): if the matrix
   // then serves more solves than expected, factor once the iterations have cost as much as the
   // factorization (below, in Solve()).
@@ -125,7 +126,7 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
                                        Eigen::Ref<Eigen::MatrixXd> x, const Context& context) {
   HARAP_CHECK(chosen_ != nullptr, "adaptive: Solve() needs a successful Factorize() first");
   if (may_switch_ && (iterated_flops_ >= decision_.estimate.flops ||
-                      iterative_solves_ >= options_.expected_solves)) {
+                      iterative_solves_ >= options_.expected_solves || stalled_)) {
     // Factor (with the kept analysis) and solve directly from here on, as soon as either
     // - the iterations have cost as much arithmetic as the factorization: like renting until the
     //   rent paid equals the price, this costs at most about twice what the better choice made
@@ -134,7 +135,8 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
     //   flops alone underrates CG: its sparse products run at a fraction of the factorization's
     //   dense-kernel speed, and its inexact steps cost the caller extra global steps, each with
     //   its own local step (dragon-lift refined to 1.75M/7M vertices iterated 17/38 steps at
-    //   level 0 before the flops caught up; docs/solvers.md, "Per-level choice").
+    //   level 0 before the flops caught up; docs/solvers.md, "Per-level choice"); or
+    // - the level's first CG solve left more than max_unresolved of its correction undone (below).
     SwitchToDirect(context);
   }
   SolveSummary summary = chosen_->Solve(b, x, context);
@@ -143,11 +145,18 @@ SolveSummary AdaptiveSolver::SolveImpl(const Eigen::Ref<const Eigen::MatrixXd>& 
   const double n = static_cast<double>(b.rows());
   const double nnz = static_cast<double>(iterative_->matrix().nonZeros());
   iterated_flops_ += summary.iterations * static_cast<double>(b.cols()) * (2.0 * nnz + 12.0 * n);
-  if (may_switch_ && summary.success() &&
-      iterative_->unresolved_fraction() > options_.max_unresolved) {
-    // The CG solve left most of its correction undone (dragon-lift's second step from 437K
-    // vertices up): a step that inexact would cost the caller several more global steps for its
-    // smooth part. Factor now and solve this system again directly.
+  if (!may_switch_ || !summary.success() ||
+      iterative_->unresolved_fraction() <= options_.max_unresolved) {
+    return summary;
+  }
+  if (iterative_solves_ == 1) {
+    // The first step from the up-sampled start: the level often stops after it, so factor only
+    // if another solve follows (a factorization there would mostly be wasted).
+    stalled_ = true;
+  } else {
+    // A later step left most of its correction undone (dragon-lift's second step from 437K
+    // vertices up) and the level is still moving: a step that inexact would cost the caller
+    // several more global steps for its smooth part. Factor now and solve this system again.
     SwitchToDirect(context);
     const int cg_iterations = summary.iterations;
     summary = chosen_->Solve(b, x, context);

@@ -39,12 +39,13 @@ namespace harap {
 /// "cg>cholmod"): before the solve at which the CG iterations so far have cost flops(L) (at
 /// most about twice the arithmetic of the better choice in hindsight, the ski-rental argument,
 /// however wrong expected_solves was), before solve number expected_solves + 1 (the premise of
-/// the choice no longer holds), or within a CG solve that left more than max_unresolved of its
-/// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first:
-/// that system is then solved again with the factor, so the caller does not get the inexact
-/// step. Iterating because the factor exceeds the memory budget (or choose = "iterative"), it
-/// never switches. A stalled step that would have been the level's last costs a factorization
-/// the earlier rule (switch before the next solve) did not pay.
+/// the choice no longer holds), or when a CG solve left more than max_unresolved of its
+/// correction undone (ConjugateGradientSolver::unresolved_fraction()), whichever comes first.
+/// After the first solve such a stall switches before the next solve (the level often stops
+/// after its first step from the up-sampled start, and then needs no factor); after a later
+/// one, the level is still moving, and that system is solved again with the factor at once,
+/// so the caller does not get the inexact step. Iterating because the factor exceeds the memory
+/// budget (or choose = "iterative"), it never switches.
 /// The last two see what the arithmetic count does not: CG's inexact steps cost the caller extra
 /// global steps, and where the up-sampled start misses smooth components of the solution
 /// (dragon-lift from 437K vertices up: a second step as large as the first, its CG terms
@@ -67,8 +68,9 @@ class AdaptiveSolver final : public LinearSolver {
     /// Global steps (3-column solves) the matrix is expected to serve: hierarchical levels take
     /// 5–15 on armadillo-bend at tolerance 1e-6 (docs/results.md), classic runs 20–200.
     double expected_solves = 10.0;
-    /// Factor as soon as a CG solve left more than this share of its correction (A-norm
-    /// squared) undone, and solve that system again with the factor; 1 never does.
+    /// Factor once a CG solve left more than this share of its correction (A-norm squared)
+    /// undone: before the next solve after the first one, at once (solving that system again)
+    /// after a later one; 1 never does.
     double max_unresolved = 0.5;
     CholmodSolver::Options direct;
     ConjugateGradientSolver::Options iterative;
@@ -123,6 +125,7 @@ class AdaptiveSolver final : public LinearSolver {
   bool switched_ = false;
   double iterated_flops_ = 0.0;  // arithmetic of the CG solves since Factorize()
   int iterative_solves_ = 0;     // CG solves since Factorize()
+  bool stalled_ = false;         // the first CG solve left more than max_unresolved undone
 };
 
 }  // namespace harap
