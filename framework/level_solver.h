@@ -74,7 +74,7 @@ struct LevelSetup {
 struct LevelSolveRequest {
   double tolerance = -1.0;
   /// Multiplies the tolerance in effect (`tolerance`, or the solver's own if that is negative):
-  /// the coarse levels' `coarse_tolerance_factor`.
+  /// the coarse levels' `coarse_tolerance_factor`. Solvers read both through Tolerance().
   double tolerance_factor = 1.0;
   /// The level's second stopping test (LocalGlobalOptions::energy_tolerance); negative: the
   /// solver's own. Solvers without it ignore it.
@@ -96,6 +96,12 @@ struct LevelSolveRequest {
   /// rotation-driven global step throw InputError.
   bool global_step_only = false;
   double diagonal = 1.0;  ///< bounding-box diagonal of the input mesh: scales convergence tests
+
+  /// The tolerance this solve stops at, given the solver's own: `tolerance` if set, else `own`,
+  /// times tolerance_factor.
+  double Tolerance(double own) const {
+    return (tolerance >= 0.0 ? tolerance : own) * tolerance_factor;
+  }
 };
 
 /// Writes out gathered rotations (LevelSolver::GlobalStepFromGathered): out[v] =

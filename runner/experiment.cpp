@@ -22,6 +22,7 @@
 #include <charconv>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -633,7 +634,7 @@ class ExperimentParser {
   void ExpandRuns(const std::string& base_text, const std::vector<Variant>& variants,
                   const std::vector<GridAxis>& axes) {
     const Registries registries = MakeBuiltinRegistries();
-    std::set<std::string> validated;  // run configs already checked
+    std::map<std::string, std::string> resolved;  // run config -> Validate()'s resolved text
     size_t combinations = 1;
     for (const auto& axis : axes) combinations *= axis.second.size();
     std::set<std::string> ids;
@@ -641,10 +642,11 @@ class ExperimentParser {
       for (const Variant& variant : variants) {
         for (size_t c = 0; c < combinations; ++c) {
           ExperimentRun run = MakeRun(s, variant, axes, c, base_text);
-          if (validated.insert(run.config_toml).second) Validate(registries, run);
+          auto [known, fresh] = resolved.try_emplace(run.config_toml);
+          if (fresh) known->second = Validate(registries, run);
           // The id follows what the run does: a preset's settings, not only its name, so that
           // a run folder made before a preset changed runs it again.
-          const uint64_t hash = Fnv1a(identities_[s] + "\n" + WithPresetApplied(run.config_toml));
+          const uint64_t hash = Fnv1a(identities_[s] + "\n" + known->second);
           run.id = fmt::format("{}-{:08x}", experiment_.scenarios[s].name,
                                static_cast<uint32_t>(hash ^ (hash >> 32)));
           if (!ids.insert(run.id).second) {
@@ -785,17 +787,14 @@ class ExperimentParser {
         energies.size(), fmt::join(parts, "; ")));
   }
 
-  // The run config as `harap deform --config` resolves its `preset` key (unchanged without one).
-  static std::string WithPresetApplied(const std::string& config_toml) {
-    ConfigNode config = ConfigNode::Parse(config_toml, "resolved run config");
-    return ApplyPreset(config, "").empty() ? config_toml : config.ToToml();
-  }
-
-  void Validate(const Registries& registries, const ExperimentRun& run) const {
+  // Checks the run's config and returns it as `harap deform --config` resolves its `preset`
+  // key (the config itself without one).
+  std::string Validate(const Registries& registries, const ExperimentRun& run) const {
     // Line numbers in the messages would refer to the generated run config, not to the file.
     ConfigNode config = ConfigNode::Parse(run.config_toml, "resolved run config");
     try {
-      ApplyPreset(config, "");  // as `harap deform --config` applies a config's preset key
+      const std::string resolved =
+          ApplyPreset(config, "").empty() ? run.config_toml : config.ToToml();
       if (experiment_.known_answers.enabled) {
         CheckRegisterConfig(registries, config);
       } else {
@@ -803,6 +802,7 @@ class ExperimentParser {
         const RegistryComponentFactory factory(registries, config);
         MakeOptimizer(registries, config)->CheckComponents(factory);
       }
+      return resolved;
     } catch (const Error& error) {
       throw ConfigError(fmt::format("{}: run '{}' is invalid: {}", source_,
                                     run.label.empty() ? "base config" : run.label, error.what()));

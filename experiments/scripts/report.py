@@ -373,14 +373,21 @@ def time_to_reach(run, energy):
     return None
 
 
-def equal_energy_ratio(run, base):
-    """The run's time to the higher of the two final energies over the baseline's: both reached
-    it, so this compares them at equal energy, whatever their stopping tests did afterwards."""
+def times_at_equal_energy(run, base):
+    """time_to_reach() of the run and of its baseline for the higher of their two final
+    energies, which both reached: a comparison at equal energy, whatever their stopping tests
+    did afterwards. None if either has no finest-level trace to read it from."""
     target = max(run["energy"], base["energy"])
     mine, theirs = time_to_reach(run, target), time_to_reach(base, target)
-    if mine is None or theirs is None or theirs[0] <= 0.0:
+    return None if mine is None or theirs is None else (mine, theirs)
+
+
+def equal_energy_ratio(run, base):
+    """The run's time at equal energy over the baseline's (times_at_equal_energy)."""
+    times = times_at_equal_energy(run, base)
+    if times is None or times[1][0] <= 0.0:
         return None
-    return mine[0] / theirs[0]
+    return times[0][0] / times[1][0]
 
 
 def why_outside(run, base):
@@ -426,9 +433,9 @@ def why_outside(run, base):
                            f"spent {duration(run['timings']['hierarchy'])} building the "
                            f"hierarchy and {duration(coarse)} on its {len(levels) - 1} coarse "
                            f"level{'s' if len(levels) > 2 else ''} (set-up and solves)")
-    target = max(run["energy"], base["energy"])
-    mine, theirs = time_to_reach(run, target), time_to_reach(base, target)
-    if mine is not None and theirs is not None:
+    times = times_at_equal_energy(run, base)
+    if times is not None:
+        mine, theirs = times
         reached = ("the run's final energy" if run["energy"] >= base["energy"]
                    else "the baseline's final energy")
         reasons.append(f"at equal energy ({reached}): {duration(mine[0])} (finest iteration "
@@ -452,11 +459,18 @@ def quadrant_section(runs, compare, baseline, panel):
     out.append("| " + " | ".join(header) + " |")
     out.append("|" + "|".join(["---"] * 3 + ["---:"] * 5) + "|")
     groups = OrderedDict()
+    at_equal_energy = OrderedDict()  # (value, tolerance): time ratios at equal energy
+    untimed = 0  # pairs without a finest-level trace to read the time from
     for run, base in pairs:
         value = compare_value(run, compare)
         tolerance = run["run"]["parameters"].get(panel, "") if panel else ""
         for bin_label in ("all", size_bin(run)):
             groups.setdefault((value, tolerance, bin_label), []).append(quadrant_of(run, base))
+        ratio = equal_energy_ratio(run, base)
+        if ratio is None:
+            untimed += 1
+        else:
+            at_equal_energy.setdefault((value, tolerance), []).append(ratio)
     order = {label: k for k, (_, _, label) in enumerate(SIZE_BINS)}
     for (value, tolerance, bin_label), quadrants in sorted(
             groups.items(), key=lambda item: (item[0][0], item[0][1],
@@ -465,15 +479,6 @@ def quadrant_section(runs, compare, baseline, panel):
         shares = [f"{100 * quadrants.count(q) / n:.0f}% ({quadrants.count(q)})" for q in range(4)]
         out.append(f"| {value} | {tolerance} | {bin_label} | {n} | " + " | ".join(shares) + " |")
     out.append("")
-    at_equal_energy = OrderedDict()
-    untimed = 0  # pairs without a finest-level trace to read the time from
-    for run, base in pairs:
-        ratio = equal_energy_ratio(run, base)
-        if ratio is None:
-            untimed += 1
-        else:
-            tolerance = run["run"]["parameters"].get(panel, "") if panel else ""
-            at_equal_energy.setdefault((compare_value(run, compare), tolerance), []).append(ratio)
     if at_equal_energy:
         out.append(f"At equal energy (each pair timed to the higher of its two final energies, "
                    f"from the finest level's trace; the stopping test left out), against "

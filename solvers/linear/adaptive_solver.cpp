@@ -42,9 +42,9 @@ AdaptiveSolver::Options AdaptiveSolver::Options::FromConfig(OptionReader node) {
       Range::Above(0.0));
   options.max_unresolved = node.Get(
       "max_unresolved", options.max_unresolved,
-      "while it iterates: factor as soon as a CG solve left more than this share of its "
-      "correction undone (CG's own estimate, A-norm squared), and solve that system again with "
-      "the factor (1: never)",
+      "while it iterates: factor once a CG solve left more than this share of its correction "
+      "undone (CG's own estimate, A-norm squared): before the next solve after the first one, at "
+      "once after a later one, solving that system again (1: never)",
       Range::Closed(0.0, 1.0));
   options.direct = CholmodSolver::Options::FromConfig(
       node.Child("direct", "table: the cholmod options used when it factors"));

@@ -305,8 +305,7 @@ LevelSolveResult AdmmLevelSolver::Solve(LevelState& state, const LevelSolveReque
     throw InputError("the ADMM level solvers have no rotation-driven global step (a preview)");
   }
   AdmmOptions options = options_;
-  if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
-  options.tolerance *= request.tolerance_factor;
+  options.tolerance = request.Tolerance(options.tolerance);
   if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
   // The targets are placed once (ADMM keeps no rotations to follow).
   const bool have_rotations = state.rotations.size() == f_.size();

@@ -235,8 +235,7 @@ double LocalGlobalSolver::FitRotations(LevelState& state, const Context& context
 LevelSolveResult LocalGlobalSolver::Solve(LevelState& state, const LevelSolveRequest& request,
                                           const Context& context) {
   LocalGlobalOptions options = options_;
-  if (request.tolerance >= 0.0) options.tolerance = request.tolerance;
-  options.tolerance *= request.tolerance_factor;
+  options.tolerance = request.Tolerance(options.tolerance);
   if (request.energy_tolerance >= 0.0) options.energy_tolerance = request.energy_tolerance;
   if (request.max_iterations > 0) options.max_iterations = request.max_iterations;
   options.freeze_targets_after = request.freeze_targets_after;

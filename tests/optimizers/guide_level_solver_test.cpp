@@ -89,8 +89,7 @@ class SweepsLevelSolver final : public LevelSolver {
   LevelSolveResult Solve(LevelState& state, const LevelSolveRequest& request,
                          const Context& context) override {
     if (request.global_step_only) throw InputError("sweeps: no single global step to offer");
-    const double tolerance = (request.tolerance >= 0.0 ? request.tolerance : options_.tolerance) *
-                             request.tolerance_factor;
+    const double tolerance = request.Tolerance(options_.tolerance);
     const int max_iterations =
         request.max_iterations > 0 ? request.max_iterations : options_.max_iterations;
     const RotationSite site = rotation_site();
