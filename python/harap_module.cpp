@@ -28,6 +28,7 @@
 #include "api/builtins.h"
 #include "api/deform.h"
 #include "api/library.h"
+#include "api/presets.h"
 #include "api/register.h"
 #include "api/session.h"
 #include "framework/error.h"
@@ -54,9 +55,12 @@ py::exception<InternalError>* g_internal_error = nullptr;
 using Settings = std::vector<std::pair<std::string, std::string>>;
 
 // A run config from settings; errors name "<options>" and the key, as config files name theirs.
+// A `preset` key (the keyword `preset=`) is applied as a config file's top-level one is: its
+// settings fill in what the others leave unset.
 ConfigNode ConfigFromSettings(const Settings& settings) {
   ConfigNode config = ConfigNode::Parse("", "<options>");
   for (const auto& [key, literal] : settings) config.Set(key, literal);
+  ApplyPreset(config, "");
   return config;
 }
 
@@ -787,6 +791,15 @@ py::dict Components() {
   return result;
 }
 
+py::list PresetList() {
+  py::list list;
+  for (const Preset& preset : Presets()) {
+    list.append(py::make_tuple(preset.name, preset.description, preset.settings,
+                               preset.hierarchical_settings, preset.local_global_settings));
+  }
+  return list;
+}
+
 // The handle groups the page drags one by one: as given (`group_sizes` consecutive rows of
 // `vertices`, named `group_names`), or, with no sizes, each connected set of handle vertices
 // (edges of the mesh's elements) with one weight one group. Vertices ascending in each group, as
@@ -970,6 +983,7 @@ PYBIND11_MODULE(_harap, m) {
   m.def("energy", &EnergyValue, py::arg("V"), py::arg("F"), py::arg("U"), py::arg("settings"),
         py::arg("planar"), py::arg("threads"));
   m.def("components", &Components);
+  m.def("presets", &PresetList);
   py::class_<PyView>(m, "View")
       .def(py::init<py::handle, py::handle, py::handle, py::handle, py::handle,
                     const std::vector<int>&, const std::vector<std::string>&, const Settings&,

@@ -35,6 +35,7 @@ from ._harap import ConfigError, Error, InputError, InternalError, NumericalErro
 __all__ = [
     "deform", "DeformResult", "register", "RegisterResult", "Session", "read_mesh", "write_mesh", "load_scenario", "Scenario",
     "builtin_mesh", "view", "View", "hierarchy", "HierarchyLevel", "energy", "EnergyValue", "components",
+    "presets",
     "Error", "ConfigError", "InputError", "NumericalError", "InternalError",
 ]
 
@@ -86,11 +87,16 @@ def _with_types(settings, **types):
 
 
 def _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
-                  max_iterations):
+                  max_iterations, preset=None):
     """The run config of deform and Session: the pieces' types, the options, and tolerance /
-    max_iterations as optimizer options (as the command's flags set them)."""
+    max_iterations as optimizer options (as the command's flags set them); a preset's name as
+    the config's top-level `preset` key, whose settings fill in what the rest leaves unset."""
     settings = _with_types(_settings(options), optimizer=optimizer, energy=energy,
                            solver=solver, hierarchy=hierarchy, upsampler=upsampler)
+    if preset is not None:
+        if not isinstance(preset, str):
+            raise ConfigError(f"preset must be a string (harap.presets()), got {preset!r}")
+        settings.append(("preset", _toml_literal("preset", preset)))
     if tolerance is not None:
         settings.append(("optimizer.tolerance", _toml_literal("optimizer.tolerance", tolerance)))
     if max_iterations is not None:
@@ -127,7 +133,7 @@ class DeformResult:
 def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, solver=None,
            hierarchy=None, upsampler=None, options=None, tolerance=None, max_iterations=None,
            initial=None, planar=None, callback=None, threads=0, trace=True, stiffness=None,
-           weights=None):
+           weights=None, preset=None):
     """Deforms the mesh (V, F) so that vertices `handles` reach `targets`, minimizing an ARAP
     energy, as `harap deform` does for a scenario file.
 
@@ -152,11 +158,14 @@ def deform(V, F, handles, targets, *, optimizer="hierarchical", energy=None, sol
     weights: None (every handle pins its vertex), or (k,) weights > 0, one per handle: a finite w
     makes that handle soft, a pull w ||u - t||^2 instead of a pin (docs/input.md, soft handles);
     inf keeps it hard. Hard and soft handles mix.
+    preset: None, or a named option set as `harap deform --preset` takes (harap.presets():
+    "fast", "hierarchical"; docs/solvers.md, Presets). It fills in only what the other
+    keywords and options leave unset.
 
     Returns a DeformResult (positions, report, stopped).
     """
     settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler, tolerance,
-                             max_iterations)
+                             max_iterations, preset)
     positions, report, stopped = _harap.deform(V, F, handles, targets, settings, initial, planar,
                                                callback, int(threads), bool(trace), stiffness,
                                                weights)
@@ -255,8 +264,8 @@ class Session:
             result = session.solve()             # result.positions, result.report
 
     V, F and the keywords optimizer ("hierarchical" or "classic"), energy, solver, hierarchy,
-    upsampler, options, tolerance, max_iterations, initial, planar and threads are those of
-    harap.deform (planar is decided from V and initial: handle targets come later).
+    upsampler, options, tolerance, max_iterations, initial, planar, threads and preset are those
+    of harap.deform (planar is decided from V and initial: handle targets come later).
     frame_start: where the finer levels start a frame, "corrected" (default), "upsampled" or
     "previous" (docs/session.md).
 
@@ -268,9 +277,9 @@ class Session:
     def __init__(self, V, F, *, optimizer="hierarchical", energy=None, solver=None,
                  hierarchy=None, upsampler=None, options=None, tolerance=None,
                  max_iterations=None, initial=None, planar=None, threads=0,
-                 frame_start="corrected"):
+                 frame_start="corrected", preset=None):
         settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler,
-                                 tolerance, max_iterations)
+                                 tolerance, max_iterations, preset)
         if not isinstance(frame_start, str):
             raise ConfigError(f"frame_start must be a string, got {frame_start!r}")
         if isinstance(threads, bool) or not isinstance(threads, _numbers.Integral):
@@ -470,7 +479,7 @@ def _start_view(V, F, handles, targets, weights, group_sizes, group_names, setti
 def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=None,
          solver=None, hierarchy=None, upsampler=None, options=None, tolerance=None,
          max_iterations=None, planar=None, threads=0, port=8080, host="127.0.0.1", open=False,
-         display_vertices=200000, assets=None, weights=None):
+         display_vertices=200000, assets=None, weights=None, preset=None):
     """Serves the page of `harap view` (docs/view.md) for a mesh: drag its handles in a browser
     while harap solves. Returns a running harap.View (url, stop(), wait(); a context manager).
 
@@ -486,7 +495,7 @@ def view(V, F, handles=None, targets=None, *, optimizer="hierarchical", energy=N
     other keywords are harap.deform's.
     """
     settings = _run_settings(options, optimizer, energy, solver, hierarchy, upsampler,
-                             tolerance, max_iterations)
+                             tolerance, max_iterations, preset)
     V_array = _np.asarray(V, dtype=_np.float64)
     group_sizes = group_names = None
     if handles is None:
@@ -629,6 +638,24 @@ def _default_value(literal):
 def _options(entries):
     return {key: {"default": _default_value(default), "help": help}
             for key, default, help in entries}
+
+
+def presets():
+    """The named option sets the keyword `preset=` (and `harap deform --preset`) takes:
+
+        {"fast": {"description": ..., "settings": {"optimizer.type": "hierarchical", ...},
+                  "hierarchical_settings": {...}, "local_global_settings": {...}}, ...}
+
+    settings apply to any run; hierarchical_settings only when the optimizer is "hierarchical";
+    local_global_settings only when, besides, its level solver is local_global (the default).
+    Each fills in only what the call leaves unset (docs/solvers.md, Presets).
+    """
+    def table(pairs):
+        return {key: _default_value(literal) for key, literal in pairs}
+    return {name: {"description": description, "settings": table(settings),
+                   "hierarchical_settings": table(hierarchical),
+                   "local_global_settings": table(local_global)}
+            for name, description, settings, hierarchical, local_global in _harap.presets()}
 
 
 def components():

@@ -91,6 +91,49 @@ def test_identical_to_the_cli_on_the_same_scenario(tmp_path, optimizer):
     np.testing.assert_allclose(result.positions, cli_positions, rtol=0, atol=1e-9)
 
 
+def test_preset_is_the_cli_preset(tmp_path):
+    scenario = tmp_path / "cylinder.toml"
+    scenario.write_text(CYLINDER_SCENARIO)
+    code, output = run_cli("deform", scenario, "--preset", "fast", "--tolerance", "1e-6",
+                           "--threads", "2", "--report", tmp_path / "r.json", "--quiet")
+    assert code == 0, output
+    cli = json.loads((tmp_path / "r.json").read_text())
+    s = harap.load_scenario(scenario)
+    result = harap.deform(*s, preset="fast", tolerance=1e-6, threads=2)
+    assert result.energy == cli["energy"]
+    assert result.report["config"] == cli["config"]
+    assert result.report["levels"][0]["solver"].startswith("adaptive")
+    assert "anderson = 5" in result.report["config"]
+
+
+def test_preset_fills_in_only_what_the_call_leaves_unset(cylinder):
+    V, F, handles, targets = cylinder
+    config = harap.deform(V, F, handles, targets, preset="fast",
+                          options={"optimizer.anderson": 0}).report["config"]
+    assert "anderson = 0" in config and "anderson = 5" not in config
+    assert "coarse_tolerance_factor = " in config
+    # Another optimizer than the preset's takes none of its hierarchical settings.
+    classic = harap.deform(V, F, handles, targets, optimizer="classic", preset="fast")
+    assert classic.report["optimizer"] == "classic"
+    assert "adaptive" not in classic.report["config"]
+
+
+def test_presets_are_listed_and_unknown_names_list_them(cylinder):
+    presets = harap.presets()
+    assert set(presets) == {"fast", "hierarchical"}
+    assert presets["fast"]["settings"]["optimizer.type"] == "hierarchical"
+    assert presets["fast"]["local_global_settings"]["optimizer.anderson"] == 5
+    V, F, handles, targets = cylinder
+    with pytest.raises(harap.ConfigError, match="unknown preset 'fastest'; valid presets: fast, "
+                       "hierarchical"):
+        harap.deform(V, F, handles, targets, preset="fastest")
+    with pytest.raises(harap.ConfigError, match="preset must be a string"):
+        harap.Session(V, F, preset=5)
+    session = harap.Session(V, F, preset="fast")
+    session.set_handles(handles, targets)
+    assert session.solve().report["levels"][0]["solver"].startswith("adaptive")
+
+
 def test_tetrahedra_identical_to_the_cli(tmp_path):
     scenario = tmp_path / "tets.toml"
     scenario.write_text(TET_SCENARIO)
