@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 #include "api/component_factory.h"
 #include "api/huge_pages.h"
@@ -19,6 +20,47 @@ long long PeakMemoryBytes() {
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<long long>(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
 }
+
+namespace {
+
+// Runs `optimize` once, or repeatedly for options.min_time (DeformOptions), and keeps the
+// repetition with the median timings.total in outcome.result and outcome.trace (which
+// `optimize`'s iteration callback fills). Every repetition solves the same problem to the same
+// positions (deterministic reductions), so only the first one's are kept.
+template <class Optimize>
+void RunRepeatedly(const Optimize& optimize, const DeformOptions& options, DeformOutcome& outcome) {
+  struct Repetition {
+    OptimizeResult result;
+    std::vector<TraceEntry> trace;
+  };
+  std::vector<Repetition> repetitions;
+  double timed = 0.0;
+  do {
+    outcome.trace.clear();
+    OptimizeResult result = optimize();
+    timed += result.timings.total;
+    if (!repetitions.empty()) result.positions = Positions();
+    repetitions.push_back({std::move(result), std::move(outcome.trace)});
+    // A stopped run (Ctrl-C, a callback) is not repeated.
+  } while (!repetitions.back().result.stopped_by_callback && timed < options.min_time &&
+           static_cast<int>(repetitions.size()) < options.max_repetitions);
+  std::vector<size_t> order(repetitions.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return repetitions[a].result.timings.total < repetitions[b].result.timings.total;
+  });
+  outcome.repetitions.count = static_cast<int>(repetitions.size());
+  outcome.repetitions.fastest_total = repetitions[order.front()].result.timings.total;
+  outcome.repetitions.slowest_total = repetitions[order.back()].result.timings.total;
+  Repetition& median = repetitions[order[(order.size() - 1) / 2]];
+  if (&median != &repetitions.front()) {
+    median.result.positions = std::move(repetitions.front().result.positions);
+  }
+  outcome.result = std::move(median.result);
+  outcome.trace = std::move(median.trace);
+}
+
+}  // namespace
 
 DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
                         const ConfigNode& config, const DeformOptions& options) {
@@ -74,9 +116,13 @@ DeformOutcome RunDeform(const Registries& registries, const Scenario& scenario,
     outcome.repaired_mesh_summary = prepared.RepairedSummary();
   }
 
-  context.run_clock.Restart();
-  outcome.result =
-      context.Run([&] { return run.optimizer->Optimize(prepared.problem(), factory, context); });
+  RunRepeatedly(
+      [&] {
+        context.run_clock.Restart();
+        return context.Run(
+            [&] { return run.optimizer->Optimize(prepared.problem(), factory, context); });
+      },
+      options, outcome);
   outcome.result.positions = prepared.ToInputVertices(outcome.result.positions);
   for (const LevelResult& level : outcome.result.levels) {
     // What the level's solver was, and for "adaptive" what it chose.
@@ -239,6 +285,9 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                        {"constrain", r.timings.constrain},
                        {"solve", r.timings.solve},
                        {"total", r.timings.total}};
+  report["repetitions"] = {{"count", outcome.repetitions.count},
+                           {"fastest_total", outcome.repetitions.fastest_total},
+                           {"slowest_total", outcome.repetitions.slowest_total}};
   report["peak_memory_bytes"] = PeakMemoryBytes();
   report["huge_pages"] = HugePageBacking();
   report["threads"] = outcome.threads;

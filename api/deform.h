@@ -36,6 +36,22 @@ struct DeformOptions : RunOptions {
   /// Per-element stiffness factors of the scenario's mesh (framework/stiffness.h), e.g. from
   /// arrays; empty: the scenario's `[[stiffness]]` regions (Scenario::ElementStiffness).
   std::vector<double> stiffness;
+  /// For timing short runs: the optimizer's run is repeated in this process until the
+  /// repetitions' timings.total add up to min_time seconds, at most max_repetitions times, and
+  /// the outcome is the repetition with the median total (0: one run). A run of a few
+  /// milliseconds timed once in a fresh process mostly measures first-use costs (worker threads
+  /// starting, fresh memory faulted in) that differ from run to run more than the methods being
+  /// compared do (docs/experiments.md, "Timing short runs").
+  double min_time = 0.0;
+  int max_repetitions = 30;
+};
+
+/// How often RunDeform ran the optimizer (DeformOptions::min_time) and the spread of the
+/// repetitions' timings.total.
+struct DeformRepetitions {
+  int count = 1;
+  double fastest_total = 0.0;
+  double slowest_total = 0.0;
 };
 
 /// Everything a `harap deform` run produced.
@@ -50,6 +66,7 @@ struct DeformOutcome {
   int threads = 0;
   OptimizeResult result;
   std::vector<TraceEntry> trace;
+  DeformRepetitions repetitions;          ///< result and trace are the median repetition's
   std::string resolved_config;            ///< The run's config as TOML.
   std::map<int, SystemSpectrum> spectra;  ///< With diagnostics: per solved level.
   MeshCheckReport mesh_checks;  ///< The input mesh's checks, with the action taken for each.

@@ -51,6 +51,7 @@ struct DeformArguments : PieceFlags {
   bool diagnostics = false;
   bool quiet = false;
   int threads = 0;
+  double min_time = 0.0;
 };
 
 // What the command is doing, for the out-of-memory message (std::bad_alloc carries no context).
@@ -89,6 +90,7 @@ int Deform(const DeformArguments& args) {
   DeformOptions options;
   options.threads = args.threads;
   options.diagnostics = args.diagnostics;
+  options.min_time = args.min_time;
   progress.Follow(options, InterruptGuard::Requested);
   DeformOutcome outcome = RunDeform(registries, scenario, config, options);
   outcome.interrupted = InterruptGuard::Requested();
@@ -269,6 +271,12 @@ CLI::App* AddDeformCommand(CLI::App& app, DeformArguments& args) {
                    "per level: extreme eigenvalues and condition number of the reduced "
                    "global-step matrix and of its Jacobi scaling (Spectra; after the run)");
   deform->add_option("--threads", args.threads, "worker threads (default: all cores)");
+  deform
+      ->add_option("--min-time", args.min_time,
+                   "repeat the solve in this process until the repetitions took this many "
+                   "seconds in all (at most 30); report the median one (timing short runs, "
+                   "docs/experiments.md)")
+      ->check(CLI::Range(0.0, 3600.0));
   deform->add_flag("--quiet,-q", args.quiet, "print nothing on success");
   return deform;
 }

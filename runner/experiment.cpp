@@ -545,7 +545,7 @@ class ExperimentParser {
   }
 
   void ParseRunSettings(const toml::table& run) {
-    toml_.CheckKeys(run, {"threads", "save_mesh", "timeout"}, "[run]");
+    toml_.CheckKeys(run, {"threads", "save_mesh", "timeout", "min_time"}, "[run]");
     if (const toml::node* threads = run.get("threads")) {
       if (!threads->is_integer() || threads->as_integer()->get() < 0) {
         Fail(*threads, "'threads' must be an integer >= 0 (0: cores / --jobs)");
@@ -559,6 +559,12 @@ class ExperimentParser {
     if (const toml::node* timeout = run.get("timeout")) {
       experiment_.settings.timeout = toml_.Number(*timeout, "timeout");
       if (experiment_.settings.timeout < 0) Fail(*timeout, "'timeout' must be >= 0 seconds");
+    }
+    if (const toml::node* min_time = run.get("min_time")) {
+      experiment_.settings.min_time = toml_.Number(*min_time, "min_time");
+      if (!(experiment_.settings.min_time >= 0 && experiment_.settings.min_time <= 3600)) {
+        Fail(*min_time, "'min_time' must be 0 to 3600 seconds");
+      }
     }
   }
 

@@ -68,6 +68,9 @@ struct ExperimentRunSettings {
   int threads = 0;         ///< threads per run (0: cores / --jobs)
   bool save_mesh = false;  ///< write the rest and deformed meshes (PLY) for the pictures
   double timeout = 0.0;    ///< seconds before a run is killed and recorded as failed (0: none)
+  /// `harap deform --min-time`: a deform run shorter than this is repeated in its process and
+  /// timed by the median repetition (0: every run once).
+  double min_time = 0.0;
 };
 
 /// The `[slurm]` table: defaults of `harap run --slurm` (its command-line options win).

@@ -85,13 +85,31 @@ void WriteFileAtomically(const fs::path& file, const std::string& content,
 // ---------------------------------------------------------------------------------------------
 // results.csv
 
-const std::vector<std::string> kReportColumns = {
-    "status",           "optimizer",   "energy_type",      "solver",
-    "hierarchy",        "upsampler",   "vertices",         "faces",
-    "energy",           "iterations",  "total_iterations", "converged",
-    "level_iterations", "t_hierarchy", "t_precompute",     "t_constrain",
-    "t_solve",          "t_total",     "peak_memory_mb",   "answer_mean_error",
-    "answer_max_error", "threads",     "wall_seconds",     "error"};
+const std::vector<std::string> kReportColumns = {"status",
+                                                 "optimizer",
+                                                 "energy_type",
+                                                 "solver",
+                                                 "hierarchy",
+                                                 "upsampler",
+                                                 "vertices",
+                                                 "faces",
+                                                 "energy",
+                                                 "iterations",
+                                                 "total_iterations",
+                                                 "converged",
+                                                 "level_iterations",
+                                                 "t_hierarchy",
+                                                 "t_precompute",
+                                                 "t_constrain",
+                                                 "t_solve",
+                                                 "t_total",
+                                                 "repetitions",
+                                                 "peak_memory_mb",
+                                                 "answer_mean_error",
+                                                 "answer_max_error",
+                                                 "threads",
+                                                 "wall_seconds",
+                                                 "error"};
 
 std::string CsvField(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;
@@ -172,6 +190,7 @@ std::string CsvRow(const json& report, const std::vector<std::string>& grid_keys
        timings.is_null() ? "" : Number(timings["constrain"], "{:.4f}"),
        timings.is_null() ? "" : Number(timings["solve"], "{:.4f}"),
        timings.is_null() ? "" : Number(timings["total"], "{:.4f}"),
+       report.contains("repetitions") ? Number(report["repetitions"]["count"]) : "",
        memory.is_null() ? "" : fmt::format("{:.1f}", memory.get<double>() / (1024.0 * 1024.0)),
        answer.is_null() ? "" : Number(answer["mean_error_relative"]),
        answer.is_null() ? "" : Number(answer["max_error_relative"]),
@@ -527,6 +546,10 @@ class Sweep {
                                          known->answer.string()});
     } else {
       arguments.insert(arguments.end(), {ScenarioFile(scenario).string(), "--trace"});
+      if (experiment_.settings.min_time > 0) {
+        arguments.insert(arguments.end(),
+                         {"--min-time", fmt::format("{}", experiment_.settings.min_time)});
+      }
     }
     arguments.insert(arguments.end(),
                      {"--config", config_file.string(), "--report", report_file.string(),
@@ -666,7 +689,8 @@ MergeSummary MergeResults(const fs::path& dir) {
 }
 
 bool IsTimingColumn(const std::string& column) {
-  return column.starts_with("t_") || column == "wall_seconds" || column == "peak_memory_mb";
+  return column.starts_with("t_") || column == "wall_seconds" || column == "peak_memory_mb" ||
+         column == "repetitions";
 }
 
 }  // namespace harap

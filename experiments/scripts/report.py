@@ -444,6 +444,18 @@ def why_outside(run, base):
     return "; ".join(reasons)
 
 
+def repetition_note(runs):
+    """A sentence on runs timed by the median of repeated solves (`[run] min_time`), or ""."""
+    unique = {id(r): r for r in runs}  # a baseline run sits in one pair per compared value
+    counts = [r.get("repetitions", {}).get("count", 1) for r in unique.values()]
+    repeated = [c for c in counts if c > 1]
+    if not repeated:
+        return ""
+    return (f" {len(repeated)} of these {len(counts)} runs were shorter than `[run] min_time` "
+            f"and are timed by the median of {min(repeated)}–{max(repeated)} repetitions in "
+            "their process (docs/experiments.md, \"Timing short runs\").")
+
+
 def quadrant_section(runs, compare, baseline, panel):
     """Fig. 11's quadrant shares per compared value, panel value (tolerance) and size bin, and
     every case outside the bottom-left quadrant with what happened."""
@@ -453,7 +465,8 @@ def quadrant_section(runs, compare, baseline, panel):
         return []
     out = ["## Quadrants (Fig. 11)\n",
            f"Each test case against `{baseline}`: bottom-left = faster and lower final energy. "
-           "Shares in percent of the cases in the row (count in brackets).\n"]
+           "Shares in percent of the cases in the row (count in brackets)." +
+           repetition_note([r for pair in pairs for r in pair]) + "\n"]
     header = [compare, panel.split(".")[-1] if panel else "", "vertices", "cases"] + \
         [f"{name} ({meaning})" for name, meaning in QUADRANTS]
     out.append("| " + " | ".join(header) + " |")

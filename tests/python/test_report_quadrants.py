@@ -101,3 +101,15 @@ def test_the_quadrant_section_counts_the_cases_faster_at_equal_energy(report):
     assert "- hierarchical: faster in 2 of 2 cases (100%)" in text
     assert "### Cases outside the bottom-left quadrant (1)" in text
     assert "**a** (hierarchical), 1,000 vertices, top-left (faster, higher). Why:" in text
+
+
+def test_runs_timed_by_repetitions_are_said(report):
+    once = run([(1.0, 2.0)], [(3, 2.0)])
+    assert report.repetition_note([once, once]) == ""
+    repeated = dict(run([(1.0, 0.01)], [(3, 0.01)]), repetitions={"count": 30})
+    other = dict(run([(1.0, 0.2)], [(3, 0.2)]), repetitions={"count": 3})
+    note = report.repetition_note([once, repeated, other])
+    assert "2 of these 3 runs were shorter than `[run] min_time`" in note
+    # A baseline in several pairs counts once.
+    assert "2 of these 3 runs" in report.repetition_note([once, repeated, other, repeated])
+    assert "median of 3–30 repetitions" in note

@@ -230,6 +230,8 @@ TEST_CASE("Experiment: config errors name the problem before any run", "[experim
       {"[scenarios]\nfiles = [\"nothing*.toml\"]\n", {"matches no file"}},
       {cylinder + "[grid]\ntolerance = [1e-6]\n", {"not a run option"}},
       {cylinder + "[run]\nthread = 1\n", {"unknown key 'thread'", "threads"}},
+      {cylinder + "[run]\nmin_time = -1\n", {"'min_time' must be 0 to 3600 seconds"}},
+      {cylinder + "[run]\nmin_time = nan\n", {"min_time is a non-finite number"}},
       {cylinder + "[[variant]]\nname = \"a\"\npreset = \"fastest\"\n",
        {"unknown preset 'fastest'", "fast"}},
       {cylinder + "[[variant]]\nname = \"a\"\npreset = 1\n", {"'preset' must be a string"}},
@@ -508,6 +510,20 @@ TEST_CASE("Runs are deterministic: same energies in two sweeps", "[experiments][
   CHECK(a == b);
   CHECK(CsvWithoutTimings(workspace.dir / "a" / "results.csv") ==
         CsvWithoutTimings(workspace.dir / "b" / "results.csv"));
+
+  // [run] min_time: the short runs are repeated in their processes, with the same results.
+  const Experiment repeated = workspace.Load(kSmallSweep + "[run]\nmin_time = 30.0\n");
+  CHECK(repeated.settings.min_time == 30.0);
+  workspace.Run(repeated, "c", {}, 2);
+  CHECK(Energies(workspace.dir / "c") == a);
+  CHECK(CsvWithoutTimings(workspace.dir / "c" / "results.csv") ==
+        CsvWithoutTimings(workspace.dir / "a" / "results.csv"));
+  for (const auto& entry : fs::directory_iterator(workspace.dir / "c" / "runs")) {
+    if (entry.path().extension() != ".json") continue;
+    const auto report = nlohmann::json::parse(ReadText(entry.path()));
+    CHECK(report["repetitions"]["count"] == 30);
+    CHECK_THAT(report["run"]["command"].get<std::string>(), Catch::Contains("--min-time 30"));
+  }
 }
 
 TEST_CASE("Two shards run with GNU parallel, merged, equal the unsharded run",

@@ -68,7 +68,8 @@ TEST_CASE("TOML readers: an unknown key is named where it is written, with the v
         "scene.toml:2:1: unknown key 'refin' in the top level; valid keys: mesh, refine, "
         "initial, planar, handle, stiffness, units, selection, deformation");
   CHECK(readers.Experiment(kScenarios + "[run]\nthread = 2\n") ==
-        "sweep.toml:4:1: unknown key 'thread' in [run]; valid keys: threads, save_mesh, timeout");
+        "sweep.toml:4:1: unknown key 'thread' in [run]; valid keys: threads, save_mesh, timeout, "
+        "min_time");
   // Inside a handle the handle is named too.
   CHECK(readers.Scenario("mesh = \"x.obj\"\n[[handle]]\nname = \"feet\"\n"
                          "select.slab = { axis = \"z\", from = 0, to = 0.1, units = 1 }\n") ==
