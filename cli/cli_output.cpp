@@ -14,6 +14,7 @@
 #include "api/component_factory.h"
 #include "api/huge_pages.h"
 #include "api/library.h"
+#include "api/presets.h"
 #include "framework/error.h"
 #include "io/builtin_meshes.h"
 #include "io/mesh_repair.h"
@@ -188,6 +189,22 @@ void ListTableOptions(const char* table, const char* title,
   fmt::print("\n");
 }
 
+// `--preset NAME` (and `preset = "NAME"` in configs): each preset's settings, by when they apply.
+void ListPresets() {
+  fmt::print("presets (--preset NAME, or preset = \"NAME\" in a config; other options win):\n");
+  for (const Preset& preset : Presets()) {
+    fmt::print("  {:<20} {}\n", preset.name, preset.description);
+    const std::pair<const char*, const std::vector<std::pair<std::string, std::string>>*> groups[] =
+        {{"", &preset.settings},
+         {"  (hierarchical optimizer)", &preset.hierarchical_settings},
+         {"  (hierarchical optimizer, local_global levels)", &preset.local_global_settings}};
+    for (const auto& [when, settings] : groups) {
+      for (const auto& [key, value] : *settings) fmt::print("      {} = {}{}\n", key, value, when);
+    }
+  }
+  fmt::print("\n");
+}
+
 void ListBuiltinMeshes() {
   fmt::print("built-in meshes (scenario: mesh = {{ builtin = NAME, ... }}):\n");
   for (const auto& name : BuiltinMeshNames()) fmt::print("  {}\n", name);
@@ -228,6 +245,7 @@ int ListPieces(const std::string& requested) {
                           DescribeComponents(registries).registration_options);
        }},
       {{"builtins", "builtin", "meshes"}, ListBuiltinMeshes},
+      {{"presets", "preset"}, ListPresets},
   };
   if (kind.empty()) {
     for (const auto& [names, list] : kinds) list();

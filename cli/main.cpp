@@ -355,7 +355,7 @@ int main(int argc, char** argv) {
   std::string list_kind;
   list->add_option("kind", list_kind,
                    "only this kind: optimizers, energies, solvers, hierarchies, upsamplers, "
-                   "level_solvers, mesh, builtins");
+                   "level_solvers, mesh, registration, builtins, presets");
   DeformArguments args;
   AddDeformCommand(app, args);
   DragCommandArguments drag_args;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/builtins.h"
+#include "api/presets.h"
 #include "io/mesh_io.h"
 #include "tests/support/run_harap.h"
 #include "tests/support/shared_data.h"
@@ -180,6 +181,12 @@ TEST_CASE("harap list names every registered piece", "[experiments]") {
     CHECK_THAT(list.output, Catch::Contains(name));
   CHECK_THAT(list.output, Catch::Contains("optimizer.tolerance"));
   CHECK_THAT(list.output, Catch::Contains("registration.max_distance = 0.1"));
+  // Presets with what they set, and when.
+  const CommandResult presets = RunHarap("list presets");
+  REQUIRE(presets.status == 0);
+  for (const Preset& preset : Presets()) CHECK_THAT(presets.output, Catch::Contains(preset.name));
+  CHECK_THAT(presets.output,
+             Catch::Contains("optimizer.anderson = 5  (hierarchical optimizer, local_global"));
 }
 
 TEST_CASE("every shared surface scenario loads and converges (small ones)", "[experiments]") {
