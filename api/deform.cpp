@@ -44,6 +44,10 @@ void RunRepeatedly(const Optimize& optimize, const DeformOptions& options, Defor
     // A stopped run (Ctrl-C, a callback) is not repeated.
   } while (!repetitions.back().result.stopped_by_callback && timed < options.min_time &&
            static_cast<int>(repetitions.size()) < options.max_repetitions);
+  // A repetition stopped part-way (Ctrl-C) is no measurement when complete ones exist.
+  if (repetitions.size() > 1 && repetitions.back().result.stopped_by_callback) {
+    repetitions.pop_back();
+  }
   std::vector<size_t> order(repetitions.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {

@@ -96,9 +96,19 @@ TEST_CASE("RunDeform: min_time repeats the run and keeps the median repetition",
   const auto report = nlohmann::json::parse(DeformReportJson(scenario, repeated, false));
   CHECK(report["repetitions"]["count"] == 4);
 
-  // A run stopped by its callback is not repeated.
+  // A run stopped by its callback is not repeated; a repetition stopped after complete ones is
+  // dropped.
   options.progress = [](const IterationSummary&) { return CallbackAction::kStop; };
   CHECK(RunDeform(registries, scenario, config, options).repetitions.count == 1);
+  int seen = 0;
+  options.progress = [&](const IterationSummary&) {
+    return ++seen > 2 * once.result.total_iterations ? CallbackAction::kStop
+                                                     : CallbackAction::kContinue;
+  };
+  const DeformOutcome stopped = RunDeform(registries, scenario, config, options);
+  CHECK(stopped.repetitions.count == 2);
+  CHECK_FALSE(stopped.result.stopped_by_callback);
+  CHECK(stopped.result.energy == once.result.energy);
 }
 
 TEST_CASE(
