@@ -24,9 +24,9 @@ long long PeakMemoryBytes() {
 namespace {
 
 // Runs `optimize` once, or repeatedly for options.min_time (DeformOptions), and keeps the
-// repetition with the median timings.total in outcome.result and outcome.trace (which
-// `optimize`'s iteration callback fills). Every repetition solves the same problem to the same
-// positions (deterministic reductions), so only the first one's are kept.
+// repetition with the median timings.total (of an even count, the lower one) in outcome.result
+// and outcome.trace (which `optimize`'s iteration callback fills). Every repetition solves the same
+// problem to the same positions (deterministic reductions), so only the first one's are kept.
 template <class Optimize>
 void RunRepeatedly(const Optimize& optimize, const DeformOptions& options, DeformOutcome& outcome) {
   struct Repetition {
@@ -41,7 +41,7 @@ void RunRepeatedly(const Optimize& optimize, const DeformOptions& options, Defor
     timed += result.timings.total;
     if (!repetitions.empty()) result.positions = Positions();
     repetitions.push_back({std::move(result), std::move(outcome.trace)});
-    // A stopped run (Ctrl-C, a callback) is not repeated.
+    // A stopped run (Ctrl-C, a callback) is not repeated: its caller asked for it to end.
   } while (!repetitions.back().result.stopped_by_callback && timed < options.min_time &&
            static_cast<int>(repetitions.size()) < options.max_repetitions);
   // A repetition stopped part-way (Ctrl-C) is no measurement when complete ones exist.
@@ -289,9 +289,12 @@ std::string DeformReportJson(const Scenario& scenario, const DeformOutcome& outc
                        {"constrain", r.timings.constrain},
                        {"solve", r.timings.solve},
                        {"total", r.timings.total}};
-  report["repetitions"] = {{"count", outcome.repetitions.count},
-                           {"fastest_total", outcome.repetitions.fastest_total},
-                           {"slowest_total", outcome.repetitions.slowest_total}};
+  // Outcomes made elsewhere (sessions) ran once and leave the spread unset.
+  const bool repeated = outcome.repetitions.count > 1;
+  report["repetitions"] = {
+      {"count", std::max(outcome.repetitions.count, 1)},
+      {"fastest_total", repeated ? outcome.repetitions.fastest_total : r.timings.total},
+      {"slowest_total", repeated ? outcome.repetitions.slowest_total : r.timings.total}};
   report["peak_memory_bytes"] = PeakMemoryBytes();
   report["huge_pages"] = HugePageBacking();
   report["threads"] = outcome.threads;

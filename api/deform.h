@@ -38,7 +38,8 @@ struct DeformOptions : RunOptions {
   std::vector<double> stiffness;
   /// For timing short runs: the optimizer's run is repeated in this process until the
   /// repetitions' timings.total add up to min_time seconds, at most max_repetitions times, and
-  /// the outcome is the repetition with the median total (0: one run). A run of a few
+  /// the outcome is the repetition with the median total (of an even count, the lower one;
+  /// 0: one run). A run of a few
   /// milliseconds timed once in a fresh process mostly measures first-use costs (worker threads
   /// starting, fresh memory faulted in) that differ from run to run more than the methods being
   /// compared do (docs/experiments.md, "Timing short runs").

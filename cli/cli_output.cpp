@@ -191,7 +191,7 @@ void ListTableOptions(const char* table, const char* title,
 
 // `--preset NAME` (and `preset = "NAME"` in configs): each preset's settings, by when they apply.
 void ListPresets() {
-  fmt::print("presets (--preset NAME, or preset = \"NAME\" in a config; other options win):\n");
+  fmt::print("presets:\n  (--preset NAME, or preset = \"NAME\" in a config; other options win)\n");
   for (const Preset& preset : Presets()) {
     fmt::print("  {:<20} {}\n", preset.name, preset.description);
     const std::pair<const char*, const std::vector<std::pair<std::string, std::string>>*> groups[] =

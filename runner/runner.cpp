@@ -228,7 +228,8 @@ json PlanJson(const Experiment& experiment) {
   plan["grid_keys"] = experiment.grid_keys;
   plan["settings"] = {{"threads", experiment.settings.threads},
                       {"save_mesh", experiment.settings.save_mesh},
-                      {"timeout", experiment.settings.timeout}};
+                      {"timeout", experiment.settings.timeout},
+                      {"min_time", experiment.settings.min_time}};
   json scenarios = json::array();
   for (const ExperimentScenario& scenario : experiment.scenarios) {
     scenarios.push_back({{"name", scenario.name},

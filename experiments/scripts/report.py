@@ -451,9 +451,11 @@ def repetition_note(runs):
     repeated = [c for c in counts if c > 1]
     if not repeated:
         return ""
+    times = (f"{min(repeated)}" if min(repeated) == max(repeated)
+             else f"{min(repeated)}–{max(repeated)}")
     return (f" {len(repeated)} of these {len(counts)} runs were shorter than `[run] min_time` "
-            f"and are timed by the median of {min(repeated)}–{max(repeated)} repetitions in "
-            "their process (docs/experiments.md, \"Timing short runs\").")
+            f"and are timed by the median of {times} repetitions in their process "
+            "(docs/experiments.md, \"Timing short runs\").")
 
 
 def quadrant_section(runs, compare, baseline, panel):

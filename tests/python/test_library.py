@@ -130,6 +130,7 @@ def test_components_are_what_harap_list_prints():
     assert "weld_duplicates" in components["mesh"]
     assert components["registration"]["max_distance"]["default"] == 0.1
     assert "cylinder" in components["builtin_meshes"]
+    assert set(harap.presets()) == listed["presets"]
 
 
 def test_mesh_round_trip(tmp_path):
