@@ -31,7 +31,7 @@ const state = {
   ready: false, mesh: null, groups: [], energy: null, lastSolve: null, framesDrawn: 0,
   stoppedSolves: 0,
   errors: [], timings: { preview: [], full: [], edit: [], previewSolve: [], editServer: [], render: [],
-    frame: [] },
+    frame: [], previewQueued: [], previewAnswered: [], previewDrawn: [] },
   scenarioToml: null,
 };
 window.harapView = state;
@@ -267,8 +267,19 @@ function receiveMessage(message) {
     case 'solved': {
       // A stopped solve is not timed, nor its resumption should the server resume it.
       if (message.interrupted && message.id !== undefined) sentAt.delete(message.id);
+      const previewSent = previewSentTime;
       const eventTime = previewAnswered(message.id);
-      afterNextDraw(() => solved(message, sent, eventTime));
+      const received = performance.now();
+      afterNextDraw(() => {
+        // Where a preview's time went: waiting for the one in flight, the server's answer (its
+        // solve included), and the drawing.
+        if (eventTime !== null) {
+          state.timings.previewQueued.push(previewSent - eventTime);
+          state.timings.previewAnswered.push(received - previewSent);
+          state.timings.previewDrawn.push(performance.now() - received);
+        }
+        solved(message, sent, eventTime);
+      });
       break;
     }
     case 'scenario':
@@ -534,9 +545,11 @@ function previewAnswered(id) {
   if (previewPending) sendPreview();
   return eventTime;
 }
+let previewSentTime = null;
 function sendPreview() {
   previewPending = false;
   previewEventTime = dragEventTime;
+  previewSentTime = performance.now();
   previewInFlight = send({ type: 'move', group: selectedGroup, transform: groupTransform(),
     solve: 'preview' });
 }

@@ -133,6 +133,14 @@ try {
   check(moved > 1e-3, `dragging the gizmo moved the mesh (by up to ${moved.toFixed(4)})`);
   check(after.previews >= 1 && after.frames > framesBefore + 1,
     `preview frames streamed while dragging (${after.previews}) and a full solve followed`);
+  // Each preview's time is its three parts: queued, answered, drawn.
+  const parts = await page.evaluate(() => {
+    const t = window.harapView.timings;
+    return t.preview.map((total, i) =>
+      total - t.previewQueued[i] - t.previewAnswered[i] - t.previewDrawn[i]);
+  });
+  check(parts.length === after.previews && parts.every((rest) => Math.abs(rest) < 1),
+    `each preview's time is queued + answered + drawn, within 1 ms (${parts.length} previews)`);
   // Without a GPU: the display the page asks for, and half resolution only while dragging.
   const drawing = await page.evaluate(() => ({ software: window.harapView.softwareRenderer,
     requested: window.harapView.displayRequested, low: window.harapView.lowResolutionFrames,
@@ -297,8 +305,9 @@ try {
       const sorted = [...values].sort((a, b) => a - b);
       return sorted.length ? sorted[Math.floor(sorted.length / 2)] : null;
     };
-    // The three figures, and where a preview's time goes: the server's solve, the page's
-    // handling of a positions frame (normals included), one render.
+    // The three figures, and where a preview's time goes: queued behind the one in flight,
+    // answered by the server (its solve alone: previewSolve), drawn (the page's handling of a
+    // positions frame, normals included, and one render, within it).
     const summary = { scenario, drags: benchmarkDrags };
     for (const [key, values] of Object.entries(timings))
       summary[`${key}_ms`] = { median: median(values), count: values.length };
