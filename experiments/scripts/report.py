@@ -1045,19 +1045,8 @@ def markdown_escape(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("directory")
-    parser.add_argument("--no-render", action="store_true", help="skip the mesh pictures")
-    parser.add_argument("--render-backend", choices=["auto", "vtk", "matplotlib"], default="auto")
-    parser.add_argument("--render-child", action="store_true", help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    directory = args.directory
-
-    progress(f"reading {directory}")
-    plan, runs = load(directory)
-    progress(f"{len(runs)} runs, {sum(1 for r in runs if ok(r))} finished")
-    GRID_KEYS[:] = plan.get("grid_keys", [])
+def report_settings(plan, runs):
+    """The config's [report] table, checked, with its defaults filled in."""
     report = plan.get("report", {})
     unknown = set(report) - KNOWN_REPORT_KEYS
     if unknown:
@@ -1071,16 +1060,18 @@ def main():
     has_variants = any(r["variant"] for r in plan["runs"])
     compare = report.get("compare", "variant" if has_variants else (GRID_KEYS[0] if GRID_KEYS else ""))
     values = list(OrderedDict.fromkeys(compare_value(r, compare) for r in runs)) if compare else []
-    baseline = report.get("baseline", values[0] if values else "")
-    render = report.get("render", True)
-    per_scenario = int(report.get("render_runs", 6))
+    return {
+        "report": report,
+        "figures": figures,
+        "compare": compare,
+        "baseline": report.get("baseline", values[0] if values else ""),
+        "render": report.get("render", True),
+        "per_scenario": int(report.get("render_runs", 6)),
+    }
 
-    if args.render_child:
-        # Runs under xvfb-run: only the pictures, written as a JSON list for the parent.
-        pictures = render_pictures(directory, runs, render, per_scenario, use_vtk=True)
-        print(json.dumps(pictures))
-        return 0
 
+def header_section(plan, runs, directory):
+    """Title, description, the commands that made the report, run counts and the machine."""
     out = []
     title = plan.get("title") or plan.get("name")
     out.append(f"# {title}\n")
@@ -1098,34 +1089,28 @@ def main():
                ", ".join(f"{count} {status}" for status, count in sorted(statuses.items())) + ".\n")
     out.append(f"Machine: {machine_note(runs)} Generated "
                f"{datetime.datetime.now().strftime('%Y-%m-%d %H:%M')}.\n")
+    return out
 
-    registration = any(is_registration(r) for r in runs)
-    if registration:
-        # The energy figures and the handle pictures do not apply to registrations: the table
-        # and the comparison with the baseline say it all.
-        figures = []
-        render = False
 
-    # Claim vs measured.
+def claim_section(runs, settings, registration):
+    """The config's claim beside what the runs measured, then the main table."""
+    report, compare, baseline = settings["report"], settings["compare"], settings["baseline"]
     summarize = registration_summary if registration else measured_summary
     measured = summarize(runs, compare, baseline) if compare else []
-    out.append("## Paper vs. measured\n")
-    out.append("| the paper claims | we measured |\n| --- | --- |")
+    out = ["## Paper vs. measured\n", "| the paper claims | we measured |\n| --- | --- |"]
     claim = report.get("claim", "(no claim given in the config)")
     out.append(f"| {markdown_escape(claim)} | "
                f"{markdown_escape('<br>'.join(measured) or 'no comparable pairs of runs')} |\n")
     if report.get("notes"):
         out.append(f"Notes: {report['notes']}\n")
+    out.extend(registration_table(runs) if registration else deformation_table(runs))
+    return out
 
-    # Main table.
-    if registration:
-        out.extend(registration_table(runs))
-    else:
-        out.extend(deformation_table(runs))
 
-    # Figures.
-    if figures:
-        out.append("## Figures\n")
+def figures_section(directory, runs, settings):
+    """Each figure the config asks for, or why it has no data."""
+    figures, compare, baseline = settings["figures"], settings["compare"], settings["baseline"]
+    out = ["## Figures\n"] if figures else []
     for number, figure in enumerate(figures, 1):
         progress(f"figure {number}/{len(figures)}: {figure}")
         if figure == "phases":
@@ -1134,7 +1119,7 @@ def main():
             made = figure_energy_vs_time(directory, runs)
         elif figure == "relative_scatter":
             made = figure_relative_scatter(directory, runs, compare, baseline,
-                                           report.get("panel", ""))
+                                           settings["report"].get("panel", ""))
         elif figure == "levels":
             made = figure_levels(directory, runs)
         elif figure == "scaling":
@@ -1146,33 +1131,77 @@ def main():
             continue
         (png, svg), caption = made
         out.append(f"![{figure}]({png})\n\n{caption} ([SVG]({svg}))\n")
+    return out
 
-    # Pictures.
-    if render and not args.no_render:
-        progress("pictures of the meshes (VTK under Xvfb if available, else matplotlib)")
-        pictures, backend = make_pictures(directory, runs, render, per_scenario,
-                                          args.render_backend)
-        if pictures:
-            out.append("## Pictures\n")
-            out.append(f"Rendered with {backend}; rest mesh with the handles coloured (blue: "
-                       "first handle, red: second), then the deformed meshes of the runs, seen "
-                       "along the axis where the shapes are thinnest.\n")
-            for scenario, path in pictures:
-                out.append(f"![{scenario}]({path})\n")
-        elif not any(r["run"].get("mesh") for r in runs):
-            out.append("No pictures: the config does not save meshes (`[run] save_mesh = "
-                       "true`).\n")
 
-    if "relative_scatter" in figures and compare:
-        out.extend(quadrant_section(runs, compare, baseline, report.get("panel", "")))
+def pictures_section(directory, runs, settings, backend):
+    """The rest and deformed meshes, rendered, or why there are none."""
+    progress("pictures of the meshes (VTK under Xvfb if available, else matplotlib)")
+    pictures, used = make_pictures(directory, runs, settings["render"], settings["per_scenario"],
+                                   backend)
+    if pictures:
+        out = ["## Pictures\n",
+               f"Rendered with {used}; rest mesh with the handles coloured (blue: first handle, "
+               "red: second), then the deformed meshes of the runs, seen along the axis where "
+               "the shapes are thinnest.\n"]
+        out.extend(f"![{scenario}]({path})\n" for scenario, path in pictures)
+        return out
+    if not any(r["run"].get("mesh") for r in runs):
+        return ["No pictures: the config does not save meshes (`[run] save_mesh = true`).\n"]
+    return []
 
+
+def failed_section(runs):
+    """Every run that failed, with its reason."""
     failed = [r for r in runs if r["run"]["status"] not in ("ok", "missing")]
-    if failed:
-        out.append("## Failed runs\n")
-        for run in failed:
-            out.append(f"- `{run['run']['id']}` ({markdown_escape(run_name(run))}): "
-                       f"{markdown_escape(run['run'].get('error', ''))}")
-        out.append("")
+    if not failed:
+        return []
+    out = ["## Failed runs\n"]
+    for run in failed:
+        out.append(f"- `{run['run']['id']}` ({markdown_escape(run_name(run))}): "
+                   f"{markdown_escape(run['run'].get('error', ''))}")
+    out.append("")
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("directory")
+    parser.add_argument("--no-render", action="store_true", help="skip the mesh pictures")
+    parser.add_argument("--render-backend", choices=["auto", "vtk", "matplotlib"], default="auto")
+    parser.add_argument("--render-child", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    directory = args.directory
+
+    progress(f"reading {directory}")
+    plan, runs = load(directory)
+    progress(f"{len(runs)} runs, {sum(1 for r in runs if ok(r))} finished")
+    GRID_KEYS[:] = plan.get("grid_keys", [])
+    settings = report_settings(plan, runs)
+
+    if args.render_child:
+        # Runs under xvfb-run: only the pictures, written as a JSON list for the parent.
+        pictures = render_pictures(directory, runs, settings["render"], settings["per_scenario"],
+                                   use_vtk=True)
+        print(json.dumps(pictures))
+        return 0
+
+    registration = any(is_registration(r) for r in runs)
+    if registration:
+        # The energy figures and the handle pictures do not apply to registrations: the table
+        # and the comparison with the baseline say it all.
+        settings["figures"] = []
+        settings["render"] = False
+
+    out = header_section(plan, runs, directory)
+    out.extend(claim_section(runs, settings, registration))
+    out.extend(figures_section(directory, runs, settings))
+    if settings["render"] and not args.no_render:
+        out.extend(pictures_section(directory, runs, settings, args.render_backend))
+    if "relative_scatter" in settings["figures"] and settings["compare"]:
+        out.extend(quadrant_section(runs, settings["compare"], settings["baseline"],
+                                    settings["report"].get("panel", "")))
+    out.extend(failed_section(runs))
 
     with open(os.path.join(directory, "report.md"), "w", encoding="utf-8") as file:
         file.write("\n".join(out) + "\n")
