@@ -330,6 +330,11 @@ void Server::Impl::Accept() {
     if (error) {
       if (error == net::error::operation_aborted) return;
     } else {
+      // Without TCP_NODELAY a small message written right after another (a solve's JSON after
+      // its positions frame) waits for the page's delayed acknowledgement of the first, up to
+      // 40 ms on Linux (Nagle's algorithm): the page must get every frame as soon as it is out.
+      beast::error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);
       std::make_shared<HttpConnection>(std::move(socket), *this)->Read();
     }
     Accept();
