@@ -273,13 +273,14 @@ function receiveMessage(message) {
       afterNextDraw(() => {
         // Where a preview's time went: waiting for the one in flight, the server's answer (its
         // solve included), and the drawing.
+        const drawn = performance.now();
         if (eventTime !== null) {
           state.timings.previewQueued.push(previewSent - eventTime);
           state.timings.previewAnswered.push(received - previewSent);
-          state.timings.previewDrawn.push(performance.now() - received);
+          state.timings.previewDrawn.push(drawn - received);
         }
-        solved(message, sent, eventTime);
-      });
+        solved(message, sent, eventTime, drawn);
+      }, /*now=*/eventTime !== null);
       break;
     }
     case 'scenario':
@@ -302,37 +303,46 @@ function receiveMessage(message) {
 // the solves need.
 let renderRequested = false;
 let drawnCallbacks = [];
+function renderFrame() {
+  renderRequested = false;
+  const start = performance.now();
+  renderer.render(scene, camera);
+  state.timings.render.push(performance.now() - start);
+  if (lowResolution) state.lowResolutionFrames += 1;
+  // The frame rendered here is on the screen when the next animation frame starts.
+  const callbacks = drawnCallbacks;
+  drawnCallbacks = [];
+  if (callbacks.length) requestAnimationFrame(() => callbacks.forEach((callback) => callback()));
+}
 function requestRender() {
   if (renderRequested) return;
   renderRequested = true;
   requestAnimationFrame(() => {
-    renderRequested = false;
-    const start = performance.now();
-    renderer.render(scene, camera);
-    state.timings.render.push(performance.now() - start);
-    if (lowResolution) state.lowResolutionFrames += 1;
-    // The frame rendered here is on the screen when the next animation frame starts.
-    const callbacks = drawnCallbacks;
-    drawnCallbacks = [];
-    if (callbacks.length) requestAnimationFrame(() => callbacks.forEach((callback) => callback()));
+    if (renderRequested) renderFrame();  // else rendered meanwhile by renderNow()
   });
 }
+// Renders at once instead of at the next animation frame: a preview's answer is then on the
+// screen one animation frame sooner (the compositor shows a canvas drawn between frames at the
+// next one).
+const renderNow = renderFrame;
 
-// Runs `callback` once the frame with the newest positions is on the screen.
+// Runs `callback` once the frame with the newest positions is on the screen; with `now`, that
+// frame is rendered at once (renderNow).
 let pendingDrawCallbacks = 0;
-function afterNextDraw(callback) {
+function afterNextDraw(callback, now = false) {
   pendingDrawCallbacks += 1;
   drawnCallbacks.push(() => {
     pendingDrawCallbacks -= 1;
     callback();
   });
-  requestRender();
+  if (now) renderNow();
+  else requestRender();
 }
 
 // `eventTime`: when the drag event this preview answers happened (null: not a preview).
-function solved(message, sent, eventTime) {
+// `now`: when its frame was drawn.
+function solved(message, sent, eventTime, now) {
   state.framesDrawn += 1;
-  const now = performance.now();
   if (message.interrupted) {
     // A newer move, solve, configure or removal stopped it and solves anew (the server resumes
     // it only if that message is refused, and then it is not timed).
