@@ -267,20 +267,21 @@ function receiveMessage(message) {
     case 'solved': {
       // A stopped solve is not timed, nor its resumption should the server resume it.
       if (message.interrupted && message.id !== undefined) sentAt.delete(message.id);
-      const previewSent = previewSentTime;
+      const receivedAt = performance.now();
+      const previewSentAt = previewSentTime;  // before previewAnswered() sends the next one
       const eventTime = previewAnswered(message.id);
-      const received = performance.now();
       afterNextDraw(() => {
         // Where a preview's time went: waiting for the one in flight, the server's answer (its
-        // solve included), and the drawing.
-        const drawn = performance.now();
+        // solve and the page's handling of the positions frame, which comes first, included),
+        // and the drawing; all from one clock reading per step.
+        const drawnAt = performance.now();
         if (eventTime !== null) {
-          state.timings.previewQueued.push(previewSent - eventTime);
-          state.timings.previewAnswered.push(received - previewSent);
-          state.timings.previewDrawn.push(drawn - received);
+          state.timings.previewQueued.push(previewSentAt - eventTime);
+          state.timings.previewAnswered.push(receivedAt - previewSentAt);
+          state.timings.previewDrawn.push(drawnAt - receivedAt);
         }
-        solved(message, sent, eventTime, drawn);
-      }, /*now=*/eventTime !== null);
+        solved(message, sent, eventTime, drawnAt);
+      });
       break;
     }
     case 'scenario':
@@ -303,45 +304,36 @@ function receiveMessage(message) {
 // the solves need.
 let renderRequested = false;
 let drawnCallbacks = [];
-function renderFrame() {
-  renderRequested = false;
-  const start = performance.now();
-  renderer.render(scene, camera);
-  state.timings.render.push(performance.now() - start);
-  if (lowResolution) state.lowResolutionFrames += 1;
-  // The frame rendered here is on the screen when the next animation frame starts.
-  const callbacks = drawnCallbacks;
-  drawnCallbacks = [];
-  if (callbacks.length) requestAnimationFrame(() => callbacks.forEach((callback) => callback()));
-}
 function requestRender() {
   if (renderRequested) return;
   renderRequested = true;
   requestAnimationFrame(() => {
-    if (renderRequested) renderFrame();  // else rendered meanwhile by renderNow()
+    renderRequested = false;
+    const start = performance.now();
+    renderer.render(scene, camera);
+    state.timings.render.push(performance.now() - start);
+    if (lowResolution) state.lowResolutionFrames += 1;
+    // The frame rendered here is on the screen when the next animation frame starts.
+    const callbacks = drawnCallbacks;
+    drawnCallbacks = [];
+    if (callbacks.length) requestAnimationFrame(() => callbacks.forEach((callback) => callback()));
   });
 }
-// Renders at once instead of at the next animation frame: a preview's answer is then on the
-// screen one animation frame sooner (the compositor shows a canvas drawn between frames at the
-// next one).
-const renderNow = renderFrame;
 
-// Runs `callback` once the frame with the newest positions is on the screen; with `now`, that
-// frame is rendered at once (renderNow).
+// Runs `callback` once the frame with the newest positions is on the screen.
 let pendingDrawCallbacks = 0;
-function afterNextDraw(callback, now = false) {
+function afterNextDraw(callback) {
   pendingDrawCallbacks += 1;
   drawnCallbacks.push(() => {
     pendingDrawCallbacks -= 1;
     callback();
   });
-  if (now) renderNow();
-  else requestRender();
+  requestRender();
 }
 
 // `eventTime`: when the drag event this preview answers happened (null: not a preview).
-// `now`: when its frame was drawn.
-function solved(message, sent, eventTime, now) {
+// `drawnAt`: when its frame was on the screen.
+function solved(message, sent, eventTime, drawnAt) {
   state.framesDrawn += 1;
   if (message.interrupted) {
     // A newer move, solve, configure or removal stopped it and solves anew (the server resumes
@@ -356,9 +348,9 @@ function solved(message, sent, eventTime, now) {
     state.energy = message.energy;
     energyElement.textContent = message.energy === null ? '–' : message.energy.toPrecision(10);
     showTrace(message.trace);
-    if (sent) state.timings.full.push(now - sent.time);
+    if (sent) state.timings.full.push(drawnAt - sent.time);
   } else if (eventTime !== null) {
-    state.timings.preview.push(now - eventTime);
+    state.timings.preview.push(drawnAt - eventTime);
     state.timings.previewSolve.push(1000 * message.seconds);
   }
   solveInfoElement.textContent = `${message.mode} ${(1000 * message.seconds).toFixed(0)} ms, ` +
@@ -532,7 +524,7 @@ function groupTransform() {
 }
 
 // Preview frames: one in flight at a time; newer drag events wait and go with the next one.
-let previewInFlight = null, previewPending = false;
+let previewInFlight = null, previewPending = false, previewSentTime = null;
 let dragEventTime = null, previewEventTime = null;
 function moveChanged() {
   if (selectedGroup < 0) return;
@@ -555,7 +547,6 @@ function previewAnswered(id) {
   if (previewPending) sendPreview();
   return eventTime;
 }
-let previewSentTime = null;
 function sendPreview() {
   previewPending = false;
   previewEventTime = dragEventTime;
