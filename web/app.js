@@ -268,16 +268,16 @@ function receiveMessage(message) {
       // A stopped solve is not timed, nor its resumption should the server resume it.
       if (message.interrupted && message.id !== undefined) sentAt.delete(message.id);
       const receivedAt = performance.now();
-      const previewSentAt = previewSentTime;  // before previewAnswered() sends the next one
-      const eventTime = previewAnswered(message.id);
+      const preview = previewAnswered(message.id);
+      const eventTime = preview ? preview.eventTime : null;
       afterNextDraw(() => {
         // Where a preview's time went: waiting for the one in flight, the server's answer (its
         // solve and the page's handling of the positions frame, which comes first, included),
         // and the drawing; all from one clock reading per step.
         const drawnAt = performance.now();
         if (eventTime !== null) {
-          state.timings.previewQueued.push(previewSentAt - eventTime);
-          state.timings.previewAnswered.push(receivedAt - previewSentAt);
+          state.timings.previewQueued.push(preview.sentAt - eventTime);
+          state.timings.previewAnswered.push(receivedAt - preview.sentAt);
           state.timings.previewDrawn.push(drawnAt - receivedAt);
         }
         solved(message, sent, eventTime, drawnAt);
@@ -538,14 +538,15 @@ function moveChanged() {
   if (previewInFlight === null) sendPreview();
 }
 // An answer (solve or error) to message `id`: if it is the preview in flight, the next one goes
-// out now, so that the server solves it while this one is drawn. Returns the drag event time of
-// the answered preview (null if `id` is not the preview in flight).
+// out now, so that the server solves it while this one is drawn. Returns when the answered
+// preview's drag event happened and when the preview was sent (null if `id` is not the preview
+// in flight).
 function previewAnswered(id) {
   if (id === undefined || id !== previewInFlight) return null;
   previewInFlight = null;
-  const eventTime = previewEventTime;
+  const answered = { eventTime: previewEventTime, sentAt: previewSentTime };
   if (previewPending) sendPreview();
-  return eventTime;
+  return answered;
 }
 function sendPreview() {
   previewPending = false;
